@@ -1,0 +1,3 @@
+from mapkit.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,76 @@
+"""The ``mapkit`` command line. Subcommands live in :mod:`mapkit.commands`.
+
+User errors (missing file, bad format, no walls, bad option) print one line
+``mapkit: error: ...`` to stderr and exit 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import pkgutil
+import sys
+
+import mapkit.commands
+from mapkit.errors import MapkitError
+from mapkit.lmap import LmapError
+
+#: Order in ``mapkit --help``; any other command module is listed after these.
+ORDER = ["build", "info", "query", "export", "layers", "preview", "view", "extrude"]
+
+
+def _command_modules() -> list[str]:
+    found = {m.name for m in pkgutil.iter_modules(mapkit.commands.__path__) if not m.name.startswith("_")}
+    return [n for n in ORDER if n in found] + sorted(found - set(ORDER))
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports bad options in our one-line error style."""
+
+    def error(self, message: str):  # noqa: D401 - argparse API
+        self.exit(2, f"mapkit: error: {message} (see '{self.prog} --help')\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from mapkit import __version__
+
+    parser = _Parser(prog="mapkit", description="Build and inspect line maps (.lmap) for robot self-location.")
+    parser.add_argument("--version", action="version", version=f"mapkit {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for name in _command_modules():
+        mod = importlib.import_module(f"mapkit.commands.{name}")
+        p = sub.add_parser(name, help=mod.HELP, description=mod.HELP)
+        mod.add_arguments(p)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except (MapkitError, LmapError) as exc:
+        return _fail(str(exc))
+    except FileNotFoundError as exc:
+        return _fail(f"{exc.filename or exc}: no such file; check the path")
+    except IsADirectoryError as exc:
+        return _fail(f"{exc.filename}: is a directory, expected a file")
+    except PermissionError as exc:
+        return _fail(f"{exc.filename}: permission denied")
+    except ValueError as exc:
+        # Validation errors of our own types (camera, options) are ValueErrors with clear text.
+        return _fail(str(exc))
+    except KeyboardInterrupt:
+        print("mapkit: interrupted", file=sys.stderr)
+        return 130
+
+
+def _fail(message: str) -> int:
+    print(f"mapkit: error: {message}", file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

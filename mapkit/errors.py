@@ -1,0 +1,9 @@
+"""Errors a user can cause. The CLI turns them into one line, exit code 2."""
+
+
+class MapkitError(Exception):
+    """A problem with the user's input or options: the message says what to do."""
+
+
+class NoWallsError(MapkitError):
+    """The plan has no geometry we recognise as walls."""

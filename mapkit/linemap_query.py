@@ -1,0 +1,113 @@
+"""Region lookup on a loaded map with numpy only (no shapely at run time).
+
+A query goes: lookup-grid cells under the disk's bounding box -> candidate
+regions -> exact test on those regions' ring edges (the disk's centre is
+inside the region under the even-odd rule, or within ``radius`` of one of
+its edges). Everything per query is a few array operations.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class RegionLookup:
+    """Precomputed ring edges of a :class:`~mapkit.lmap.LineMap` for fast queries."""
+
+    def __init__(self, m) -> None:
+        self.m = m
+        pts, offs = m.ring_points, m.ring_offsets
+        k = len(m.ring_region)
+        # Edge e goes from a[e] to b[e]; b is the next point of the same ring.
+        idx = np.arange(len(pts))
+        ring_of_point = np.repeat(np.arange(k), np.diff(offs))
+        nxt = idx + 1
+        if k:
+            last = offs[1:] - 1
+            nxt[last] = offs[:-1]
+        self.a = pts
+        self.b = pts[nxt] if len(pts) else pts
+        self.edge_region = m.ring_region[ring_of_point] if k else np.zeros(0, dtype=np.int64)
+        # Rings are sorted by region, so a region's edges are one contiguous run.
+        r = m.n_regions
+        self.region_edge_start = np.searchsorted(self.edge_region, np.arange(r + 1))
+        self.centres, self.radii = self._centres_and_radii(ring_of_point)
+
+    def _centres_and_radii(self, ring_of_point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r = self.m.n_regions
+        a, b = self.a, self.b
+        cross = a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]  # shoelace terms, signed
+        # Holes are oriented either way in files; make each ring's sign follow its role.
+        ring_area2 = np.bincount(ring_of_point, weights=cross, minlength=len(self.m.ring_region))
+        sign = np.where(self.m.ring_is_hole, -1.0, 1.0) * np.sign(ring_area2)
+        s = sign[ring_of_point] if len(ring_of_point) else np.zeros(0)
+        w = cross * s
+        area2 = np.bincount(self.edge_region, weights=w, minlength=r)
+        cx = np.bincount(self.edge_region, weights=w * (a[:, 0] + b[:, 0]), minlength=r)
+        cy = np.bincount(self.edge_region, weights=w * (a[:, 1] + b[:, 1]), minlength=r)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            centres = np.stack([cx, cy], axis=1) / (3.0 * area2[:, None])
+        # Degenerate (zero-area) regions fall back to the vertex mean.
+        bad = ~np.isfinite(centres).all(axis=1)
+        if bad.any():
+            cnt = np.maximum(np.bincount(self.edge_region, minlength=r), 1)
+            mean = np.stack(
+                [np.bincount(self.edge_region, weights=a[:, i], minlength=r) / cnt for i in (0, 1)], axis=1
+            )
+            centres[bad] = mean[bad]
+        d = np.linalg.norm(a - centres[self.edge_region], axis=1) if len(a) else np.zeros(0)
+        radii = np.zeros(r)
+        if len(d):
+            np.maximum.at(radii, self.edge_region, d)
+        return centres, radii
+
+    def candidate_regions(self, x: float, y: float, radius: float) -> np.ndarray:
+        """Regions listed by the grid cells under the disk's bounding box (a superset)."""
+        m = self.m
+        ny, nx = m.grid_shape
+        ox, oy = m.grid_origin
+        c = m.grid_cell
+        ix0 = int(np.floor((x - radius - ox) / c))
+        ix1 = int(np.floor((x + radius - ox) / c))
+        iy0 = int(np.floor((y - radius - oy) / c))
+        iy1 = int(np.floor((y + radius - oy) / c))
+        ix0, iy0 = max(ix0, 0), max(iy0, 0)
+        ix1, iy1 = min(ix1, nx - 1), min(iy1, ny - 1)
+        if ix0 > ix1 or iy0 > iy1:
+            return np.zeros(0, dtype=np.int64)
+        cells = (np.arange(iy0, iy1 + 1)[:, None] * nx + np.arange(ix0, ix1 + 1)[None, :]).ravel()
+        starts, ends = m.grid_offsets[cells], m.grid_offsets[cells + 1]
+        if (ends - starts).sum() == 0:
+            return np.zeros(0, dtype=np.int64)
+        take = np.concatenate([np.arange(s, e) for s, e in zip(starts, ends)])
+        return np.unique(m.grid_regions[take])
+
+    def regions_near(self, x: float, y: float, radius: float) -> np.ndarray:
+        """Sorted ids of regions meeting the closed disk (radius 0: containing the point)."""
+        if not (np.isfinite(x) and np.isfinite(y) and np.isfinite(radius)) or radius < 0:
+            raise ValueError(f"query needs finite x, y and radius >= 0, got ({x}, {y}, {radius})")
+        cand = self.candidate_regions(x, y, radius)
+        if cand.size == 0:
+            return cand
+        starts, ends = self.region_edge_start[cand], self.region_edge_start[cand + 1]
+        edges = np.concatenate([np.arange(s, e) for s, e in zip(starts, ends)])
+        a, b = self.a[edges], self.b[edges]
+        reg = self.edge_region[edges]
+        # Even-odd crossing test of a ray towards +x.
+        straddle = (a[:, 1] > y) != (b[:, 1] > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (y - a[:, 1]) / (b[:, 1] - a[:, 1])
+        xcross = a[:, 0] + t * (b[:, 0] - a[:, 0])
+        crossings = np.bincount(reg, weights=(straddle & (xcross > x)).astype(float), minlength=self.m.n_regions)
+        inside = (crossings[cand] % 2) == 1
+        # Distance from the centre to each edge.
+        ab = b - a
+        denom = np.einsum("ij,ij->i", ab, ab)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = np.clip(np.einsum("ij,ij->i", np.array([x, y]) - a, ab) / denom, 0.0, 1.0)
+        u = np.where(denom > 0, u, 0.0)
+        d = np.hypot(a[:, 0] + u * ab[:, 0] - x, a[:, 1] + u * ab[:, 1] - y)
+        dmin = np.full(self.m.n_regions, np.inf)
+        np.minimum.at(dmin, reg, d)
+        near = dmin[cand] <= radius
+        return cand[inside | near]

@@ -1,0 +1,67 @@
+"""Options of ``mapkit build``, shared by every importer and stage.
+
+One dataclass, so the CLI, the pipeline and the tests agree on names and
+defaults, and the whole set is recorded in the map's META as build parameters.
+Lengths in metres, angles in degrees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+
+@dataclass
+class BuildOptions:
+    # ---- import -------------------------------------------------------
+    #: Drawing/mesh units ("m", "cm", "mm", "in", "ft", ...); None: from the file.
+    units: str | None = None
+    #: Extra factor applied after unit conversion (meshes in odd scales).
+    scale: float = 1.0
+    #: Layer name globs (fnmatch, case-insensitive) per role; empty: guess.
+    walls: list[str] = field(default_factory=list)
+    doors: list[str] = field(default_factory=list)
+    windows: list[str] = field(default_factory=list)
+    ignore: list[str] = field(default_factory=list)
+    #: Mesh up axis: "z" or "y" (glTF is y-up).
+    up: str = "z"
+
+    # ---- reconstruction -----------------------------------------------
+    wall_height: float = 2.5
+    door_height: float = 2.1
+    window_sill: float = 0.9
+    window_head: float = 2.1
+    #: The free space is shrunk by this (the camera centre stays this far from walls).
+    robot_radius: float = 0.2
+    #: Double-line walls thicker than this are not closed into solids.
+    max_wall_thickness: float = 0.8
+
+    # ---- edges --------------------------------------------------------
+    #: Edges shorter than this are dropped (tiny pieces, furniture noise).
+    min_edge_length: float = 0.2
+    #: Mesh feature edges: dihedral angle above which an edge is sharp.
+    crease_deg: float = 30.0
+
+    # ---- visibility and regions ----------------------------------------
+    #: Camera: height above the floor, pitch (down positive) and intrinsics.
+    camera: dict = field(
+        default_factory=lambda: {
+            "width": 640,
+            "height": 480,
+            "fx": 457.0,
+            "fy": 457.0,
+            "cx": 320.0,
+            "cy": 240.0,
+            "height_m": 1.2,
+            "pitch_deg": 0.0,
+        }
+    )
+    #: Segments farther than this from the camera are not listed.
+    max_range: float = 10.0
+    #: A segment counts as visible if a contiguous piece this long is seen.
+    min_visible_length: float = 0.3
+    #: Region lists hold everything visible from within this distance.
+    eps: float = 0.05
+
+    def to_meta(self) -> dict:
+        """JSON-able record of every option (stored in the map)."""
+        return asdict(self)

@@ -1,0 +1,210 @@
+"""Camera model in the conventions of docs/method.md section 2.
+
+World: x, y horizontal, z up, metres. Camera: OpenCV pinhole, X right,
+Y down, Z forward; pixel ``u`` is the column, ``v`` the row. The camera
+centre is ``C = (x, y, h)``; ``yaw`` is the heading of the optical axis on
+the floor, counter-clockwise from +x; ``pitch`` is positive looking down;
+roll is zero. Angles are radians in code and degrees in files.
+
+numpy only: the map builder imports this too (for the vertical field of view).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+REQUIRED_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch_deg")
+
+
+class CameraError(ValueError):
+    """A camera description is missing a field or holds an impossible value."""
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A calibrated camera at a known height and pitch.
+
+    ``distortion`` holds OpenCV's coefficients (k1, k2, p1, p2[, k3...]) or is
+    empty for an ideal pinhole.
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    height_m: float
+    pitch_deg: float
+    distortion: tuple[float, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        check_camera(self)
+
+    # ---- construction -------------------------------------------------
+    @classmethod
+    def from_dict(cls, d: dict) -> "Camera":
+        """Build from the camera.json shape; missing or bad fields raise CameraError."""
+        if not isinstance(d, dict):
+            raise CameraError("camera description must be a JSON object")
+        missing = [k for k in REQUIRED_FIELDS if k not in d]
+        if missing:
+            raise CameraError(f"camera description lacks {', '.join(missing)} (needs {', '.join(REQUIRED_FIELDS)})")
+        try:
+            dist = tuple(float(v) for v in d.get("distortion", ()) or ())
+            return cls(
+                width=int(d["width"]),
+                height=int(d["height"]),
+                fx=float(d["fx"]),
+                fy=float(d["fy"]),
+                cx=float(d["cx"]),
+                cy=float(d["cy"]),
+                height_m=float(d["height_m"]),
+                pitch_deg=float(d["pitch_deg"]),
+                distortion=dist,
+            )
+        except (TypeError, ValueError) as exc:
+            if isinstance(exc, CameraError):
+                raise
+            raise CameraError(f"camera description has a non-numeric field: {exc}") from None
+
+    @classmethod
+    def load(cls, path: str | Path) -> "Camera":
+        """Read a camera.json file."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise CameraError(f"camera file {path} not found") from None
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise CameraError(f"camera file {path} is not valid JSON ({exc})") from None
+        return cls.from_dict(d)
+
+    @classmethod
+    def from_fov(cls, hfov_deg: float, width: int, height: int, height_m: float, pitch_deg: float) -> "Camera":
+        """An ideal pinhole with square pixels and the given horizontal field of view."""
+        if not 1.0 <= hfov_deg < 179.0:
+            raise CameraError(f"horizontal field of view must be in [1, 179) degrees, got {hfov_deg}")
+        f = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+        return cls(width, height, f, f, width / 2.0, height / 2.0, height_m, pitch_deg)
+
+    def to_dict(self) -> dict:
+        d = {
+            "width": self.width,
+            "height": self.height,
+            "fx": self.fx,
+            "fy": self.fy,
+            "cx": self.cx,
+            "cy": self.cy,
+            "height_m": self.height_m,
+            "pitch_deg": self.pitch_deg,
+        }
+        if self.distortion:
+            d["distortion"] = list(self.distortion)
+        return d
+
+    # ---- geometry -------------------------------------------------------
+    @property
+    def pitch(self) -> float:
+        return math.radians(self.pitch_deg)
+
+    @property
+    def K(self) -> np.ndarray:
+        """(3, 3) intrinsic matrix."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def world2cam(self, yaw: float) -> np.ndarray:
+        """(3, 3) rotation R with rows (right, down, forward) in world coordinates."""
+        return world2cam_rotation(yaw, self.pitch)
+
+    def centre(self, x: float, y: float) -> np.ndarray:
+        return np.array([x, y, self.height_m])
+
+    def project(self, points: np.ndarray, x: float, y: float, yaw: float) -> tuple[np.ndarray, np.ndarray]:
+        """Project world points (..., 3) for the camera at pose (x, y, yaw).
+
+        Returns pixels (..., 2) as (u, v) and depth Zc (...,); points with
+        Zc <= 0 are behind the camera and their pixels are meaningless.
+        """
+        R = self.world2cam(yaw)
+        pc = (np.asarray(points, dtype=float) - self.centre(x, y)) @ R.T
+        z = pc[..., 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = np.stack([self.fx * pc[..., 0] / z + self.cx, self.fy * pc[..., 1] / z + self.cy], axis=-1)
+        return uv, z
+
+    def pixel_rays(self, uv: np.ndarray) -> np.ndarray:
+        """Rays K^-1 [u, v, 1] (..., 3) in camera coordinates (not normalised)."""
+        uv = np.asarray(uv, dtype=float)
+        return np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy, np.ones(uv.shape[:-1])], axis=-1)
+
+    def elevation_range(self) -> tuple[float, float]:
+        """(lowest, highest) elevation angle, radians, that any pixel looks at.
+
+        Elevation is measured from the horizontal plane, positive upwards. The
+        extremes of a pinhole's view cone lie on the image border, so the
+        border is sampled densely (corners included); the heading is free, so
+        these bounds are all the vertical field of view says about visibility.
+        """
+        w, h = self.width, self.height
+        t = np.linspace(0.0, 1.0, 257)
+        border = np.concatenate(
+            [
+                np.stack([t * w, np.zeros_like(t)], 1),
+                np.stack([t * w, np.full_like(t, h)], 1),
+                np.stack([np.zeros_like(t), t * h], 1),
+                np.stack([np.full_like(t, w), t * h], 1),
+                [[self.cx, 0.0], [self.cx, h]],
+            ]
+        )
+        rays = self.pixel_rays(border)
+        # World direction of a camera ray: R^T ray; its z component is d_z*Y + f_z*Z.
+        p = self.pitch
+        z = -math.cos(p) * rays[:, 1] - math.sin(p) * rays[:, 2]
+        elev = np.arcsin(z / np.linalg.norm(rays, axis=1))
+        return float(elev.min()), float(elev.max())
+
+    def horizontal_half_fov(self) -> float:
+        """Largest horizontal angle, radians, between the optical axis's heading and
+        the heading of any pixel's ray (used to drop segments out of view)."""
+        w, h = self.width, self.height
+        t = np.linspace(0.0, 1.0, 129)
+        border = np.concatenate([np.stack([np.zeros_like(t), t * h], 1), np.stack([np.full_like(t, w), t * h], 1)])
+        R = self.world2cam(0.0)  # yaw 0: the optical axis heads along +x
+        d = self.pixel_rays(border) @ R  # world directions (R^T ray)
+        return float(np.abs(np.arctan2(d[:, 1], d[:, 0])).max())
+
+
+def world2cam_rotation(yaw: float, pitch: float) -> np.ndarray:
+    """(3, 3) world-to-camera rotation, rows r, d, f of method.md section 2."""
+    cy_, sy_ = math.cos(yaw), math.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    f = (cp * cy_, cp * sy_, -sp)
+    r = (sy_, -cy_, 0.0)
+    d = (-sp * cy_, -sp * sy_, -cp)
+    return np.array([r, d, f])
+
+
+def check_camera(cam: Camera) -> None:
+    """Validate a camera; raise CameraError naming the field and its valid range."""
+    vals = {k: getattr(cam, k) for k in REQUIRED_FIELDS}
+    for k, v in vals.items():
+        if not math.isfinite(v):
+            raise CameraError(f"camera {k} must be finite, got {v}")
+    if cam.width <= 0 or cam.height <= 0:
+        raise CameraError(f"camera width and height must be positive pixels, got {cam.width}x{cam.height}")
+    if cam.fx <= 0 or cam.fy <= 0:
+        raise CameraError(f"camera fx and fy must be positive, got {cam.fx}, {cam.fy}")
+    if cam.height_m <= 0:
+        raise CameraError(f"camera height_m must be above the floor (> 0 m), got {cam.height_m}")
+    if not -89.0 <= cam.pitch_deg <= 89.0:
+        raise CameraError(f"camera pitch_deg must be in [-89, 89] (positive looks down), got {cam.pitch_deg}")
+    if any(not math.isfinite(v) for v in cam.distortion):
+        raise CameraError("camera distortion coefficients must be finite")
+    if cam.distortion and len(cam.distortion) not in (4, 5, 8, 12, 14):
+        raise CameraError(f"camera distortion takes 4, 5, 8, 12 or 14 OpenCV coefficients, got {len(cam.distortion)}")
