@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 import zlib
 from dataclasses import dataclass, field
 from enum import IntEnum
@@ -31,6 +30,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from mapkit.atomic import write_atomic
 
 MAGIC = b"\x89LMP\r\n\x1a\n"  # PNG-style: catches text-mode and 7-bit mangling
 FORMAT_MAJOR = 1  # bump when an old reader cannot read the new file
@@ -196,18 +197,7 @@ def save_map(path: str | os.PathLike, linemap: LineMap) -> int:
     """
     validate(linemap)
     blob = encode(linemap)
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(blob)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_atomic(path, blob)
     return len(blob)
 
 

@@ -1,0 +1,156 @@
+"""``mapkit build``: plan or mesh in, :class:`~mapkit.lmap.LineMap` out.
+
+    import  ->  Scene  ->  edges  ->  visibility regions (VIR)  ->  LineMap
+
+Each stage takes plain data from the one before. This module only wires
+them, times them, and records what was done in the map's META.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mapkit import __version__
+from mapkit.assemble import assemble_map, polygon_parts
+from mapkit.errors import MapkitError
+from mapkit.lmap import LineMap, SegmentKind, file_sha256
+from mapkit.options import BuildOptions
+
+log = logging.getLogger("mapkit")
+
+
+@dataclass
+class BuildReport:
+    """What a build did: seconds per stage and the resulting counts."""
+
+    seconds: dict[str, float] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+
+def build_map(plan: str | Path, options: BuildOptions | None = None, progress: bool = False) -> tuple[LineMap, BuildReport]:
+    """Run the whole pipeline on a DXF plan or a mesh; nothing is written."""
+    from matcher.camera import Camera
+
+    from mapkit.edges import extract_edges
+    from mapkit.importers import load_scene
+    from mapkit.vir import build_regions
+
+    options = options or BuildOptions()
+    _check_options(options)
+    camera = Camera.from_dict(options.camera)
+    report = BuildReport()
+    plan = Path(plan)
+
+    t = time.perf_counter()
+    scene = load_scene(plan, options)
+    report.seconds["import"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    if scene.segments is not None:
+        segments, kinds = np.asarray(scene.segments, float), np.asarray(scene.kinds, np.uint8)
+    else:
+        segments, kinds = extract_edges(scene, options)
+    report.seconds["edges"] = time.perf_counter() - t
+    if len(segments) == 0:
+        raise MapkitError(f"{plan}: no straight wall edges found; check the layer choice with 'mapkit preview'")
+
+    t = time.perf_counter()
+    part = build_regions(
+        segments,
+        scene.walls,
+        scene.free_space,
+        camera,
+        max_range=options.max_range,
+        min_visible_length=options.min_visible_length,
+        eps=options.eps,
+        progress=progress,
+    )
+    report.seconds["regions"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    polygons, lists = _single_part_regions(part.polygons, part.lists)
+    segments, kinds, lists, dropped = _drop_unseen(segments, kinds, lists)
+    counts = {
+        "segments": int(len(segments)),
+        "segments_never_visible_dropped": dropped,
+        "regions": len(polygons),
+        "mean_list_length": float(np.mean([len(x) for x in lists])) if lists else 0.0,
+    }
+    meta = {
+        "units": "m",
+        "generator": f"mapkit {__version__}",
+        "source": {"name": plan.name, "sha256": file_sha256(plan), "bytes": plan.stat().st_size},
+        "build": options.to_meta(),
+        "camera": camera.to_dict(),
+        "wall_height": float(scene.wall_height),
+        "scene": _jsonable(scene.info),
+        "stats": {"counts": counts, "regions": _jsonable(part.stats)},
+    }
+    linemap = assemble_map(segments, kinds, polygons, lists, scene.walls, meta)
+    report.seconds["assemble"] = time.perf_counter() - t
+    report.counts = counts
+    report.warnings = list(scene.info.get("warnings", []))
+    linemap.meta["stats"]["seconds"] = {k: round(v, 4) for k, v in report.seconds.items()}
+    return linemap, report
+
+
+def _check_options(o: BuildOptions) -> None:
+    """Options a user can get wrong, checked before any work is done."""
+    positive = {
+        "wall_height": o.wall_height,
+        "max_range": o.max_range,
+        "min_visible_length": o.min_visible_length,
+        "eps": o.eps,
+        "scale": o.scale,
+    }
+    for name, v in positive.items():
+        if not (np.isfinite(v) and v > 0):
+            raise MapkitError(f"--{name.replace('_', '-')} must be a positive number, got {v}")
+    if not 0 < o.door_height <= o.wall_height:
+        raise MapkitError(f"--door-height must be in (0, wall height {o.wall_height}], got {o.door_height}")
+    if not 0 <= o.window_sill < o.window_head <= o.wall_height:
+        raise MapkitError("window sill and head must satisfy 0 <= sill < head <= wall height")
+    if o.robot_radius < 0 or o.min_edge_length < 0:
+        raise MapkitError("--robot-radius and --min-edge-length must be >= 0")
+    if o.eps > 0.5:
+        raise MapkitError(f"--eps is the lookup tolerance and must be at most 0.5 m, got {o.eps}")
+
+
+def _single_part_regions(polygons, lists):
+    """Split multi-part regions: the file and GeoJSON hold one polygon per region."""
+    out_p, out_l = [], []
+    for geom, lst in zip(polygons, lists):
+        for part in polygon_parts(geom):
+            if part.area > 0:
+                out_p.append(part)
+                out_l.append(np.asarray(lst, dtype=np.int64))
+    return out_p, out_l
+
+
+def _drop_unseen(segments, kinds, lists):
+    """Remove segments that no region lists (e.g. outer faces of exterior walls)
+    and renumber the lists; ids stay dense indices into the segment array."""
+    seen = np.zeros(len(segments), dtype=bool)
+    for lst in lists:
+        seen[lst] = True
+    new_id = np.cumsum(seen) - 1
+    lists = [new_id[np.asarray(lst, dtype=np.int64)] for lst in lists]
+    return segments[seen], kinds[seen], lists, int((~seen).sum())
+
+
+def _jsonable(obj):
+    """A JSON-safe copy (numpy scalars, tuples, paths and the like made plain)."""
+    return json.loads(json.dumps(obj, default=lambda v: v.item() if hasattr(v, "item") else str(v)))
+
+
+def kind_counts(m: LineMap) -> dict[str, int]:
+    """Number of segments per kind label, every kind listed."""
+    c = np.bincount(m.kinds, minlength=len(SegmentKind))
+    return {k.label: int(c[k]) for k in SegmentKind}
