@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import pkgutil
 import sys
 
@@ -46,9 +47,24 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class _OneLineWarnings(logging.Handler):
+    """Print the importers' and stages' warnings as 'mapkit: warning: ...'."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        print(f"mapkit: {record.levelname.lower()}: {record.getMessage()}", file=sys.stderr)
+
+
+def _setup_logging() -> None:
+    log = logging.getLogger("mapkit")
+    if not any(isinstance(h, _OneLineWarnings) for h in log.handlers):
+        log.addHandler(_OneLineWarnings(logging.WARNING))
+    log.propagate = False
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    _setup_logging()
     try:
         return int(args._run(args) or 0)
     except (MapkitError, LmapError) as exc:

@@ -1,0 +1,97 @@
+"""``mapkit build PLAN -o OUT.lmap``: the main job, plan or mesh in, map out."""
+
+from __future__ import annotations
+
+import sys
+
+from mapkit.errors import MapkitError
+
+HELP = "build a .lmap map from a DXF floor plan or a 3D mesh"
+
+
+def add_arguments(p) -> None:
+    from mapkit.commands._import_args import add_import_arguments
+    from mapkit.options import BuildOptions
+
+    d = BuildOptions()
+    p.add_argument("plan", metavar="PLAN", help="DXF plan or mesh (.obj .ply .stl .glb .gltf .off)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.lmap", help="map file to write")
+    add_import_arguments(p)
+    g = p.add_argument_group("camera (what 'visible' means)")
+    g.add_argument("--camera", metavar="CAM.json", help="camera.json: intrinsics, height_m, pitch_deg")
+    g.add_argument("--camera-height", type=float, metavar="M", help=f"camera height above the floor (default {d.camera['height_m']})")
+    g.add_argument("--pitch", type=float, metavar="DEG", help=f"camera pitch, positive looking down (default {d.camera['pitch_deg']})")
+    g.add_argument("--hfov", type=float, metavar="DEG", help="horizontal field of view of an ideal camera (default 70)")
+    g.add_argument("--image-size", metavar="WxH", help="image size in pixels with --hfov (default 640x480)")
+    g = p.add_argument_group("edges and visibility")
+    g.add_argument("--min-edge-length", type=float, default=d.min_edge_length, metavar="M", help=f"drop shorter edges (default {d.min_edge_length})")
+    g.add_argument("--crease-deg", type=float, default=d.crease_deg, metavar="DEG", help=f"mesh feature-edge angle (default {d.crease_deg})")
+    g.add_argument("--max-range", type=float, default=d.max_range, metavar="M", help=f"farthest visible distance (default {d.max_range})")
+    g.add_argument("--min-visible-length", type=float, default=d.min_visible_length, metavar="M", help=f"shortest contiguous visible piece that counts (default {d.min_visible_length})")
+    g.add_argument("--eps", type=float, default=d.eps, metavar="M", help=f"region lists cover everything visible within this distance (default {d.eps})")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+
+
+def options_from_args(args):
+    """BuildOptions from parsed arguments (import options, camera, visibility)."""
+    from matcher.camera import Camera
+
+    from mapkit.commands._import_args import import_options_from_args
+
+    o = import_options_from_args(args)
+    if args.camera:
+        if any(v is not None for v in (args.camera_height, args.pitch, args.hfov, args.image_size)):
+            raise MapkitError("--camera already sets the camera; drop --camera-height/--pitch/--hfov/--image-size")
+        o.camera = Camera.load(args.camera).to_dict()
+    else:
+        cam = dict(o.camera)
+        if args.camera_height is not None:
+            cam["height_m"] = args.camera_height
+        if args.pitch is not None:
+            cam["pitch_deg"] = args.pitch
+        if args.hfov is not None or args.image_size is not None:
+            w, h = _image_size(args.image_size or f"{cam['width']}x{cam['height']}")
+            hfov = args.hfov if args.hfov is not None else 70.0
+            c = Camera.from_fov(hfov, w, h, cam["height_m"], cam["pitch_deg"])
+            cam = c.to_dict()
+        o.camera = Camera.from_dict(cam).to_dict()  # validates
+    o.min_edge_length = args.min_edge_length
+    o.crease_deg = args.crease_deg
+    o.max_range = args.max_range
+    o.min_visible_length = args.min_visible_length
+    o.eps = args.eps
+    return o
+
+
+def _image_size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise MapkitError(f"--image-size expects WIDTHxHEIGHT in pixels (e.g. 640x480), got '{text}'") from None
+    if w <= 0 or h <= 0:
+        raise MapkitError(f"--image-size must be positive, got '{text}'")
+    return w, h
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from mapkit.lmap import save_map
+    from mapkit.pipeline import build_map
+
+    options = options_from_args(args)
+    out = Path(args.output)
+    if not out.parent.exists():
+        raise MapkitError(f"output folder {out.parent} does not exist; create it first")
+    if out.suffix.lower() != ".lmap":
+        raise MapkitError(f"output must end in .lmap, got '{out.name}'")
+    linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty())
+    size = save_map(out, linemap)
+    if not args.quiet:
+        c = report.counts
+        t = " ".join(f"{k} {v:.2f}s" for k, v in report.seconds.items())
+        print(
+            f"wrote {out}: {c['segments']} segments, {c['regions']} regions, "
+            f"mean list {c['mean_list_length']:.1f}, {size / 1024:.1f} KiB  ({t})"
+        )
+    return 0
