@@ -70,7 +70,8 @@ def main(argv: list[str] | None = None) -> int:
     except (MapkitError, LmapError) as exc:
         return _fail(str(exc))
     except FileNotFoundError as exc:
-        return _fail(f"{exc.filename or exc}: no such file; check the path")
+        what = (exc.strerror or "no such file").lower().replace("no such file or directory", "no such file")
+        return _fail(f"{exc.filename or exc}: {what}; check the path")
     except IsADirectoryError as exc:
         return _fail(f"{exc.filename}: is a directory, expected a file")
     except PermissionError as exc:
