@@ -250,15 +250,21 @@ def add_dirt(lines):
     """Apply ``DIRT`` to the wall lines; returns the list to write."""
     out = []
     corner = DIRT["gap_at"]
+    applied = []
     for p, q in lines:
         if corner in (p, q) and p[1] == q[1]:  # the horizontal face at the corner
             far, near = (p, q) if q == corner else (q, p)
             d = DIRT["gap"] / math.dist(far, near)
             near = (near[0] + (far[0] - near[0]) * d, near[1] + (far[1] - near[1]) * d)
             p, q = far, near
+            applied.append("gap")
         out.append((p, q))
         if (p, q) == DIRT["duplicate"]:
             out.append((p, q))
+            applied.append("duplicate")
+    # a layout change must not make the faults disappear silently
+    if sorted(applied) != ["duplicate", "gap"]:
+        raise RuntimeError(f"DIRT no longer matches the walls: applied {applied}")
     return out
 
 
