@@ -37,3 +37,38 @@ CURVE_STEP_DEG = 10.0
 #: Vertical or horizontal: a segment whose direction is within this many
 #: degrees of the vertical (horizontal plane) is classified as such.
 AXIS_DEG = 2.0
+
+# ---- meshes (mapkit.importers.mesh, mapkit.mesh_edges) -------------------
+
+#: Mesh heights within this of a level (the floor, the top of the walls)
+#: count as on it: modellers leave objects a few millimetres off the floor.
+MESH_LEVEL = 0.02
+
+#: An upward horizontal surface is (part of) the floor only if the faces at
+#: its height cover at least this fraction of the model's bounding box seen
+#: from above; table tops and wall tops are smaller.
+MESH_FLOOR_FRACTION = 0.1
+
+#: Walls modelled as single surfaces (no thickness) are given this
+#: thickness, metres, so that they occlude and bound the free space.
+MESH_THIN_WALL = 0.05
+
+#: Heights above the floor, metres, of the extra sections that find low
+#: obstacles (parapets under windows, desks, table legs): the robot cannot
+#: stand there although the camera sees over them.
+MESH_OBSTACLE_HEIGHTS = (0.05, 0.3)
+
+#: Walls-only meshes: at most this many section heights are searched for
+#: rooms the walls enclose (doorways leave rooms open at low heights; the
+#: wall above a door closes them).
+MESH_MAX_SECTIONS = 12
+
+#: Mesh edges shared by more than this many faces are feature edges without
+#: further analysis (pathological non-manifold fans).
+MESH_MAX_EDGE_FACES = 8
+
+#: Overlay operations on visibility regions snap to this grid, metres: the
+#: fixed precision makes GEOS far faster on the many nearly collinear edges
+#: of overlapping visibility polygons; the shift (< 1e-5 m) is absorbed by
+#: ``VIR_EPS_SLACK``.
+OVERLAY_GRID = 1e-5

@@ -1,0 +1,167 @@
+"""Read a mesh file into one welded triangle mesh: metres, z up, floor at z = 0.
+
+Everything after this module may assume: one ``trimesh.Trimesh`` (node
+transforms of a scene already applied), coordinates in metres, z up,
+coincident vertices merged (split vertices would make every edge look like
+a border), no degenerate or repeated faces, and the floor at z = 0.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+
+import numpy as np
+
+from mapkit.errors import MapkitError
+from mapkit.importers.dxf_units import UNIT_METRES, canonical_units
+from mapkit.mesh_edges import face_normals
+from mapkit.options import BuildOptions
+from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_LEVEL, PLAUSIBLE_EXTENT
+
+log = logging.getLogger("mapkit")
+
+#: y-up to z-up: +90 degrees about x, so +y becomes +z and +z becomes -y
+#: (a proper rotation: the model is not mirrored).
+Y_UP_TO_Z_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+
+
+def load_mesh(path: Path, options: BuildOptions):
+    """The mesh of ``path`` ready for sectioning and edge extraction.
+
+    Returns ``(mesh, info)``: a ``trimesh.Trimesh`` (metres, z up, welded,
+    floor at z = 0) and a dict of what was decided (``units``, ``scale``,
+    ``up``, ``floor``, ``floor_offset_m``, ``warnings``).
+    """
+    import trimesh
+
+    vertices, faces = read_triangles(path)
+    if options.up not in ("z", "y"):
+        raise MapkitError(f"--up must be 'z' or 'y', got '{options.up}'")
+    if options.up == "y":
+        vertices = vertices @ Y_UP_TO_Z_UP.T
+    unit = canonical_units(options.units) if options.units else "m"
+    if not (options.scale > 0 and math.isfinite(options.scale)):
+        raise MapkitError(f"--scale must be a positive number, got {options.scale}")
+    factor = UNIT_METRES[unit] * options.scale
+    vertices = vertices * factor
+
+    extent = float(np.ptp(vertices, axis=0).max())
+    lo, hi = PLAUSIBLE_EXTENT
+    if not lo <= extent <= hi:
+        raise MapkitError(
+            f"{path}: the model is {extent:.3g} m across with units '{unit}' and scale {options.scale:g}, "
+            f"not a building ({lo:g} to {hi:g} m); set --units (e.g. mm, cm) or --scale"
+        )
+    vertices, faces = weld(vertices, faces)
+    if len(faces) == 0:
+        raise MapkitError(f"{path}: every triangle is degenerate at this scale; check --units and --scale")
+
+    floor_z, has_floor = find_floor(vertices, faces)
+    vertices[:, 2] -= floor_z
+    warnings = []
+    size_xy = float(np.ptp(vertices[:, :2], axis=0).max())
+    height = float(vertices[:, 2].max())
+    if height > size_xy:
+        warnings.append(
+            f"the model is {height:.3g} m tall but only {size_xy:.3g} m wide: is the up axis right? "
+            f"(--up {'z' if options.up == 'y' else 'y'})"
+        )
+    for w in warnings:
+        log.warning(w)
+    info = {
+        "units": unit,
+        "scale": factor,
+        "up": options.up,
+        "floor": "floor faces" if has_floor else "lowest point (no floor faces)",
+        "floor_offset_m": float(floor_z),
+        "vertices": int(len(vertices)),
+        "faces": int(len(faces)),
+        "warnings": warnings,
+    }
+    return trimesh.Trimesh(vertices=vertices, faces=faces, process=False), info
+
+
+def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """All triangles of a mesh file as ``vertices`` (V, 3) float64 and ``faces`` (F, 3) int64.
+
+    Scenes (glTF, multi-object OBJ) are flattened with every node's world
+    transform applied; points, lines and other non-triangle geometry are
+    skipped. Coordinates stay in the file's units and axes.
+    """
+    import trimesh
+
+    try:
+        loaded = trimesh.load(str(path), process=False)
+    except Exception as exc:  # trimesh raises anything from struct.error to KeyError on bad files
+        reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
+        raise MapkitError(f"{path}: not a readable {path.suffix} mesh ({reason}); check the file or export it again") from None
+    parts = []
+    if isinstance(loaded, trimesh.Scene):
+        for node in loaded.graph.nodes_geometry:
+            transform, name = loaded.graph[node]
+            geom = loaded.geometry.get(name)
+            if isinstance(geom, trimesh.Trimesh) and len(geom.faces):
+                v = np.asarray(geom.vertices, dtype=np.float64)
+                parts.append((v @ transform[:3, :3].T + transform[:3, 3], np.asarray(geom.faces, dtype=np.int64)))
+    elif isinstance(loaded, trimesh.Trimesh) and len(loaded.faces):
+        parts.append((np.asarray(loaded.vertices, dtype=np.float64), np.asarray(loaded.faces, dtype=np.int64)))
+    if not parts:
+        raise MapkitError(f"{path}: the file holds no triangles; export the model as a surface mesh")
+    offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
+    vertices = np.concatenate([v for v, _ in parts])
+    faces = np.concatenate([f + o for (_, f), o in zip(parts, offsets)])
+    if not np.isfinite(vertices).all():
+        raise MapkitError(f"{path}: the mesh has non-finite coordinates (NaN or infinity); repair or re-export it")
+    return vertices, faces
+
+
+def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices closer than about ``tol`` (snapped to a ``tol`` grid).
+
+    Drops faces that collapse (two corners merged), faces of zero area and
+    exact repeats (same corners in the same order). Returns the used
+    vertices (V', 3) and the faces (F', 3) re-indexed.
+    """
+    key = np.round(vertices / tol).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    faces = inverse.reshape(-1)[faces]
+    merged = vertices[first]
+    ok = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
+    faces = faces[ok]
+    _, area = face_normals(merged, faces)
+    faces = faces[area > 0.5 * tol * tol]
+    # Same triangle, same orientation: rotate each row to start at its smallest id.
+    shift = np.argmin(faces, axis=1)
+    rolled = np.take_along_axis(faces, (shift[:, None] + np.arange(3)) % 3, axis=1)
+    _, keep = np.unique(rolled, axis=0, return_index=True)
+    faces = faces[np.sort(keep)]
+    used, faces = np.unique(faces, return_inverse=True)
+    return merged[used], faces.reshape(-1, 3)
+
+
+def find_floor(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, bool]:
+    """Height of the floor: the lowest large upward-facing horizontal surface.
+
+    Upward faces (normal within ``AXIS_DEG`` of +z) are grouped into levels
+    (heights closer than ``MESH_LEVEL`` chain together); the lowest level
+    covering ``MESH_FLOOR_FRACTION`` of the plan's bounding box is the floor.
+    Returns ``(z, True)``, or ``(lowest z, False)`` for a mesh without floor
+    faces (walls only).
+    """
+    normals, areas = face_normals(vertices, faces)
+    up = normals[:, 2] >= math.cos(math.radians(AXIS_DEG))
+    box = np.ptp(vertices[:, :2], axis=0)
+    need = MESH_FLOOR_FRACTION * float(box[0] * box[1])
+    if up.any() and need > 0:
+        z = vertices[faces[up]][:, :, 2].mean(axis=1)
+        order = np.argsort(z)
+        z, a = z[order], areas[up][order]
+        level = np.r_[0, np.cumsum(np.diff(z) > MESH_LEVEL)]
+        level_area = np.bincount(level, weights=a)
+        big = np.nonzero(level_area >= need)[0]
+        if len(big):
+            at = level == big[0]
+            return float(np.average(z[at], weights=a[at])), True
+    return float(vertices[:, 2].min()), False
