@@ -72,3 +72,60 @@ MESH_MAX_EDGE_FACES = 8
 #: of overlapping visibility polygons; the shift (< 1e-5 m) is absorbed by
 #: ``VIR_EPS_SLACK``.
 OVERLAY_GRID = 1e-5
+
+# ---- visibility and regions (mapkit.visibility, mapkit.vir) -----------------
+
+#: Visibility polygons cast rays this many degrees either side of each wall
+#: vertex (to see past it and onto it). At 10 m that is 2 nm.
+VIS_RAY_OFFSET_DEG = 1e-8
+
+#: Circles (distance limits, eps disks) become polygons of this many sides,
+#: circumscribed or inscribed so that every approximation is a superset.
+CIRCLE_SIDES = 64
+
+#: Added to the region distance ``eps``: covers float noise in the distance a
+#: caller measures between a point and a region.
+VIR_EPS_SLACK = 1e-3
+
+#: Smallest quadtree cell of the region partition, metres. Cells this small
+#: that still straddle a visibility boundary keep every candidate segment.
+VIR_MIN_CELL = 0.1
+
+#: Neighbouring regions are merged (lists united) while the area-weighted mean
+#: list length grows by at most this fraction: fewer regions, smaller maps.
+VIR_MERGE_GROWTH = 0.15
+
+# ---- meshes (mapkit.importers.mesh, mapkit.mesh_edges) -------------------
+
+#: Mesh heights within this of a level (the floor, the top of the walls)
+#: count as on it: modellers leave objects a few millimetres off the floor.
+MESH_LEVEL = 0.02
+
+#: An upward horizontal surface is (part of) the floor only if the faces at
+#: its height cover at least this fraction of the model's bounding box seen
+#: from above; table tops and wall tops are smaller.
+MESH_FLOOR_FRACTION = 0.1
+
+#: Walls modelled as single surfaces (no thickness) are given this
+#: thickness, metres, so that they occlude and bound the free space.
+MESH_THIN_WALL = 0.05
+
+#: Heights above the floor, metres, of the extra sections that find low
+#: obstacles (parapets under windows, desks, table legs): the robot cannot
+#: stand there although the camera sees over them.
+MESH_OBSTACLE_HEIGHTS = (0.05, 0.3)
+
+#: Walls-only meshes: at most this many section heights are searched for
+#: rooms the walls enclose (doorways leave rooms open at low heights; the
+#: wall above a door closes them).
+MESH_MAX_SECTIONS = 12
+
+#: Mesh edges shared by more than this many faces are feature edges without
+#: further analysis (pathological non-manifold fans).
+MESH_MAX_EDGE_FACES = 8
+
+#: Overlay operations on visibility regions snap to this grid, metres: the
+#: fixed precision makes GEOS far faster on the many nearly collinear edges
+#: of overlapping visibility polygons; the shift (< 1e-5 m) is absorbed by
+#: ``VIR_EPS_SLACK``.
+OVERLAY_GRID = 1e-5

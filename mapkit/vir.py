@@ -1,0 +1,405 @@
+"""The view-invariant region (VIR) partition of the free space.
+
+:func:`build_regions` cuts the free space into regions, each with the sorted
+ids of every segment visible from within ``eps`` of it (docs/visibility.md).
+Steps, each timed in ``stats``:
+
+1. ``segment_regions``: per segment S a superset R_S of the floor points it
+   is visible from (:mod:`mapkit.visibility`).
+2. ``grow``: ``R_S^eps = (R_S & free_space) + disk(eps)`` (circumscribed).
+3. ``quadtree``: adaptive cells over the free space; a cell is a leaf when
+   every R_S^eps meeting it contains it, or at the minimum cell size (its
+   list then holds every R_S^eps that meets it: still a superset).
+4. ``merge``: leaves with equal lists that touch become one region; then
+   neighbours whose lists differ little are merged (lists united, so still
+   supersets) while the area-weighted mean list length grows by at most
+   ``merge_growth``: fewer regions, a smaller map.
+5. ``geometry``: each region is the union of its cells cut to the free space;
+   regions are ordered along a Morton curve so that neighbours have close ids
+   (the file XOR-codes consecutive lists).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from mapkit.assemble import polygon_parts
+from mapkit.tolerances import OVERLAY_GRID, VIR_EPS_SLACK, VIR_MERGE_GROWTH, VIR_MIN_CELL
+from mapkit.visibility import Occluders, segment_regions
+
+# Round joins of the eps buffer: this many segments per quarter circle; the
+# radius is scaled so that the chords circumscribe the true circle.
+_QUAD_SEGS = 4
+
+
+@dataclass
+class RegionPartition:
+    """The partition and its lists.
+
+    - ``polygons``: R shapely Polygon/MultiPolygon, pairwise non-overlapping,
+      their union is the free space (up to float noise).
+    - ``lists``: R sorted int64 arrays of visible segment ids.
+    - ``stats``: JSON-able timings (s) per step, counts, mean list length.
+    """
+
+    polygons: list
+    lists: list
+    stats: dict = field(default_factory=dict)
+
+
+def build_regions(
+    segments: np.ndarray,
+    occluders,
+    free_space,
+    camera,
+    *,
+    max_range: float = 10.0,
+    min_visible_length: float = 0.3,
+    eps: float = 0.05,
+    progress: bool = False,
+    min_cell: float = VIR_MIN_CELL,
+    merge_growth: float = VIR_MERGE_GROWTH,
+) -> RegionPartition:
+    """Partition ``free_space`` into view-invariant regions.
+
+    - ``segments`` (N, 2, 3) float, metres, world frame z up.
+    - ``occluders``: shapely (Multi)Polygon, wall solids (full height, opaque).
+    - ``free_space``: shapely (Multi)Polygon, where the camera centre may be.
+    - ``camera``: :class:`matcher.camera.Camera` (``height_m``,
+      ``elevation_range()``).
+    - ``max_range`` (m), ``min_visible_length`` (m), ``eps`` (m): see
+      docs/visibility.md; ``min_cell`` (m) the smallest quadtree cell;
+      ``merge_growth`` the allowed relative growth of the mean list length
+      when merging regions (0: merge equal lists only).
+
+    Guarantee: for every point q of the free space and every segment S
+    visible from q, S is in the list of every region within ``eps`` of q.
+    """
+    segs = np.asarray(segments, dtype=float)
+    if segs.ndim != 3 or segs.shape[1:] != (2, 3):
+        raise ValueError(f"segments: expected shape (N, 2, 3), got {segs.shape}")
+    if not np.isfinite(segs).all():
+        raise ValueError("segments: coordinates must be finite")
+    for name, v, lo in (("max_range", max_range, 0.0), ("min_visible_length", min_visible_length, 0.0), ("min_cell", min_cell, 0.0)):
+        if not (math.isfinite(v) and v > lo):
+            raise ValueError(f"{name} must be a finite number > {lo}, got {v}")
+    if not (math.isfinite(eps) and eps >= 0):
+        raise ValueError(f"eps must be a finite number >= 0, got {eps}")
+    if not (math.isfinite(merge_growth) and merge_growth >= 0):
+        raise ValueError(f"merge_growth must be a finite number >= 0, got {merge_growth}")
+    if free_space is None or free_space.is_empty:
+        raise ValueError("free_space is empty: no place for the camera")
+
+    stats: dict = {"segments": int(len(segs))}
+    t0 = time.perf_counter()
+    occ = Occluders.from_geometry(occluders)
+    sr = segment_regions(
+        segs,
+        occ,
+        camera.height_m,
+        camera.elevation_range(),
+        max_range=max_range,
+        min_visible_length=min_visible_length,
+        progress=progress,
+    )
+    stats.update(sr.stats)
+    t1 = time.perf_counter()
+    stats["time_segment_regions_total_s"] = t1 - t0
+
+    grown = grow_regions(sr.regions, free_space, eps)
+    t2 = time.perf_counter()
+    stats["time_grow_s"] = t2 - t1
+
+    leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress)
+    t3 = time.perf_counter()
+    stats["time_quadtree_s"] = t3 - t2
+    stats["quadtree_leaves"] = int(len(leaves.level))
+    stats["quadtree_depth"] = int(leaves.depth)
+
+    groups, bits = merge_leaves(leaves, merge_growth)
+    t4 = time.perf_counter()
+    stats["time_merge_s"] = t4 - t3
+
+    polygons, lists, ordering = region_geometry(leaves, groups, bits, free_space, len(segs))
+    t5 = time.perf_counter()
+    stats["time_geometry_s"] = t5 - t4
+    stats["time_total_s"] = t5 - t0
+    stats["regions"] = len(polygons)
+    areas = np.array([g.area for g in polygons])
+    lengths = np.array([len(x) for x in lists], dtype=float)
+    stats["mean_list_length"] = float((areas * lengths).sum() / max(areas.sum(), 1e-300))
+    stats["max_list_length"] = int(lengths.max()) if len(lengths) else 0
+    stats["region_area"] = float(areas.sum())
+    stats["free_space_area"] = float(free_space.area)
+    return RegionPartition(polygons, lists, stats)
+
+
+# --------------------------------------------------------------------------
+# Step 2: grow the visibility regions by eps
+
+
+def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
+    """``(R_S & free_space) + disk(eps + VIR_EPS_SLACK)``, the disk circumscribed
+    by the buffer's chords. ``regions`` (N,) object array; returns (N,) prepared
+    geometries (empty where S is never visible)."""
+    clipped = shapely.intersection(regions, free_space, grid_size=OVERLAY_GRID)
+    radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * _QUAD_SEGS))
+    grown = shapely.buffer(clipped, radius, quad_segs=_QUAD_SEGS)
+    shapely.prepare(grown)
+    return grown
+
+
+# --------------------------------------------------------------------------
+# Step 3: adaptive quadtree
+
+
+@dataclass
+class Leaves:
+    """Quadtree leaves. Cell (level, ix, iy) spans
+    ``[x0 + ix*s, x0 + (ix+1)*s] x [y0 + iy*s, ...]``, ``s = size / 2**level``.
+
+    - ``level``, ``ix``, ``iy`` (M,) int64; ``bits`` (M, ceil(N/8)) uint8, the
+      packed list of each leaf (little bit order); ``depth`` the finest level.
+    """
+
+    level: np.ndarray
+    ix: np.ndarray
+    iy: np.ndarray
+    bits: np.ndarray
+    origin: np.ndarray
+    size: float
+    depth: int
+
+    def boxes(self) -> np.ndarray:
+        s = self.size / 2.0**self.level
+        x, y = self.origin[0] + self.ix * s, self.origin[1] + self.iy * s
+        return shapely.box(x, y, x + s, y + s)
+
+
+def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
+    """Subdivide until each cell's list is decided (see the module docstring).
+
+    Per level, every still-undecided (cell, segment) pair is tested at once
+    with shapely's vectorised predicates on prepared geometries: ``intersects``
+    (S may be listed) then ``covers`` (S is listed for every child too).
+    Children test only their parent's undecided segments.
+    """
+    from tqdm import tqdm
+
+    n = len(grown)
+    x0, y0, x1, y1 = free_space.bounds
+    span = max(x1 - x0, y1 - y0, min_cell)
+    depth = max(0, int(math.ceil(math.log2(span / min_cell) - 1e-9)))
+    size = min_cell * 2.0**depth
+    origin = np.array([(x0 + x1 - size) / 2.0, (y0 + y1 - size) / 2.0])
+    free = free_space
+    shapely.prepare(free)
+
+    ix = np.zeros(1, dtype=np.int64)
+    iy = np.zeros(1, dtype=np.int64)
+    listed = np.zeros((1, n), dtype=bool)
+    tree = shapely.STRtree(grown)
+    ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int64)
+    pc = np.zeros(len(ps), dtype=np.int64)
+    out_level, out_ix, out_iy, out_bits = [], [], [], []
+    for lev in tqdm(range(depth + 1), desc="region quadtree", disable=not progress, leave=False):
+        s = size / 2.0**lev
+        bx, by = origin[0] + ix * s, origin[1] + iy * s
+        boxes = shapely.box(bx, by, bx + s, by + s)
+        # Cells off the free space are dropped; pairs follow their cells.
+        keep = shapely.intersects(free, boxes)
+        remap = np.cumsum(keep) - 1
+        alive = keep[pc]
+        pc, ps = remap[pc[alive]], ps[alive]
+        ix, iy, listed, boxes = ix[keep], iy[keep], listed[keep], boxes[keep]
+        hit = shapely.intersects(grown[ps], boxes[pc])
+        pc, ps = pc[hit], ps[hit]
+        full = shapely.covers(grown[ps], boxes[pc])
+        listed[pc[full], ps[full]] = True
+        pc, ps = pc[~full], ps[~full]
+        open_count = np.bincount(pc, minlength=len(ix))
+        done = open_count == 0 if lev < depth else np.ones(len(ix), dtype=bool)
+        if lev == depth:  # smallest cells keep every segment that may be seen
+            listed[pc, ps] = True
+        out_level.append(np.full(int(done.sum()), lev))
+        out_ix.append(ix[done])
+        out_iy.append(iy[done])
+        out_bits.append(np.packbits(listed[done], axis=1, bitorder="little"))
+        if lev == depth or done.all():
+            break
+        # Split the undecided cells in four; children inherit the parent's list.
+        split = np.nonzero(~done)[0]
+        child_of = np.full(len(ix), -1)
+        child_of[split] = np.arange(len(split))
+        dx = np.array([0, 1, 0, 1])
+        dy = np.array([0, 0, 1, 1])
+        ix = (2 * ix[split][:, None] + dx).ravel()
+        iy = (2 * iy[split][:, None] + dy).ravel()
+        listed = np.repeat(listed[split], 4, axis=0)
+        base = child_of[pc] * 4
+        pc = (base[:, None] + np.arange(4)).ravel()
+        ps = np.repeat(ps, 4)
+    nbytes = (n + 7) // 8
+    bits = np.concatenate(out_bits) if out_bits else np.zeros((0, nbytes), dtype=np.uint8)
+    return Leaves(
+        np.concatenate(out_level).astype(np.int64),
+        np.concatenate(out_ix).astype(np.int64),
+        np.concatenate(out_iy).astype(np.int64),
+        bits.reshape(-1, nbytes),
+        origin,
+        size,
+        depth,
+    )
+
+
+# --------------------------------------------------------------------------
+# Step 4: merge leaves into regions
+
+
+def leaf_raster(leaves: Leaves) -> np.ndarray:
+    """(G, G) int64 label image at the finest cell size, ``G = 2**depth``:
+    the leaf covering each fine cell, -1 where none (off the free space)."""
+    g = 2**leaves.depth
+    lab = np.full((g, g), -1, dtype=np.int64)
+    scale = 2 ** (leaves.depth - leaves.level)
+    for k, (x, y, w) in enumerate(zip(leaves.ix * scale, leaves.iy * scale, scale)):
+        lab[y : y + w, x : x + w] = k
+    return lab
+
+
+def adjacent_pairs(labels: np.ndarray) -> np.ndarray:
+    """(P, 2) distinct unordered pairs of labels that share a cell side."""
+    pairs = np.concatenate(
+        [
+            np.stack([labels[:, :-1].ravel(), labels[:, 1:].ravel()], 1),
+            np.stack([labels[:-1, :].ravel(), labels[1:, :].ravel()], 1),
+        ]
+    )
+    pairs = pairs[(pairs[:, 0] != pairs[:, 1]) & (pairs >= 0).all(axis=1)]
+    return np.unique(np.sort(pairs, axis=1), axis=0)
+
+
+def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[int]]:
+    """Group leaves into regions. Returns ``group`` (M,) region index of each
+    leaf and the region lists as Python int bitsets (bit i: segment i).
+
+    First, touching leaves with equal lists join (connected components).
+    Then a greedy agglomeration: the cost of merging A and B is the growth of
+    the summed area x list length, ``a_A (|A u B| - |A|) + a_B (|A u B| - |B|)``;
+    the cheapest pair is merged first, until the total growth would exceed
+    ``merge_growth`` times the starting sum.
+    """
+    m = len(leaves.level)
+    labels = leaf_raster(leaves)
+    pairs = adjacent_pairs(labels)
+    _, list_id = np.unique(leaves.bits, axis=0, return_inverse=True)
+    list_id = list_id.ravel()
+    same = pairs[list_id[pairs[:, 0]] == list_id[pairs[:, 1]]]
+    graph = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(m, m))
+    n_comp, comp = connected_components(graph, directed=False)
+    first = np.full(n_comp, -1)
+    first[comp[::-1]] = np.arange(m)[::-1]
+    cell_area = (leaves.size / 2.0**leaves.level) ** 2
+    area = np.bincount(comp, weights=cell_area, minlength=n_comp).tolist()
+    bits = [int.from_bytes(leaves.bits[i].tobytes(), "little") for i in first]
+    count = [b.bit_count() for b in bits]
+    cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
+    cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
+    nbrs: list[set] = [set() for _ in range(n_comp)]
+    for a, b in cpairs.tolist():
+        nbrs[a].add(b)
+        nbrs[b].add(a)
+
+    budget = merge_growth * sum(a * c for a, c in zip(area, count))
+    parent = list(range(n_comp))
+    version = [0] * n_comp
+
+    def cost(a: int, b: int) -> float:
+        u = (bits[a] | bits[b]).bit_count()
+        return area[a] * (u - count[a]) + area[b] * (u - count[b])
+
+    heap = [(cost(a, b), a, b, 0, 0) for a, b in cpairs.tolist()]
+    heapq.heapify(heap)
+    spent = 0.0
+    while heap and budget > 0:
+        c, a, b, va, vb = heapq.heappop(heap)
+        if version[a] != va or version[b] != vb or parent[a] != a or parent[b] != b:
+            continue
+        if spent + c > budget:
+            break
+        spent += c
+        # b joins a
+        parent[b] = a
+        bits[a] |= bits[b]
+        count[a] = bits[a].bit_count()
+        area[a] += area[b]
+        version[a] += 1
+        for x in nbrs[b]:
+            nbrs[x].discard(b)
+            if x != a:
+                nbrs[x].add(a)
+                nbrs[a].add(x)
+        nbrs[a].discard(b)
+        nbrs[b] = set()
+        for x in nbrs[a]:
+            heapq.heappush(heap, (cost(a, x), a, x, version[a], version[x]) if a < x else (cost(x, a), x, a, version[x], version[a]))
+    root = np.array(parent)
+    while True:  # path compression to the final representatives
+        nxt = root[root]
+        if (nxt == root).all():
+            break
+        root = nxt
+    reps, group_of_comp = np.unique(root, return_inverse=True)
+    return group_of_comp.ravel()[comp], [bits[r] for r in reps]
+
+
+# --------------------------------------------------------------------------
+# Step 5: region outlines
+
+
+def _morton(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Interleave the bits of non-negative ints x, y (< 2**31): Z-order keys."""
+    def spread(v):
+        v = v.astype(np.uint64) & np.uint64(0xFFFFFFFF)
+        for shift, mask in ((16, 0x0000FFFF0000FFFF), (8, 0x00FF00FF00FF00FF), (4, 0x0F0F0F0F0F0F0F0F), (2, 0x3333333333333333), (1, 0x5555555555555555)):
+            v = (v | (v << np.uint64(shift))) & np.uint64(mask)
+        return v
+
+    return spread(x) | (spread(y) << np.uint64(1))
+
+
+def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int):
+    """Outlines (union of each region's cells, cut to the free space), lists,
+    and the Morton order used. Regions left empty by the cut are dropped."""
+    n_groups = len(bits)
+    scale = 2 ** (leaves.depth - leaves.level)
+    key = _morton(leaves.ix * scale, leaves.iy * scale)
+    first_key = np.full(n_groups, np.iinfo(np.uint64).max, dtype=np.uint64)
+    np.minimum.at(first_key, group, key)
+    order = np.argsort(first_key, kind="stable")
+    boxes = leaves.boxes()
+    by_group = np.argsort(group, kind="stable")
+    bounds = np.searchsorted(group[by_group], np.arange(n_groups + 1))
+    merged = np.array([shapely.union_all(boxes[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None])[:-1]
+    cut = shapely.intersection(merged, free_space, grid_size=OVERLAY_GRID)
+    polygons, lists = [], []
+    ids = np.arange(n_segments)
+    for g in order:
+        parts = [p for p in polygon_parts(cut[g]) if p.area > 0]
+        if not parts:
+            continue
+        polygons.append(parts[0] if len(parts) == 1 else shapely.MultiPolygon(parts))
+        row = np.frombuffer(bits[g].to_bytes((n_segments + 7) // 8, "little"), dtype=np.uint8)
+        lists.append(ids[np.unpackbits(row, count=n_segments, bitorder="little").astype(bool)].astype(np.int64))
+    return polygons, lists, order
+
+
+__all__ = ["Leaves", "RegionPartition", "build_regions", "grow_regions", "merge_leaves", "quadtree_leaves", "region_geometry"]

@@ -1,0 +1,406 @@
+"""Visibility among opaque walls: visibility polygons of points, and the
+region of the floor from which each model segment is visible.
+
+Conventions (docs/visibility.md has the full definition):
+
+- Floor points ``q`` and segment points ``s`` in metres, world frame, z up.
+  The camera centre stands at ``(q, h)``; its heading is free.
+- Occluders are wall solids seen from above (full height, opaque). For sight
+  tests they are shrunk by ``OCCLUSION_SHRINK``, so that a sight line ending
+  on the wall face its segment lies on is not blocked by float noise.
+- Everything computed here is a *superset* of the exact set it stands for:
+  circles become circumscribed polygons, disks removed become inscribed ones.
+  The matcher may only ever lose speed, never a visible segment.
+
+Public names: :class:`Occluders` (edge arrays ready for sweeps),
+:func:`visibility_polygon`, :func:`distance_band`,
+:func:`vertical_distance_band`, :func:`segment_regions`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import Polygon
+
+from mapkit.assemble import polygon_parts
+from mapkit.tolerances import (
+    CIRCLE_SIDES,
+    MERGE,
+    OCCLUSION_SHRINK,
+    OVERLAY_GRID,
+    VIS_RAY_OFFSET_DEG,
+)
+
+# Rays x edges per numpy block: bounds the temporaries of the sweep (~50 MB).
+_BLOCK = 400_000
+
+
+# --------------------------------------------------------------------------
+# Occluders as oriented edges
+
+
+@dataclass(frozen=True)
+class Occluders:
+    """Edges of the shrunk occluders, oriented with the solid on their left.
+
+    - ``edges`` (E, 2, 2) float: edge ``e`` runs from ``edges[e, 0]`` to
+      ``edges[e, 1]``; exteriors counter-clockwise, holes clockwise.
+    - ``lo``, ``hi`` (E, 2): per-edge bounding boxes (range culling).
+    - ``geometry``: the shrunk occluders as one shapely geometry.
+    """
+
+    edges: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    geometry: object
+
+    @classmethod
+    def from_geometry(cls, occluders, shrink: float = OCCLUSION_SHRINK) -> "Occluders":
+        """Shrink ``occluders`` (shapely (Multi)Polygon) by ``shrink`` metres and
+        collect their edges; walls thinner than ``2 * shrink`` vanish (they are
+        drawing noise at that scale)."""
+        if occluders is None or occluders.is_empty:
+            geom = shapely.MultiPolygon()
+        else:
+            geom = shapely.buffer(occluders, -shrink, join_style="mitre")
+            geom = shapely.orient_polygons(geom, exterior_cw=False)
+        segs = []
+        for poly in polygon_parts(geom):
+            for ring in [poly.exterior, *poly.interiors]:
+                pts = np.asarray(ring.coords)[:, :2]
+                if len(pts) >= 4:  # closed ring: first point repeated
+                    segs.append(np.stack([pts[:-1], pts[1:]], axis=1))
+        edges = np.concatenate(segs) if segs else np.zeros((0, 2, 2))
+        keep = np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1) > 0
+        edges = edges[keep]
+        return cls(edges, edges.min(axis=1), edges.max(axis=1), geom)
+
+
+# --------------------------------------------------------------------------
+# Visibility polygon of one point
+
+
+def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarray:
+    """Star-shaped polygon of the floor points whose sight line to ``p`` is clear.
+
+    ``p`` (2,) metres; returns the (K, 2) vertices, counter-clockwise around
+    ``p``. Exact up to the ray offset ``VIS_RAY_OFFSET_DEG`` within the square
+    of half-side ``radius`` around ``p``; outside that square the outline is
+    only a bound (callers intersect with disks of radius <= ``radius``).
+
+    Angular sweep, vectorised: rays just either side of every vertex of a
+    front-facing edge, nearest hit among those edges and the square. Between
+    two consecutive rays the nearest edge cannot change (occluder edges do not
+    cross, and every endpoint is a ray), so joining the hits is exact. Edges
+    facing away from ``p`` are never first hit (a ray enters a solid through
+    a front face), which halves the work.
+    """
+    p = np.asarray(p, dtype=float)
+    half = float(radius)
+    lo, hi = p - half, p + half
+    e = occ.edges
+    near = (occ.hi[:, 0] >= lo[0]) & (occ.lo[:, 0] <= hi[0]) & (occ.hi[:, 1] >= lo[1]) & (occ.lo[:, 1] <= hi[1])
+    e = e[near]
+    a, b = e[:, 0], e[:, 1]
+    ab = b - a
+    # Solid on the left of a->b: the edge faces p iff p is strictly on its right.
+    front = ab[:, 0] * (p[1] - a[:, 1]) - ab[:, 1] * (p[0] - a[:, 0]) < 0.0
+    a, b = a[front], b[front]
+    sq = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
+    a = np.concatenate([a, sq])
+    b = np.concatenate([b, np.roll(sq, -1, axis=0)])
+    verts = np.concatenate([a, b]) - p
+    theta = np.arctan2(verts[:, 1], verts[:, 0])
+    off = math.radians(VIS_RAY_OFFSET_DEG)
+    ang = np.concatenate([theta - off, theta + off])
+    ang = np.unique(np.mod(ang + math.pi, 2.0 * math.pi) - math.pi)
+    d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    t = _nearest_hits(d, a - p, b - a)
+    return p + d * t[:, None]
+
+
+def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Distance along unit rays ``d`` (K, 2) from the origin to the nearest of
+    the edges ``a + u e``, u in [0, 1] (``a``, ``e`` (E, 2)); inf if none."""
+    out = np.empty(len(d))
+    step = max(1, _BLOCK // max(1, len(a)))
+    for i in range(0, len(d), step):
+        dd = d[i : i + step, None, :]
+        denom = dd[..., 0] * e[None, :, 1] - dd[..., 1] * e[None, :, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (a[None, :, 0] * e[None, :, 1] - a[None, :, 1] * e[None, :, 0]) / denom
+            u = (a[None, :, 0] * dd[..., 1] - a[None, :, 1] * dd[..., 0]) / denom
+        # u within [0, 1] up to round-off: a ray through a shared vertex must
+        # not slip between the two edges meeting there.
+        ok = (t > 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
+        out[i : i + step] = np.where(ok, t, np.inf).min(axis=1)
+    return out
+
+
+# --------------------------------------------------------------------------
+# Distance and elevation: which horizontal distances suit a point at height z
+
+
+def distance_band(z: np.ndarray, h: float, e_min: float, e_max: float, max_range: float) -> tuple[np.ndarray, np.ndarray]:
+    """Horizontal distances ``d`` from which a point at height ``z`` is seen.
+
+    Conditions (2) and (3) of the definition: the 3D distance from the camera
+    centre (height ``h``) is <= ``max_range``, and the elevation
+    ``atan2(z - h, d)`` lies in ``[e_min, e_max]`` (radians). For a fixed
+    ``z`` both say ``dmin <= d <= dmax``. Returns ``(dmin, dmax)`` arrays shaped
+    like ``z``; an empty band has ``dmax < dmin`` (both -1 then).
+    """
+    z = np.asarray(z, dtype=float)
+    dz = z - h
+    with np.errstate(invalid="ignore"):
+        dmax = np.sqrt(max_range**2 - dz**2)
+    dmax = np.where(np.abs(dz) <= max_range, dmax, -1.0)
+    dmin = np.zeros_like(dz)
+    tmin, tmax = math.tan(e_min), math.tan(e_max)
+    up, down = dz > 0, dz < 0
+    # Above the camera the elevation falls from 90 deg towards 0 as d grows.
+    if e_max <= 0:
+        dmax = np.where(up, -1.0, dmax)
+    elif e_max < math.pi / 2:
+        dmin = np.where(up, np.maximum(dmin, dz / tmax), dmin)
+    if e_min > 0:
+        dmax = np.where(up, np.minimum(dmax, dz / tmin), dmax)
+    # Below it the elevation rises from -90 deg towards 0.
+    if e_min >= 0:
+        dmax = np.where(down, -1.0, dmax)
+    elif e_min > -math.pi / 2:
+        dmin = np.where(down, np.maximum(dmin, dz / tmin), dmin)
+    if e_max < 0:
+        dmax = np.where(down, np.minimum(dmax, dz / tmax), dmax)
+    # Level with the camera: elevation 0 at every distance.
+    if not e_min <= 0.0 <= e_max:
+        dmax = np.where(dz == 0, -1.0, dmax)
+    empty = dmax < dmin
+    return np.where(empty, -1.0, dmin), np.where(empty, -1.0, dmax)
+
+
+def vertical_extent(d: np.ndarray, z0: np.ndarray, z1: np.ndarray, h: float, e_min: float, e_max: float, max_range: float) -> np.ndarray:
+    """Length of the part of vertical segments ``[z0, z1]`` seen from
+    horizontal distance ``d`` (all arrays broadcast); negative if none.
+
+    Concave in ``d`` (a min of concave bounds minus a max of convex ones), so
+    the distances where it exceeds a threshold form one interval."""
+    d = np.asarray(d, dtype=float)
+    reach = np.sqrt(np.maximum(max_range**2 - d**2, 0.0))
+    reach = np.where(d <= max_range, reach, -np.inf)
+    top = np.minimum(np.minimum(z1, h + d * math.tan(min(e_max, 1.5707))), h + reach)
+    bot = np.maximum(np.maximum(z0, h + d * math.tan(max(e_min, -1.5707))), h - reach)
+    return top - bot
+
+
+def vertical_distance_band(z0, z1, need, h, e_min, e_max, max_range) -> tuple[np.ndarray, np.ndarray]:
+    """Horizontal distances from which vertical segments ``[z0, z1]`` (arrays
+    (M,)) show a visible extent >= ``need`` (M,). Returns ``(dmin, dmax)``,
+    widened outwards by 1 um; ``dmax < dmin`` (both -1) when never.
+
+    The extent is concave in ``d``: a ternary search finds its maximum, then
+    bisections find where it crosses ``need`` on either side."""
+    z0, z1, need = (np.asarray(v, dtype=float) for v in (z0, z1, need))
+    f = lambda d: vertical_extent(d, z0, z1, h, e_min, e_max, max_range) - need  # noqa: E731
+    lo, hi = np.zeros_like(z0), np.full_like(z0, max_range)
+    for _ in range(80):  # ternary search: interval shrinks by 2/3 per step
+        m1, m2 = lo + (hi - lo) / 3, hi - (hi - lo) / 3
+        left = f(m1) < f(m2)
+        lo, hi = np.where(left, m1, lo), np.where(left, hi, m2)
+    peak = (lo + hi) / 2
+    ok = f(peak) >= 0
+    # Bisect [0, peak] for the first distance that qualifies, [peak, R] for the last.
+    a, b = np.zeros_like(peak), peak.copy()
+    c, e = peak.copy(), np.full_like(peak, max_range)
+    for _ in range(60):
+        m = (a + b) / 2
+        good = f(m) >= 0
+        a, b = np.where(good, a, m), np.where(good, m, b)
+        m = (c + e) / 2
+        good = f(m) >= 0
+        c, e = np.where(good, m, c), np.where(good, e, m)
+    dmin = np.where(f(np.zeros_like(peak)) >= 0, 0.0, a)
+    dmax = np.where(f(np.full_like(peak, max_range)) >= 0, max_range, e)
+    dmin, dmax = np.maximum(dmin - 1e-6, 0.0), dmax + 1e-6
+    return np.where(ok, dmin, -1.0), np.where(ok, dmax, -1.0)
+
+
+def annuli(centres: np.ndarray, r_in: np.ndarray, r_out: np.ndarray, sides: int = CIRCLE_SIDES) -> np.ndarray:
+    """Shapely polygons ``r_in <= |q - c| <= r_out`` as supersets: the outer
+    circle circumscribed, the inner one inscribed (it is removed). ``centres``
+    (M, 2), radii (M,); ``r_in <= 0`` gives a disk. Returns an (M,) object array."""
+    phi = np.linspace(0.0, 2.0 * math.pi, sides, endpoint=False)
+    ring = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    outer = centres[:, None, :] + (r_out / math.cos(math.pi / sides))[:, None, None] * ring[None]
+    shells = shapely.linearrings(outer)
+    out = np.empty(len(centres), dtype=object)
+    disk = r_in <= 0
+    out[disk] = shapely.polygons(shells[disk])
+    if (~disk).any():
+        inner = centres[~disk, None, :] + r_in[~disk, None, None] * ring[None, ::-1]
+        holes = shapely.linearrings(inner)
+        out[~disk] = [shapely.Polygon(s, [hh]) for s, hh in zip(shells[~disk], holes)]
+    return out
+
+
+# --------------------------------------------------------------------------
+# Per-segment visibility regions
+
+
+@dataclass
+class SegmentRegions:
+    """What :func:`segment_regions` returns.
+
+    - ``regions``: (N,) object array of shapely geometries, ``R_S`` for each
+      segment (empty geometry when never visible); not clipped to free space.
+    - ``stats``: counts and timings (JSON-able).
+    """
+
+    regions: np.ndarray
+    stats: dict
+
+
+def sample_segment(seg: np.ndarray, spacing: float) -> np.ndarray:
+    """(n, 3) points along ``seg`` (2, 3), end points included, spaced <= ``spacing``."""
+    length = float(np.linalg.norm(seg[1] - seg[0]))
+    n = max(1, int(math.ceil(length / spacing - 1e-9)))
+    t = np.linspace(0.0, 1.0, n + 1)
+    return seg[0] + t[:, None] * (seg[1] - seg[0])
+
+
+def segment_regions(
+    segments: np.ndarray,
+    occ: Occluders,
+    h: float,
+    elevation: tuple[float, float],
+    *,
+    max_range: float,
+    min_visible_length: float,
+    progress: bool = False,
+) -> SegmentRegions:
+    """For every segment S, a region R_S containing every floor point S is visible from.
+
+    ``segments`` (N, 2, 3) metres; ``h`` camera height; ``elevation`` the
+    camera's (lowest, highest) elevation angles, radians.
+
+    Non-vertical S: samples ``s_i`` spaced <= L/2 (``L = min_visible_length``).
+    A seen piece of length >= L holds two consecutive samples, so
+    ``R_S = U_i V(s_i) & V(s_i+1)``, where ``V(s)`` is the visibility polygon
+    of ``s_xy`` within its distance band. The two bands of a pair are bounded
+    together by one annulus around the pair's midpoint ``m`` (``delta`` apart):
+    ``|q-m|^2 <= (dmax_i^2 + dmax_j^2)/2 - delta^2/4`` holds in both outer disks,
+    and the disk ``|q-m| <= sqrt(min dmin^2 - delta^2/4)`` lies in their union.
+    Vertical S: visibility polygon of its xy point within the distance band
+    where its visible z-extent reaches min(L, its length).
+    """
+    import time
+
+    from tqdm import tqdm
+
+    t0 = time.perf_counter()
+    segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
+    n = len(segs)
+    e_min, e_max = elevation
+    L = float(min_visible_length)
+    vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= MERGE
+
+    # ---- samples: xy keys shared between segments (floor and ceiling edges)
+    keys: dict[tuple[float, float], int] = {}
+    xy_list: list[np.ndarray] = []
+
+    def key_of(pt: np.ndarray) -> int:
+        k = (round(float(pt[0]), 7), round(float(pt[1]), 7))
+        if k not in keys:
+            keys[k] = len(xy_list)
+            xy_list.append(np.array(k))
+        return keys[k]
+
+    pair_seg, pair_a, pair_b, pair_mid, pair_delta, pair_rin, pair_rout = [], [], [], [], [], [], []
+    vert_ids = np.nonzero(vertical)[0]
+    vert_keys = [key_of(segs[i, 0, :2]) for i in vert_ids]
+    for i in np.nonzero(~vertical)[0]:
+        pts = sample_segment(segs[i], L / 2.0)
+        dmin, dmax = distance_band(pts[:, 2], h, e_min, e_max, max_range)
+        ks = [key_of(pt) for pt in pts[:, :2]]
+        for j in range(len(pts) - 1):
+            if dmax[j] < 0 or dmax[j + 1] < 0:
+                continue  # one sample never seen: the pair never is
+            delta2 = float(np.sum((pts[j + 1, :2] - pts[j, :2]) ** 2))
+            r_out2 = (dmax[j] ** 2 + dmax[j + 1] ** 2) / 2.0 - delta2 / 4.0
+            r_in2 = min(dmin[j], dmin[j + 1]) ** 2 - delta2 / 4.0
+            if r_out2 <= max(r_in2, 0.0):
+                continue
+            pair_seg.append(i)
+            pair_a.append(ks[j])
+            pair_b.append(ks[j + 1])
+            pair_mid.append((pts[j, :2] + pts[j + 1, :2]) / 2.0)
+            pair_delta.append(delta2)
+            pair_rin.append(math.sqrt(r_in2) if r_in2 > 0 else 0.0)
+            pair_rout.append(math.sqrt(r_out2))
+    t_sample = time.perf_counter()
+
+    # ---- visibility polygons, one per distinct xy sample point
+    xy = np.array(xy_list).reshape(-1, 2)
+    box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
+    vp = np.empty(len(xy), dtype=object)
+    for k in tqdm(range(len(xy)), desc="visibility polygons", disable=not progress, leave=False):
+        vp[k] = visibility_polygon(xy[k], occ, box)
+    vp = np.array([Polygon(v) for v in vp] + [None])[:-1]
+    t_vis = time.perf_counter()
+
+    regions = np.array([Polygon()] * n, dtype=object)
+    # ---- vertical segments: one visibility polygon within one band
+    if len(vert_ids):
+        z = np.sort(segs[vert_ids, :, 2], axis=1)
+        need = np.minimum(L, z[:, 1] - z[:, 0])
+        dmin, dmax = vertical_distance_band(z[:, 0], z[:, 1], need, h, e_min, e_max, max_range)
+        ok = dmax > dmin
+        if ok.any():
+            idx = np.nonzero(ok)[0]
+            ann = annuli(xy[np.asarray(vert_keys)[idx]], dmin[idx], dmax[idx])
+            regions[vert_ids[idx]] = shapely.intersection(vp[np.asarray(vert_keys)[idx]], ann, grid_size=OVERLAY_GRID)
+
+    # ---- pairs: V(s_i) & V(s_j), the polygon pair shared by equal xy pairs
+    n_pairs = len(pair_seg)
+    if n_pairs:
+        pa, pb = np.array(pair_a), np.array(pair_b)
+        lo_k, hi_k = np.minimum(pa, pb), np.maximum(pa, pb)
+        uniq, inv = np.unique(lo_k * len(xy) + hi_k, return_inverse=True)
+        ua, ub = uniq // len(xy), uniq % len(xy)
+        both = shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID)
+        ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
+        pieces = shapely.intersection(both[inv], ann)
+        pair_seg = np.array(pair_seg)
+        order = np.argsort(pair_seg, kind="stable")
+        bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
+        for i in tqdm(range(n), desc="segment regions", disable=not progress, leave=False):
+            if bounds[i + 1] > bounds[i]:
+                regions[i] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
+    t_union = time.perf_counter()
+    stats = {
+        "segments": n,
+        "vertical_segments": int(vertical.sum()),
+        "visibility_polygons": int(len(xy)),
+        "sample_pairs": int(n_pairs),
+        "time_sampling_s": t_sample - t0,
+        "time_visibility_polygons_s": t_vis - t_sample,
+        "time_segment_regions_s": t_union - t_vis,
+    }
+    return SegmentRegions(regions, stats)
+
+
+__all__ = [
+    "Occluders",
+    "SegmentRegions",
+    "annuli",
+    "distance_band",
+    "sample_segment",
+    "segment_regions",
+    "vertical_distance_band",
+    "vertical_extent",
+    "visibility_polygon",
+]
