@@ -38,40 +38,34 @@ CURVE_STEP_DEG = 10.0
 #: degrees of the vertical (horizontal plane) is classified as such.
 AXIS_DEG = 2.0
 
-# ---- meshes (mapkit.importers.mesh, mapkit.mesh_edges) -------------------
+# ---- plan reconstruction (mapkit.reconstruct) ------------------------------
 
-#: Mesh heights within this of a level (the floor, the top of the walls)
-#: count as on it: modellers leave objects a few millimetres off the floor.
-MESH_LEVEL = 0.02
+#: Single wall lines that bound no solid are thickened to this total width.
+THIN_WALL = 0.1
 
-#: An upward horizontal surface is (part of) the floor only if the faces at
-#: its height cover at least this fraction of the model's bounding box seen
-#: from above; table tops and wall tops are smaller.
-MESH_FLOOR_FRACTION = 0.1
+#: A closed outline standing alone (a column, a solid block) with at most
+#: this area, square metres, is solid even outside any enclosure.
+COLUMN_MAX_AREA = 1.0
 
-#: Walls modelled as single surfaces (no thickness) are given this
-#: thickness, metres, so that they occlude and bound the free space.
-MESH_THIN_WALL = 0.05
+#: Door and window jambs: wall material within this distance of the opening's
+#: drawing counts as touching it (door blocks stop a little short of the wall).
+JAMB_REACH = 0.1
 
-#: Heights above the floor, metres, of the extra sections that find low
-#: obstacles (parapets under windows, desks, table legs): the robot cannot
-#: stand there although the camera sees over them.
-MESH_OBSTACLE_HEIGHTS = (0.05, 0.3)
+#: Openings narrower than this are drawing noise, not a passage or a window.
+MIN_OPENING_WIDTH = 0.3
 
-#: Walls-only meshes: at most this many section heights are searched for
-#: rooms the walls enclose (doorways leave rooms open at low heights; the
-#: wall above a door closes them).
-MESH_MAX_SECTIONS = 12
+#: If closed outlines enclose less than this fraction of the walls' convex
+#: hull, the plan is open (a pavilion): the interior comes from a floor layer
+#: or the hull instead.
+OPEN_PLAN_FRACTION = 0.25
 
-#: Mesh edges shared by more than this many faces are feature edges without
-#: further analysis (pathological non-manifold fans).
-MESH_MAX_EDGE_FACES = 8
+#: Free-space pieces smaller than this, square metres, are slivers between
+#: walls, not places a camera can stand.
+MIN_FREE_AREA = 0.05
 
-#: Overlay operations on visibility regions snap to this grid, metres: the
-#: fixed precision makes GEOS far faster on the many nearly collinear edges
-#: of overlapping visibility polygons; the shift (< 1e-5 m) is absorbed by
-#: ``VIR_EPS_SLACK``.
-OVERLAY_GRID = 1e-5
+#: Plausible building extent, metres (largest side); outside it the drawing
+#: units are probably wrong.
+PLAUSIBLE_EXTENT = (1.0, 2000.0)
 
 # ---- visibility and regions (mapkit.visibility, mapkit.vir) -----------------
 

@@ -1,0 +1,103 @@
+"""DXF floor plans -> :class:`~mapkit.scene.Scene`.
+
+Reads the file (recovering damaged ones), decides the units, sorts layers
+into roles, flattens the linework of each role into strokes in metres and
+hands them to :func:`mapkit.reconstruct.reconstruct_scene`.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import Counter
+from pathlib import Path
+
+from ezdxf import bbox
+
+from mapkit.importers.dxf_entities import flatten_entities
+from mapkit.importers.dxf_layers import layer_counts, resolve_roles
+from mapkit.importers.dxf_read import read_dxf
+from mapkit.importers.dxf_units import decide_units
+from mapkit.options import BuildOptions
+from mapkit.reconstruct import reconstruct_scene
+from mapkit.reconstruct_types import PlanDrawing
+from mapkit.scene import Scene
+from mapkit.tolerances import CURVE_SAGITTA
+
+SUFFIXES = (".dxf",)
+
+log = logging.getLogger("mapkit")
+
+#: Roles whose geometry builds the scene (the rest is only shown in previews).
+_USED_ROLES = ("walls", "doors", "windows", "floor")
+
+
+def load_scene(path: Path, options: BuildOptions) -> Scene:
+    """Import a DXF plan; see the module docstring. Raises MapkitError for user-fixable problems."""
+    drawing, info = load_drawing(Path(path), options)
+    return reconstruct_scene(drawing, options, info)
+
+
+def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
+    """The plan's strokes per role, and ``info`` (units, layers, warnings) so far."""
+    doc, warnings = read_dxf(path)
+    for w in warnings:
+        log.warning(w)
+    counts = layer_counts(doc)
+    roles, role_warnings = resolve_roles(counts, options)
+    for w in role_warnings:
+        log.warning(w)
+    warnings += role_warnings
+
+    msp = doc.modelspace()
+    used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
+    extent = _extent(used)
+    insunits = int(doc.header.get("$INSUNITS", 0) or 0)
+    unit, per_unit, unit_warning = decide_units(insunits, options.units, extent)
+    if unit_warning:
+        log.warning(unit_warning)
+        warnings.append(unit_warning)
+    factor = per_unit * float(options.scale)
+
+    strokes, skipped = flatten_entities(msp, factor, CURVE_SAGITTA / factor, lambda layer: True)
+    if skipped:
+        listed = ", ".join(f"{n} {kind}" for kind, n in sorted(skipped.items()))
+        message = f"skipped unsupported entities: {listed}"
+        log.warning(message)
+        warnings.append(message)
+
+    drawing = PlanDrawing()
+    for s in strokes:
+        role = roles.get(s.layer)
+        if role in _USED_ROLES:
+            drawing.strokes.setdefault(role, []).append(s)
+        else:
+            drawing.ignored.setdefault(s.layer, []).append(s)
+
+    info = {
+        "source": path.name,
+        "format": "dxf",
+        "units": unit,
+        "insunits": insunits,
+        "scale": factor,
+        "layers": {
+            role: sorted(name for name, r in roles.items() if r == role and sum(counts[name].values()))
+            for role in _USED_ROLES
+        }
+        | {"ignored": sorted(name for name, r in roles.items() if r in ("ignore", None) and sum(counts[name].values()))},
+        "entities": dict(sum(counts.values(), Counter())),
+        "warnings": warnings,
+    }
+    return drawing, info
+
+
+def _extent(entities) -> float:
+    """Largest side of the bounding box of ``entities``, drawing units (0 if none)."""
+    box = bbox.extents(entities, fast=True)
+    if not box.has_data:
+        return 0.0
+    size = box.size
+    return float(max(size.x, size.y))
+
+
+def _layer(entity) -> str:
+    return entity.dxf.get("layer", "0")

@@ -1,0 +1,140 @@
+"""Flatten DXF model-space entities into :class:`~mapkit.reconstruct_types.Stroke` objects.
+
+Curves (arcs, circles, ellipses, splines, polyline bulges) become polylines
+whose chords stay within ``CURVE_SAGITTA`` of the curve and turn by at most
+``CURVE_STEP_DEG`` per step. Block inserts are expanded recursively with
+their transforms (scale incl. mirroring, rotation, MINSERT arrays); block
+content on layer 0 takes the layer of its INSERT, as CAD programs draw it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Callable, Iterator
+
+import numpy as np
+from ezdxf import path as dxfpath
+
+from mapkit.reconstruct_types import Stroke
+from mapkit.tolerances import CURVE_STEP_DEG
+
+#: Entities that carry no building geometry: skipped without a word.
+SILENT = frozenset(
+    {
+        "TEXT", "MTEXT", "ATTRIB", "ATTDEF", "DIMENSION", "ARC_DIMENSION", "LARGE_RADIAL_DIMENSION",
+        "LEADER", "MULTILEADER", "MLEADER", "TOLERANCE", "POINT", "VIEWPORT", "WIPEOUT", "SEQEND",
+        "IMAGE", "UNDERLAY", "PDFUNDERLAY", "DWFUNDERLAY", "DGNUNDERLAY", "OLE2FRAME", "XLINE", "RAY",
+    }
+)
+
+#: Entities turned into outlines through ezdxf's path support.
+PATH_TYPES = frozenset({"LINE", "LWPOLYLINE", "POLYLINE", "ARC", "CIRCLE", "ELLIPSE", "SPLINE"})
+
+#: Entities whose outline is a solid fill.
+FILL_TYPES = frozenset({"HATCH", "SOLID", "TRACE", "MPOLYGON"})
+
+#: Entities expanded into simpler ones by ezdxf.
+EXPAND_TYPES = frozenset({"INSERT", "MLINE"})
+
+#: Block nesting deeper than this is a reference cycle in a broken file.
+_MAX_DEPTH = 32
+
+#: Least segments per cubic Bezier piece: ezdxf's arcs are pieces of at most
+#: 90 degrees, so this many steps keep each under CURVE_STEP_DEG.
+_MIN_SEGMENTS = math.ceil(90.0 / CURVE_STEP_DEG)
+
+
+def flatten_entities(
+    entities,
+    factor: float,
+    sagitta: float,
+    layer_wanted: Callable[[str], bool],
+) -> tuple[list[Stroke], Counter]:
+    """Strokes (in metres) of model-space ``entities`` on wanted layers.
+
+    ``factor``: metres per drawing unit; ``sagitta``: chord tolerance in
+    drawing units; ``layer_wanted(layer)`` says whether a layer's geometry is
+    needed at all. Returns the strokes and a count of unsupported entity
+    types that were skipped.
+    """
+    strokes: list[Stroke] = []
+    skipped: Counter = Counter()
+    for group, entity in enumerate(entities):
+        layer = entity.dxf.get("layer", "0")
+        if entity.dxftype() in EXPAND_TYPES:
+            # Each top-level block insert is one group (one door, one window).
+            items = _expand(entity, layer, 0, skipped)
+        else:
+            items = iter([(entity, layer)])
+            group = None
+        for sub, sub_layer in items:
+            if not layer_wanted(sub_layer):
+                continue
+            for coords, closed, filled in _outlines(sub, sagitta, skipped):
+                strokes.append(Stroke(coords * factor, closed, filled, sub_layer, group))
+    return strokes, skipped
+
+
+def _expand(entity, layer: str, depth: int, skipped: Counter) -> Iterator[tuple[object, str]]:
+    """Leaf entities of an INSERT/MLINE with their effective layers."""
+    if depth > _MAX_DEPTH:
+        skipped["INSERT (nested too deep)"] += 1
+        return
+    kind = entity.dxftype()
+    if kind == "INSERT" and entity.mcount > 1:
+        # MINSERT: one virtual insert per array cell.
+        for cell in entity.multi_insert():
+            yield from _expand(cell, layer, depth + 1, skipped)
+        return
+    try:
+        children = list(entity.virtual_entities())
+    except Exception:  # noqa: BLE001 - ezdxf raises many types for broken blocks
+        skipped[f"{kind} (broken)"] += 1
+        return
+    for child in children:
+        child_layer = child.dxf.get("layer", "0")
+        # Layer 0 inside a block means "the layer of the insert".
+        effective = layer if child_layer == "0" else child_layer
+        if child.dxftype() in EXPAND_TYPES:
+            yield from _expand(child, effective, depth + 1, skipped)
+        else:
+            yield child, effective
+
+
+def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.ndarray, bool, bool]]:
+    """(coords (N, 2) in drawing units, closed, filled) for each outline of an entity."""
+    kind = entity.dxftype()
+    if kind in SILENT:
+        return
+    if kind in PATH_TYPES:
+        filled = False
+        try:
+            paths = [dxfpath.make_path(entity)]
+        except Exception:  # noqa: BLE001 - degenerate geometry (zero-radius arc, bad spline)
+            skipped[f"{kind} (degenerate)"] += 1
+            return
+    elif kind in ("HATCH", "MPOLYGON"):
+        # Solid or patterned, a hatch on a wall layer fills the wall's section;
+        # hatches on floor layers never get here (their role is not walls).
+        filled = True
+        paths = list(dxfpath.from_hatch(entity))
+    elif kind in ("SOLID", "TRACE"):
+        filled = True
+        paths = [dxfpath.make_path(entity)]
+    else:
+        skipped[kind] += 1
+        return
+    for p in paths:
+        subs = p.sub_paths() if p.has_sub_paths else [p]
+        for sub in subs:
+            pts = np.array([(v.x, v.y) for v in sub.flattening(sagitta, segments=_MIN_SEGMENTS)], dtype=float)
+            if len(pts) < 2:
+                continue
+            closed = bool(np.allclose(pts[0], pts[-1], rtol=0.0, atol=sagitta * 1e-3)) and len(pts) > 3
+            if closed:
+                pts = pts[:-1]
+            elif filled:
+                closed = len(pts) >= 3  # a fill boundary is closed by definition
+            yield pts, closed, filled
+

@@ -1,0 +1,78 @@
+"""Open a DXF file: strict reader first, ezdxf's recover mode for damaged files."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import ezdxf
+from ezdxf import recover
+
+from mapkit.errors import MapkitError
+
+log = logging.getLogger("mapkit")
+
+#: Errors ezdxf raises on files it cannot parse (it has no single base class for all).
+_READ_ERRORS = (ezdxf.DXFError, OSError, UnicodeError, ValueError, TypeError, AttributeError, IndexError, KeyError)
+
+
+def read_dxf(path: Path) -> tuple[object, list[str]]:
+    """The ezdxf document of ``path`` and warnings about its condition.
+
+    Raises :class:`MapkitError` when the file is not DXF or nothing usable
+    survives recovery.
+    """
+    warnings: list[str] = []
+    _check_looks_like_dxf(path)
+    try:
+        doc = ezdxf.readfile(path)
+    except _READ_ERRORS as strict_error:
+        try:
+            doc, auditor = recover.readfile(path)
+        except _READ_ERRORS as exc:
+            raise MapkitError(
+                f"{path.name}: cannot read this DXF ({_short(exc) or _short(strict_error)}); "
+                f"re-export it from the CAD program"
+            ) from None
+        fixed = len(auditor.fixes)
+        errors = len(auditor.errors)
+        warnings.append(
+            f"{path.name} is damaged ({_short(strict_error)}); recovered what was readable "
+            f"({fixed} fixes, {errors} unrecoverable errors): check the preview"
+        )
+    if not _has_entities(doc):
+        if warnings:
+            raise MapkitError(
+                f"{path.name}: the file is damaged or truncated and no drawing survived recovery; "
+                f"re-export it from the CAD program"
+            )
+        raise MapkitError(f"{path.name}: the drawing is empty (no entities in model space); check the file")
+    return doc, warnings
+
+
+def _check_looks_like_dxf(path: Path) -> None:
+    """Reject files that are obviously not DXF before ezdxf tries hard to parse them."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    if head.startswith(b"AutoCAD Binary DXF"):
+        return
+    if not head.strip():
+        raise MapkitError(f"{path.name}: the file is empty; give a DXF plan")
+    text = head.decode("latin-1")
+    lines = [ln.strip() for ln in text.splitlines()[:64]]
+    # An ASCII DXF is group-code/value pairs and starts with "0" / "SECTION"
+    # (possibly after 999 comments).
+    if "SECTION" not in lines and "0" not in lines[:4]:
+        raise MapkitError(f"{path.name}: not a DXF file (no DXF SECTION header); give a DXF plan")
+
+
+def _has_entities(doc) -> bool:
+    try:
+        return next(iter(doc.modelspace()), None) is not None
+    except _READ_ERRORS:
+        return False
+
+
+def _short(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text[:120] if text else type(exc).__name__

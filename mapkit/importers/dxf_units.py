@@ -1,0 +1,104 @@
+"""Drawing units of a DXF plan: from ``$INSUNITS``, an override, or a guess.
+
+A DXF coordinate is a number in the drawing's units; everything downstream
+works in metres. ``$INSUNITS`` is often 0 ("unitless") in real files, and
+sometimes wrong, so the extent of the drawing is checked for plausibility.
+"""
+
+from __future__ import annotations
+
+import math
+
+from mapkit.errors import MapkitError
+from mapkit.tolerances import PLAUSIBLE_EXTENT
+
+#: Unit name -> metres per unit. Names accepted by ``--units``.
+UNIT_METRES = {
+    "m": 1.0,
+    "cm": 0.01,
+    "mm": 0.001,
+    "dm": 0.1,
+    "km": 1000.0,
+    "in": 0.0254,
+    "ft": 0.3048,
+    "yd": 0.9144,
+    "us-ft": 1200.0 / 3937.0,
+}
+
+_ALIASES = {
+    "metre": "m", "meter": "m", "metres": "m", "meters": "m",
+    "centimetre": "cm", "centimeter": "cm", "centimetres": "cm", "centimeters": "cm",
+    "millimetre": "mm", "millimeter": "mm", "millimetres": "mm", "millimeters": "mm",
+    "decimetre": "dm", "decimeter": "dm",
+    "inch": "in", "inches": "in", '"': "in",
+    "foot": "ft", "feet": "ft", "'": "ft",
+    "yard": "yd", "yards": "yd",
+}
+
+#: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
+#: astronomical or micro units no floor plan uses).
+INSUNITS = {1: "in", 2: "ft", 4: "mm", 5: "cm", 6: "m", 7: "km", 10: "yd", 14: "dm", 21: "us-ft"}
+
+#: Units tried, in order, when the file has none (metric CAD first).
+_GUESSES = ("m", "mm", "cm")
+
+#: Typical building size, metres: unitless drawings get the unit that puts
+#: their extent closest to this (in log scale).
+_TYPICAL_EXTENT = 20.0
+
+
+def parse_units(name: str) -> float:
+    """Metres per unit for a ``--units`` value such as "mm" or "feet"."""
+    key = name.strip().lower()
+    key = _ALIASES.get(key, key)
+    if key not in UNIT_METRES:
+        known = ", ".join(UNIT_METRES)
+        raise MapkitError(f"unknown units '{name}'; use one of {known}")
+    return UNIT_METRES[key]
+
+
+def canonical_units(name: str) -> str:
+    """The short name of a unit ("millimetres" -> "mm"); validates like :func:`parse_units`."""
+    parse_units(name)
+    key = name.strip().lower()
+    return _ALIASES.get(key, key)
+
+
+def _plausible(extent_m: float) -> bool:
+    lo, hi = PLAUSIBLE_EXTENT
+    return lo <= extent_m <= hi
+
+
+def decide_units(insunits: int, override: str | None, extent: float) -> tuple[str, float, str | None]:
+    """Choose the drawing units.
+
+    ``insunits`` is the header code, ``override`` the user's ``--units`` (or
+    None), ``extent`` the largest side of the drawing's bounding box in
+    drawing units. Returns ``(unit name, metres per unit, warning or None)``.
+    """
+    if override:
+        name = canonical_units(override)
+        return name, UNIT_METRES[name], None
+    if insunits in INSUNITS:
+        name = INSUNITS[insunits]
+        factor = UNIT_METRES[name]
+        warning = None
+        if extent > 0 and not _plausible(extent * factor):
+            warning = (
+                f"the drawing says its units are {name} but then it is {_fmt(extent * factor)} across; "
+                f"pass --units if that is wrong"
+            )
+        return name, factor, warning
+    # No usable units: pick the unit that makes the building a plausible size.
+    name = min(_GUESSES, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
+    factor = UNIT_METRES[name]
+    code = f"$INSUNITS {insunits}" if insunits else "$INSUNITS 0, unitless"
+    warning = (
+        f"the drawing has no units ({code}); assumed {name} from its extent of "
+        f"{extent:.4g} units ({_fmt(extent * factor)}); pass --units to override"
+    )
+    return name, factor, warning
+
+
+def _fmt(metres: float) -> str:
+    return f"{metres / 1000:.3g} km" if metres >= 1000 else f"{metres:.3g} m"

@@ -1,0 +1,124 @@
+"""Which DXF layer plays which role: walls, doors, windows, floor or ignored.
+
+Users name layers with ``--walls/--doors/--windows/--ignore`` globs
+(fnmatch, case-insensitive). Without them, roles are guessed from the names
+architects commonly use, in several languages and in the US National CAD
+Standard (``A-WALL``, ``A-DOOR``, ``A-GLAZ``, ``A-COLS``, ``A-FURN`` ...).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import re
+import unicodedata
+from collections.abc import Iterable
+
+#: Roles, in the order they are reported.
+ROLES = ("walls", "doors", "windows", "floor", "ignore")
+
+# Whole-word patterns on the normalised layer name (lower case, accents
+# folded, split on punctuation, digits and camelCase). Checked in order:
+# annotation words win over everything (an "A-WALL-TEXT" layer holds text),
+# doors before windows before walls (a "glass door" is a door, a "curtain
+# wall" is glass).
+_IGNORE_FIRST = r"""
+    text|texts|txt|texte|texto|testo|tekst|anno|annotation|notes?|dims?|dimensions?|dimension
+    |cotas?|cotation|cotations?|quotas?|quote|bemassung|bemasung|masse|maatvoering
+    |patt|pattern|patterns?|tiles?|tiling|carrelage|fliesen|baldosas?|piastrelle
+    |furn|furniture|mobilier|moebel|mobel|muebles?|mobiliario|arredo|arredi|meubilair|meubels?
+    |eqpm|equipment|appliances?|fixtures?|plumbing|plmb|sanitary|sanitaire|elec|electrical|hvac|mech
+    |grid|axis|axes|achsen?|ejes?|title|titleblock|frame|viewport|vport|defpoints|hidden|cancel
+    |projection|roof|ceiling|clng|plafond|techo|decke|trees?|plants?|landscape|symbols?|iden|tags?
+"""
+_DOORS = r"doors?|door|dr|porte|portes|tuer|tur|tueren|turen|puertas?|porta|porte|deur|deuren|portas?"
+_WINDOWS = r"""
+    windows?|wndw|glaz|glazing|glass|crystal|cristal|cristales|vitre|vitres|vitrage|fenetres?
+    |fenster|glas|verglasung|ventanas?|vidrio|finestr[ae]|vetro|vetri|ramen|raam|janelas?|vidro|curtain|cwmg
+"""
+_WALLS = r"""
+    walls?|wall|wand|waende|wande|mauer|mauern|murs?|muros?|muri|muur|muren|pared|paredes|parete|pareti|parede|paredes
+    |partitions?|prtn|cloisons?|tabiques?|tramezz[io]|structure|structural|struct|strs|tragwerk
+    |columns?|cols?|colonnes?|colonnas?|columnas?|pilier|piliers|pilar|pilares|pilastr[io]|poteaux?|stuetzen?|stutzen?|kolom|kolommen
+    |core|beton|concrete|hormigon|masonry|maconnerie|mauerwerk
+"""
+_FLOOR = r"""flooring|floors?|flor|sol|sols|dallage|revetement|suelos?|pavimentos?|piso|boden|fussboden|vloer|paving"""
+
+
+def _rx(alternatives: str) -> re.Pattern:
+    words = "".join(alternatives.split())
+    return re.compile(rf"^(?:{words})$")
+
+
+_GUESS_ORDER = [
+    ("ignore", _rx(_IGNORE_FIRST)),
+    ("doors", _rx(_DOORS)),
+    ("windows", _rx(_WINDOWS)),
+    ("walls", _rx(_WALLS)),
+    ("floor", _rx(_FLOOR)),
+]
+
+
+def tokens(layer: str) -> list[str]:
+    """Words of a layer name: "A-WALL-Full", "Wände", "outerWalls" -> lower-case ASCII words."""
+    # Fold accents; German umlauts also commonly appear spelled "ue", "ae", "oe".
+    folded = unicodedata.normalize("NFKD", layer)
+    folded = "".join(c for c in folded if not unicodedata.combining(c))
+    folded = folded.replace("ß", "ss")
+    split = re.sub(r"([a-z])([A-Z])", r"\1 \2", folded)
+    return [w for w in re.split(r"[^A-Za-z]+", split.lower()) if w]
+
+
+def guess_role(layer: str) -> str | None:
+    """Role guessed from a layer's name, or None when the name says nothing."""
+    words = tokens(layer)
+    for role, rx in _GUESS_ORDER:
+        if any(rx.match(w) for w in words):
+            return role
+    return None
+
+
+def _matches(layer: str, globs: Iterable[str]) -> bool:
+    name = layer.casefold()
+    return any(fnmatch.fnmatchcase(name, g.casefold()) for g in globs)
+
+
+def assign_roles(
+    layers: Iterable[str],
+    walls: list[str],
+    doors: list[str],
+    windows: list[str],
+    ignore: list[str],
+    floor: list[str] | None = None,
+) -> dict[str, str | None]:
+    """Role of every layer: "walls", "doors", "windows", "floor", "ignore", or None (unknown).
+
+    Explicit globs win. A role given explicitly is not guessed for other
+    layers (``--walls W`` means "only W are walls"); roles not given are
+    still guessed. ``ignore`` globs beat everything.
+    """
+    explicit = {"walls": walls, "doors": doors, "windows": windows, "floor": floor or []}
+    given = {role for role, globs in explicit.items() if globs}
+    out: dict[str, str | None] = {}
+    for layer in layers:
+        if _matches(layer, ignore):
+            out[layer] = "ignore"
+            continue
+        role = next((r for r in ("doors", "windows", "walls", "floor") if _matches(layer, explicit[r])), None)
+        if role is None:
+            guessed = guess_role(layer)
+            # "--walls W" means only W are walls: a layer merely named like a
+            # wall is then ignored, not guessed.
+            role = "ignore" if guessed in given else guessed
+        out[layer] = role
+    return out
+
+
+def unmatched_globs(layers: Iterable[str], **globs_by_role: list[str]) -> list[str]:
+    """The user's globs that match no layer (probably typos), as "--role glob"."""
+    layers = list(layers)
+    missing = []
+    for role, globs in globs_by_role.items():
+        for g in globs:
+            if not any(_matches(layer, [g]) for layer in layers):
+                missing.append(f"--{role} {g}")
+    return missing

@@ -1,0 +1,187 @@
+"""Plan reconstruction: strokes per role -> :class:`~mapkit.scene.Scene`.
+
+1. Walls (:mod:`mapkit.reconstruct_walls`): solids from double lines,
+   outlines, fills and columns; single lines thickened.
+2. Openings (:mod:`mapkit.reconstruct_openings`): each door or window
+   drawing claims the wall gap it sits in; free-standing glass becomes an
+   obstacle.
+3. Free space: the interior (what closed outlines enclose once door and
+   window gaps are shut; for open plans a floor layer's extent or the walls'
+   convex hull) minus walls and obstacles, shrunk by the robot radius.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import shapely
+from shapely.geometry import MultiPolygon, Polygon
+from shapely.ops import unary_union
+
+from mapkit.errors import MapkitError, NoWallsError
+from mapkit.options import BuildOptions
+from mapkit.reconstruct_openings import drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.reconstruct_types import PlanDrawing, Stroke
+from mapkit.reconstruct_walls import build_walls
+from mapkit.scene import Opening, Scene
+from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP
+
+log = logging.getLogger("mapkit")
+
+
+def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
+    """Build the scene of a plan; ``info`` (units, layers, warnings) is completed and stored in it."""
+    info = dict(info or {})
+    warnings = info.setdefault("warnings", [])
+
+    def warn(message: str) -> None:
+        log.warning(message)
+        warnings.append(message)
+
+    wall_result = build_walls(drawing.role("walls"), options.max_wall_thickness)
+    walls = wall_result.walls
+    if walls.is_empty:
+        layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
+        raise NoWallsError(
+            f"no recognisable walls on the wall layers ({layers}); name the wall layers with --walls "
+            f"(see 'mapkit layers PLAN')"
+        )
+
+    openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
+    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"))
+    if interior_source == "convex hull":
+        warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
+
+    free = interior.difference(walls)
+    if not obstacles.is_empty:
+        free = free.difference(obstacles)
+    free = free.buffer(-options.robot_radius)
+    free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+    if free.is_empty:
+        raise MapkitError(
+            f"no free space left inside the walls after keeping {options.robot_radius:g} m from them; "
+            f"check the wall layers in 'mapkit preview' or lower --robot-radius"
+        )
+
+    info["interior"] = interior_source
+    info["counts"] = dict(wall_result.counts) | {
+        "doors": sum(o.kind == "door" for o in openings),
+        "windows": sum(o.kind == "window" for o in openings),
+    }
+    info["areas_m2"] = {
+        "walls": round(walls.area, 3),
+        "free_space": round(free.area, 3),
+        "obstacles": round(obstacles.area, 3),
+        "interior": round(interior.area, 3),
+    }
+    ignored = {layer: _strokes_geometry(strokes) for layer, strokes in drawing.ignored.items()}
+    return Scene(
+        walls=walls,
+        openings=openings,
+        free_space=free,
+        wall_height=options.wall_height,
+        obstacles=obstacles,
+        ignored=ignored,
+        info=info,
+    )
+
+
+def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
+    """Openings, obstacles (windows, glass) and door gap footprints."""
+    openings: list[Opening] = []
+    glass_parts = []
+    window_gaps = []
+    for item in drawing_items(drawing.role("windows")):
+        gap = find_opening(item, walls, options.max_wall_thickness)
+        if gap is None:
+            glass_parts.append(glass_footprint(item))
+            continue
+        window_gaps.append(gap)
+        openings.append(Opening(gap, "window", options.window_sill, options.window_head))
+    glass = unary_union(glass_parts) if glass_parts else Polygon()
+
+    # Doors may sit in glass walls (a pavilion) as well as in walls.
+    barriers = unary_union([walls, glass]) if not glass.is_empty else walls
+    door_gaps = []
+    lost = []
+    for item in drawing_items(drawing.role("doors")):
+        gap = find_opening(item, barriers, options.max_wall_thickness)
+        if gap is None:
+            lost.append(item.centroid)
+            continue
+        door_gaps.append(gap)
+        openings.append(Opening(gap, "door", 0.0, options.door_height))
+    if lost:
+        where = ", ".join(f"({p.x:.1f}, {p.y:.1f})" for p in lost[:5]) + (" ..." if len(lost) > 5 else "")
+        warn(f"{len(lost)} door drawing(s) are not in a wall gap and were ignored, at {where} m; check them in 'mapkit preview'")
+    narrow = [o for o in openings if opening_width(o.footprint) < 0.5]
+    if narrow:
+        warn(f"{len(narrow)} opening(s) narrower than 0.5 m; check them in 'mapkit preview'")
+
+    # Glass doors: the door's gap is passable even where glass was drawn across it.
+    if door_gaps and not glass.is_empty:
+        glass = glass.difference(unary_union(door_gaps))
+    obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
+    obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
+    return openings, obstacles, door_gaps
+
+
+def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPolygon, floor: list[Stroke]):
+    """Region where the building's inside is, and how it was decided.
+
+    Doors, windows and glass shut their gaps, so the rooms are the holes of
+    the union of all barriers; door gaps then join the interior (the robot
+    passes through them). Open plans (those holes cover less than
+    ``OPEN_PLAN_FRACTION`` of the walls' convex hull) take the floor layer's
+    extent, else the hull.
+    """
+    shut = unary_union([walls, obstacles, *door_gaps])
+    # Hairline gaps where glass or a door gap meets a wall must not let the inside leak.
+    shut = shut.buffer(SNAP_GAP, join_style="mitre").buffer(-SNAP_GAP, join_style="mitre")
+    holes = [Polygon(ring) for poly in shapely.get_parts(shut) if isinstance(poly, Polygon) for ring in poly.interiors]
+    enclosed = unary_union(holes) if holes else Polygon()
+    hull = shut.convex_hull
+    floor_area = _floor_extent(floor)
+    if not floor_area.is_empty:
+        inside, source = unary_union([enclosed, floor_area]), "floor layer"
+    elif enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
+        inside, source = enclosed, "enclosed"
+    else:
+        inside, source = hull, "convex hull"
+    # The robot walks through doors: their gaps join the rooms they connect.
+    # A small closing seals hairline slits where a gap meets a room (they
+    # would block the passage once the free space is shrunk); walls are
+    # subtracted afterwards, so it cannot add wall material to the inside.
+    inside = unary_union([inside, *door_gaps])
+    inside = inside.buffer(SNAP_GAP, join_style="mitre").buffer(-SNAP_GAP, join_style="mitre")
+    return inside, source
+
+
+def _floor_extent(floor: list[Stroke]) -> Polygon | MultiPolygon:
+    """What a floor layer covers: its closed outlines and fills, and the faces its lines enclose."""
+    if not floor:
+        return Polygon()
+    lines = []
+    polys = []
+    for s in floor:
+        if (s.closed or s.filled) and len(s.coords) >= 3:
+            polys.append(shapely.make_valid(Polygon(s.coords)))
+        elif len(s.coords) >= 2:
+            lines.append(shapely.LineString(s.coords))
+    if lines:
+        noded = unary_union(lines)
+        polys.extend(shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))))
+    polys = [p for p in polys if isinstance(p, Polygon | MultiPolygon) and p.area > 0]
+    if not polys:
+        return Polygon()
+    return unary_union(polys)
+
+
+def _strokes_geometry(strokes: list[Stroke]):
+    """Ignored strokes as one MultiLineString (closed ones as rings), for previews."""
+    lines = []
+    for s in strokes:
+        pts = s.coords if not s.closed else list(s.coords) + [s.coords[0]]
+        if len(pts) >= 2:
+            lines.append(shapely.LineString(pts))
+    return shapely.MultiLineString(lines)

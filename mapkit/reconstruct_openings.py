@@ -1,0 +1,140 @@
+"""Door and window openings: the gap in a wall that a door or window drawing sits in.
+
+A door (leaf + swing arc, often a block) or a window (parallel lines across
+the wall) touches the wall at its two jambs. The opening footprint is the
+gap between those jambs across the wall's thickness: the convex hull of the
+wall ends near the jambs, minus the walls.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, MultiLineString, Polygon
+from shapely.ops import unary_union
+
+from mapkit.reconstruct_types import Stroke
+from mapkit.tolerances import JAMB_REACH, MERGE, MIN_OPENING_WIDTH, SNAP_GAP, THIN_WALL
+
+
+def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:
+    """The separate doors (or windows) of a layer's strokes.
+
+    Strokes of one block insert form one item; loose strokes that touch
+    (within ``SNAP_GAP``) are one item.
+    """
+    groups: dict[int, list] = {}
+    loose = []
+    for s in strokes:
+        pts = np.asarray(s.coords, dtype=float)
+        if s.closed:
+            pts = np.vstack([pts, pts[:1]])
+        if len(pts) < 2:
+            continue
+        line = LineString(pts)
+        if s.group is not None:
+            groups.setdefault(s.group, []).append(line)
+        else:
+            loose.append(line)
+    items = [unary_union(lines) for lines in groups.values()]
+    if loose:
+        blobs = shapely.get_parts(unary_union([g.buffer(SNAP_GAP) for g in loose]))
+        tree = shapely.STRtree(loose)
+        for blob in blobs:
+            items.append(unary_union([loose[i] for i in tree.query(blob, predicate="contains")]))
+    return [_lines(item) for item in items if not item.is_empty]
+
+
+def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> Polygon | None:
+    """Footprint of the wall gap the drawing ``item`` sits in, or None if it is in no gap.
+
+    ``barriers``: wall solids (and glass, for doors in glass walls). The gap
+    runs between the two jambs the drawing touches; across, it spans the
+    wall's thickness measured at the jambs (a jamb that is the side of a
+    perpendicular wall, not a wall end, gives no thickness).
+    """
+    near = barriers.intersection(item.buffer(JAMB_REACH))
+    jambs = [g for g in shapely.get_parts(near) if g.area > 0]
+    if len(jambs) < 2:
+        return None
+    # The two jambs farthest apart span the gap (a door near a corner may
+    # touch a third wall piece; the gap is still between the outer two).
+    probes = np.array([[p.x, p.y] for p in (j.representative_point() for j in jambs)])
+    d = np.linalg.norm(probes[:, None] - probes[None], axis=-1)
+    i, k = np.unravel_index(np.argmax(d), d.shape)
+    a, b = probes[i], probes[k]
+    width = float(d[i, k])
+    if width < MIN_OPENING_WIDTH:
+        return None
+    axis = (b - a) / width
+    normal = np.array([-axis[1], axis[0]])
+    bands = [_thickness_band(p, normal, a, barriers, max_wall_thickness) for p in (a, b)]
+    bands = [band for band in bands if band is not None]
+    if bands:
+        lo, hi = min(band[0] for band in bands), max(band[1] for band in bands)
+    else:
+        # Jambs are the sides of walls running across (a glass screen between
+        # two walls): that is no wall gap.
+        return None
+    reach = JAMB_REACH
+    zone = Polygon(
+        [
+            a - axis * reach + normal * lo,
+            b + axis * reach + normal * lo,
+            b + axis * reach + normal * hi,
+            a - axis * reach + normal * hi,
+        ]
+    )
+    gap = zone.difference(barriers)
+    # The zone is square to the jamb axis, which may be a hair off the wall's
+    # direction: shave the hairline slivers that leaves along the wall faces.
+    gap = shapely.make_valid(gap).buffer(-2 * MERGE, join_style="mitre").buffer(2 * MERGE, join_style="mitre")
+    pieces = [g for g in shapely.get_parts(gap) if isinstance(g, Polygon) and g.area > 0]
+    if not pieces:
+        return None
+    touching = item.buffer(JAMB_REACH)
+    best = max(pieces, key=lambda g: g.intersection(touching).area)
+    if best.intersection(touching).area <= 0:
+        return None
+    return best
+
+
+def _thickness_band(probe, normal, origin, barriers, max_wall_thickness: float) -> tuple[float, float] | None:
+    """Extent ``(lo, hi)`` along ``normal`` (from ``origin``) of the wall through ``probe``.
+
+    None when the wall there is thicker than ``max_wall_thickness`` (the probe
+    sits in a wall running along the normal, not at a wall end).
+    """
+    reach = max_wall_thickness
+    ray = LineString([probe - normal * reach, probe + normal * reach])
+    hit = ray.intersection(barriers)
+    point = shapely.Point(probe)
+    for seg in shapely.get_parts(hit):
+        if isinstance(seg, LineString) and seg.distance(point) < 1e-9:
+            ts = sorted(float((np.asarray(c[:2]) - origin) @ normal) for c in (seg.coords[0], seg.coords[-1]))
+            if ts[1] - ts[0] >= 2 * reach - 1e-6 or ts[1] - ts[0] > max_wall_thickness:
+                return None
+            return ts[0], ts[1]
+    return None
+
+
+def glass_footprint(item: MultiLineString) -> Polygon:
+    """Footprint of free-standing glass (no wall gap): the lines thickened to ``THIN_WALL``.
+
+    Square caps let the glass overlap the walls it meets, so it shuts them.
+    """
+    return item.buffer(THIN_WALL / 2.0, cap_style="square", join_style="mitre")
+
+
+def opening_width(footprint: Polygon) -> float:
+    """Width of a gap footprint: the longer side of its minimum rotated rectangle, metres."""
+    rect = np.asarray(footprint.minimum_rotated_rectangle.exterior.coords)[:4]
+    sides = np.linalg.norm(np.diff(np.vstack([rect, rect[:1]]), axis=0), axis=1)
+    return float(sides.max())
+
+
+def _lines(geom) -> MultiLineString:
+    return MultiLineString([g for g in shapely.get_parts(geom) if isinstance(g, LineString) and not g.is_empty])
+
+
+__all__ = ["drawing_items", "find_opening", "glass_footprint", "opening_width"]
