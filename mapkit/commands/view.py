@@ -1,0 +1,70 @@
+"""``mapkit view MAP``: the map in the browser (viser), or a standalone HTML snapshot."""
+
+from __future__ import annotations
+
+HELP = "inspect a .lmap map in the browser (segments, walls, regions, pose tool, matcher results)"
+
+
+def add_arguments(p) -> None:
+    p.add_argument("map", metavar="MAP", help=".lmap file")
+    p.add_argument("--plan", metavar="PLAN", help="overlay the source plan (DXF or mesh) the map was built from")
+    p.add_argument("--result", metavar="RESULT.json", help="overlay a matcher result (matcher localize --json)")
+    p.add_argument("--lines", metavar="LINES.json", help="image lines of the result, if the result holds none")
+    p.add_argument("--camera", metavar="CAM.json", help="camera to use instead of the one recorded in the map")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1; 0.0.0.0 for all)")
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080; 0 takes any free port)")
+    p.add_argument("--html", metavar="OUT.html",
+                   help="write a standalone HTML snapshot of the 3D scene (opens from file://, no server) and exit")
+
+
+def run(args) -> int:
+    import sys
+    import threading
+
+    from mapkit.errors import MapkitError
+    from mapkit.lmap import load_map
+
+    if args.lines and not args.result:
+        raise MapkitError("--lines needs --result (the lines are drawn at the result's pose)")
+    if not 0 <= args.port <= 65535:
+        raise MapkitError(f"--port must be in [0, 65535], got {args.port}")
+    m = load_map(args.map)
+    camera = None
+    if args.camera:
+        from matcher.camera import Camera
+
+        camera = Camera.load(args.camera)
+    result = None
+    if args.result:
+        from mapkit.view.result import load_result
+
+        result = load_result(args.result, m.n_segments, args.lines)
+    plan = None
+    if args.plan:
+        from mapkit.importers import load_scene
+
+        plan = load_scene(args.plan)
+
+    if args.html:
+        from mapkit.view.snapshot import write_snapshot
+
+        size = write_snapshot(m, args.html, plan=plan, result=result, camera=camera)
+        print(f"mapkit view: wrote {args.html} ({size / 1e6:.1f} MB); open it in a browser, no server needed")
+        return 0
+
+    from mapkit.view.server import Inspector
+
+    try:
+        inspector = Inspector(m, host=args.host, port=args.port, map_path=args.map, plan=plan, result=result,
+                              camera=camera)
+    except OSError as exc:
+        raise MapkitError(f"cannot listen on {args.host}:{args.port} ({exc.strerror or exc}); try --port 0") from None
+    print(f"mapkit view: {args.map} at {inspector.url}  (Ctrl-C to stop)", flush=True)
+    try:
+        threading.Event().wait()  # the server runs on its own threads; wait for Ctrl-C
+    except KeyboardInterrupt:
+        pass
+    finally:
+        inspector.stop()
+    print("mapkit view: stopped", file=sys.stderr)
+    return 0

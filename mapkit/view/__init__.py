@@ -1,0 +1,22 @@
+"""The map inspector behind ``mapkit view``: a browser view of a ``.lmap`` map.
+
+Modules, one concept each (only ``server``, ``scene_nodes``, ``panel`` and
+``snapshot`` import viser; the rest is numpy/shapely and testable alone):
+
+- :mod:`~mapkit.view.geometry`: region polygons, their triangulation, ring
+  edges, the wall extrusion: the arrays the scene is drawn from.
+- :mod:`~mapkit.view.palette`: colours of segment kinds and regions.
+- :mod:`~mapkit.view.fov`: which candidate segments a camera can see over a
+  range of headings.
+- :mod:`~mapkit.view.synthetic_image`: the model as the camera would see it.
+- :mod:`~mapkit.view.result`: reading a matcher result and image lines.
+- :mod:`~mapkit.view.stats`: the numbers shown in the panel.
+- :mod:`~mapkit.view.scene_nodes`: the static 3D layers (batched viser calls).
+- :mod:`~mapkit.view.panel`: the GUI panel (legend, toggles, pose controls).
+- :mod:`~mapkit.view.server`: :class:`~mapkit.view.server.Inspector`, which
+  ties them together and reacts to clicks and pose changes.
+- :mod:`~mapkit.view.snapshot`: a standalone HTML file of the scene.
+- :mod:`~mapkit.view.headless`: a minimal headless-chromium driver (Chrome
+  DevTools Protocol) for the browser test and the README screenshot.
+- :mod:`~mapkit.view.demo`: a synthetic flat for tests and demos.
+"""

@@ -1,0 +1,109 @@
+"""The model as the camera would see it: projected segments drawn into an image.
+
+Segments are clipped to the camera's near plane in 3D (a segment crossing
+the plane through the camera centre would otherwise project through
+infinity), projected with :meth:`matcher.camera.Camera.project` (an ideal
+pinhole: lens distortion is not drawn) and clipped to the image rectangle.
+Image lines are (M, 2, 2) pixel end points (u column, v row).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from matcher.camera import Camera
+
+#: Points nearer than this (metres, along the optical axis) are behind the image.
+NEAR_PLANE_M = 0.05
+
+
+def clip_near(camera: Camera, segments: np.ndarray, x: float, y: float, yaw: float) -> tuple[np.ndarray, np.ndarray]:
+    """Cut the segments (N, 2, 3) to the part in front of the near plane.
+
+    Returns (clipped world segments (M, 2, 3), their indices (M,) in the input).
+    """
+    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 3)
+    R = camera.world2cam(yaw)
+    z = (segments - camera.centre(x, y)) @ R[2]  # (N, 2) depths along the optical axis
+    keep = (z > NEAR_PLANE_M).any(axis=1)
+    seg, z = segments[keep].copy(), z[keep]
+    for end, other in ((0, 1), (1, 0)):
+        behind = z[:, end] <= NEAR_PLANE_M
+        t = (NEAR_PLANE_M - z[behind, end]) / (z[behind, other] - z[behind, end])
+        seg[behind, end] = seg[behind, end] + t[:, None] * (seg[behind, other] - seg[behind, end])
+    return seg, np.nonzero(keep)[0]
+
+
+def clip_to_image(lines: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
+    """Liang-Barsky clipping of (M, 2, 2) pixel lines to [0, width] x [0, height].
+
+    Returns (clipped lines (K, 2, 2), indices (K,) of the kept input lines).
+    """
+    lines = np.asarray(lines, dtype=np.float64).reshape(-1, 2, 2)
+    p0, d = lines[:, 0], lines[:, 1] - lines[:, 0]
+    t0, t1 = np.zeros(len(lines)), np.ones(len(lines))
+    ok = np.isfinite(lines).all(axis=(1, 2))
+    for p, q in ((-d[:, 0], p0[:, 0]), (d[:, 0], width - p0[:, 0]), (-d[:, 1], p0[:, 1]), (d[:, 1], height - p0[:, 1])):
+        parallel = p == 0
+        ok &= ~(parallel & (q < 0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(parallel, 0.0, q / np.where(parallel, 1.0, p))
+        t0 = np.where(~parallel & (p < 0), np.maximum(t0, t), t0)
+        t1 = np.where(~parallel & (p > 0), np.minimum(t1, t), t1)
+    ok &= t0 <= t1
+    out = np.stack([p0 + t0[:, None] * d, p0 + t1[:, None] * d], axis=1)
+    return out[ok], np.nonzero(ok)[0]
+
+
+def project_segments(
+    camera: Camera, segments: np.ndarray, x: float, y: float, yaw: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Image lines (K, 2, 2) of the visible parts of world segments (N, 2, 3)
+    for the camera at (x, y, yaw radians), with their indices (K,) into ``segments``.
+
+    Occlusion is not modelled: a segment behind a wall is drawn too (the map's
+    lists already say what is visible from where).
+    """
+    seg, idx = clip_near(camera, segments, x, y, yaw)
+    uv, _ = camera.project(seg, x, y, yaw)
+    lines, kept = clip_to_image(uv, camera.width, camera.height)
+    return lines, idx[kept]
+
+
+def blank_image(camera: Camera, shade: int = 245) -> np.ndarray:
+    """(height, width, 3) uint8 light-grey canvas with the image centre marked."""
+    img = np.full((camera.height, camera.width, 3), shade, dtype=np.uint8)
+    cx, cy = int(round(camera.cx)), int(round(camera.cy))
+    img[max(cy, 0) : cy + 1, :] = np.minimum(img[max(cy, 0) : cy + 1, :], 225)
+    img[:, max(cx, 0) : cx + 1] = np.minimum(img[:, max(cx, 0) : cx + 1], 225)
+    return img
+
+
+def draw_lines(image: np.ndarray, lines: np.ndarray, colours, thickness: int = 2) -> np.ndarray:
+    """Draw (K, 2, 2) pixel lines into ``image`` (in place, returned).
+
+    ``colours`` is one RGB triple or (K, 3). Anti-aliased OpenCV lines.
+    """
+    import cv2  # a core dependency of the project (the matcher detects lines with it)
+
+    lines = np.asarray(lines, dtype=np.float64).reshape(-1, 2, 2)
+    cols = np.broadcast_to(np.asarray(colours, dtype=np.int64).reshape(-1, 3), (len(lines), 3))
+    shift = 4  # sub-pixel precision: 1/16 pixel
+    pts = np.round(lines * (1 << shift)).astype(np.int64)
+    for (a, b), c in zip(pts, cols):
+        cv2.line(image, (int(a[0]), int(a[1])), (int(b[0]), int(b[1])), tuple(int(v) for v in c), thickness,
+                 cv2.LINE_AA, shift)
+    return image
+
+
+def render_segments(
+    camera: Camera, segments: np.ndarray, colours: np.ndarray, x: float, y: float, yaw: float,
+    image: np.ndarray | None = None, thickness: int = 2,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Draw world segments (N, 2, 3) with per-segment ``colours`` (N, 3) as the
+    camera at (x, y, yaw) sees them. Returns (image, indices of drawn segments)."""
+    img = blank_image(camera) if image is None else image
+    lines, idx = project_segments(camera, segments, x, y, yaw)
+    cols = np.asarray(colours).reshape(-1, 3)
+    draw_lines(img, lines, cols[idx] if len(cols) == len(segments) else cols, thickness)
+    return img, idx
