@@ -7,8 +7,6 @@ preview alike. The PNG is written atomically (temporary file, then rename).
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +43,7 @@ def render_preview(scene: Scene, out: str | Path, title: str | None = None, dpi:
     fig, ax = plt.subplots(figsize=(fig_w, max(3.0, min(fig_w * aspect, 14.0)) + 1.0))
     try:
         for geom in scene.ignored.values():
-            _draw_lines(ax, geom, color=COLOURS["ignored"], lw=0.5, alpha=0.7, zorder=1)
+            _draw_lines(ax, geom, color=COLOURS["ignored"], lw=0.5, alpha=0.7, zorder=3)
         _fill(ax, scene.free_space, COLOURS["free"], zorder=2)
         _fill(ax, scene.obstacles, COLOURS["obstacle"], zorder=3, edge=COLOURS["window"])
         _fill(ax, scene.walls, COLOURS["walls"], zorder=4)
@@ -126,13 +124,8 @@ def _scale_bar(ax, bounds) -> None:
 
 
 def _save_atomic(fig, out: Path, dpi: int) -> None:
-    """Save to a temporary file beside ``out``, then rename: no half-written PNG is ever seen."""
-    out.parent.mkdir(parents=True, exist_ok=True) if str(out.parent) else None
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp.png", dir=out.parent or Path("."))
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=dpi, format="png")
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Render to a temporary file beside ``out``, then rename: no half-written PNG is ever seen."""
+    from mapkit.atomic import atomic_output
+
+    with atomic_output(out) as fh:
+        fig.savefig(fh, dpi=dpi, format="png")

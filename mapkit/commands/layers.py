@@ -1,0 +1,72 @@
+"""``mapkit layers PLAN``: every layer of a DXF plan, its entities and the role it gets."""
+
+from __future__ import annotations
+
+import json
+
+HELP = "list the layers of a DXF plan with entity counts and the role each is given"
+
+
+def add_arguments(p) -> None:
+    from mapkit.commands._import_args import add_import_arguments
+
+    p.add_argument("plan", metavar="PLAN", help="DXF floor plan")
+    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    add_import_arguments(p)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from mapkit.commands._import_args import import_options_from_args
+    from mapkit.errors import MapkitError, NoWallsError
+    from mapkit.importers.dxf_layers import layer_counts, resolve_roles
+    from mapkit.importers.dxf_read import read_dxf
+    from mapkit.layer_roles import assign_roles
+
+    options = import_options_from_args(args)
+    path = Path(args.plan)
+    if not path.is_file():
+        raise MapkitError(f"{path}: no such file; check the path")
+    if path.suffix.lower() != ".dxf":
+        raise MapkitError(f"{path.name}: 'mapkit layers' reads DXF plans; meshes have no layers")
+    doc, warnings = read_dxf(path)
+    counts = layer_counts(doc)
+    try:
+        roles, more = resolve_roles(counts, options)
+        warnings += more
+    except NoWallsError as exc:
+        # Listing the layers is how a user finds the wall layers: show them anyway.
+        roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore)
+        warnings.append(str(exc))
+
+    rows = [
+        {
+            "name": name,
+            "role": {"ignore": "ignored", None: "unknown"}.get(roles.get(name), roles.get(name)),
+            "entities": dict(sorted(c.items())),
+            "total": sum(c.values()),
+        }
+        for name, c in sorted(counts.items(), key=lambda kv: kv[0].casefold())
+    ]
+    if args.json:
+        print(json.dumps({"file": path.name, "layers": rows, "warnings": warnings}))
+        return 0
+    print(_table(rows))
+    for w in warnings:
+        print(f"note: {w}")
+    return 0
+
+
+def _table(rows: list[dict]) -> str:
+    """Aligned text table: layer, role, total, entities per type."""
+    header = ("LAYER", "ROLE", "COUNT", "ENTITIES")
+    body = [
+        (r["name"], r["role"], str(r["total"]), ", ".join(f"{k} {v}" for k, v in r["entities"].items()) or "-")
+        for r in rows
+    ]
+    widths = [max(len(row[i]) for row in [header, *body]) for i in range(3)]
+    lines = []
+    for row in [header, *body]:
+        lines.append(f"{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:>{widths[2]}}  {row[3]}")
+    return "\n".join(lines)

@@ -1,0 +1,43 @@
+"""``mapkit preview PLAN -o preview.png``: a picture of what the importer understood."""
+
+from __future__ import annotations
+
+HELP = "draw what was understood of a plan or mesh (walls, doors, windows, free space) as a PNG"
+
+
+def add_arguments(p) -> None:
+    from mapkit.commands._import_args import add_import_arguments
+
+    p.add_argument("plan", metavar="PLAN", help="DXF plan or mesh")
+    p.add_argument("-o", "--output", required=True, metavar="PREVIEW.png", help="PNG file to write")
+    p.add_argument("--dpi", type=int, default=150, help="resolution of the PNG (default 150)")
+    add_import_arguments(p)
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from mapkit.commands._import_args import import_options_from_args
+    from mapkit.errors import MapkitError
+    from mapkit.importers import load_scene
+    from mapkit.preview import render_preview
+
+    options = import_options_from_args(args)
+    out = Path(args.output)
+    if out.suffix.lower() != ".png":
+        raise MapkitError(f"output must end in .png, got '{out.name}'")
+    if not (out.parent if str(out.parent) else Path(".")).is_dir():
+        raise MapkitError(f"output folder {out.parent} does not exist; create it first")
+    if not 20 <= args.dpi <= 1200:
+        raise MapkitError(f"--dpi must be between 20 and 1200, got {args.dpi}")
+    scene = load_scene(args.plan, options)
+    render_preview(scene, out, title=Path(args.plan).name, dpi=args.dpi)
+    doors = sum(o.kind == "door" for o in scene.openings)
+    windows = sum(o.kind == "window" for o in scene.openings)
+    layers = scene.info.get("layers", {})
+    used = "; ".join(f"{role}: {', '.join(names)}" for role, names in layers.items() if names and role != "ignored")
+    print(
+        f"wrote {out}: walls {scene.walls.area:.1f} m², free space {scene.free_space.area:.1f} m², "
+        f"{doors} doors, {windows} windows" + (f" ({used})" if used else "")
+    )
+    return 0
