@@ -1,0 +1,49 @@
+"""``mapkit extrude PLAN -o model.glb``: the 3D model a plan builds, for simulators and checks."""
+
+from __future__ import annotations
+
+from mapkit.errors import MapkitError
+
+HELP = "write the 3D model (walls with door and window openings, floor) a plan builds"
+
+#: Output suffix -> trimesh export type.
+FORMATS = {".glb": "glb", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
+
+
+def add_arguments(p) -> None:
+    from mapkit.commands._import_args import add_import_arguments
+
+    p.add_argument("plan", metavar="PLAN", help="DXF plan (or a mesh, to re-export it cleaned)")
+    p.add_argument("-o", "--output", required=True, metavar="MODEL", help=f"model to write ({' '.join(FORMATS)})")
+    p.add_argument("--ceiling", action="store_true", help="add a ceiling slab on top of the walls")
+    add_import_arguments(p)
+    p.add_argument("-q", "--quiet", action="store_true", help="no summary line")
+
+
+def run(args) -> int:
+    from pathlib import Path
+
+    from mapkit.atomic import write_atomic
+    from mapkit.commands._import_args import import_options_from_args
+    from mapkit.extrude import scene_to_mesh
+    from mapkit.importers import load_scene
+
+    out = Path(args.output)
+    kind = FORMATS.get(out.suffix.lower())
+    if kind is None:
+        raise MapkitError(f"output must end in one of {', '.join(FORMATS)}, got '{out.name}'")
+    if not (out.parent if str(out.parent) else Path(".")).is_dir():
+        raise MapkitError(f"output folder {out.parent} does not exist; create it first")
+    options = import_options_from_args(args)
+    scene = load_scene(args.plan, options)
+    if scene.walls.is_empty:
+        raise MapkitError(f"{args.plan}: no walls to extrude; check the layer choice with 'mapkit preview'")
+    mesh = scene_to_mesh(scene, ceiling=args.ceiling)
+    data = mesh.export(file_type=kind)
+    write_atomic(out, data if isinstance(data, (bytes, str)) else bytes(data))
+    if not args.quiet:
+        print(
+            f"wrote {out}: {len(mesh.faces)} triangles, walls {scene.wall_height:g} m high, "
+            f"{len(scene.openings)} openings{', with ceiling' if args.ceiling else ''}"
+        )
+    return 0
