@@ -40,9 +40,13 @@ EXPAND_TYPES = frozenset({"INSERT", "MLINE"})
 #: Block nesting deeper than this is a reference cycle in a broken file.
 _MAX_DEPTH = 32
 
-#: Least segments per cubic Bezier piece: ezdxf's arcs are pieces of at most
-#: 90 degrees, so this many steps keep each under CURVE_STEP_DEG.
-_MIN_SEGMENTS = math.ceil(90.0 / CURVE_STEP_DEG)
+#: Arcs and ellipses become at least this many cubic Bezier pieces per full
+#: turn (at most 45 degrees each): a 45-degree cubic strays from its circle by
+#: 4e-6 of the radius (a 90-degree one by 3e-4, 3 mm on a 10 m rotunda).
+_BEZIER_PER_TURN = 8
+
+#: Least flattening steps per Bezier piece, so each step turns at most CURVE_STEP_DEG.
+_MIN_SEGMENTS = math.ceil(360.0 / _BEZIER_PER_TURN / CURVE_STEP_DEG)
 
 
 def flatten_entities(
@@ -60,32 +64,34 @@ def flatten_entities(
     """
     strokes: list[Stroke] = []
     skipped: Counter = Counter()
-    for group, entity in enumerate(entities):
+    groups: dict[tuple[int, int], int] = {}
+    for index, entity in enumerate(entities):
         layer = entity.dxf.get("layer", "0")
         if entity.dxftype() in EXPAND_TYPES:
-            # Each top-level block insert is one group (one door, one window).
-            items = _expand(entity, layer, 0, skipped)
+            # Each top-level block insert (each MINSERT cell) is one group:
+            # one door, one window, one column.
+            items = _expand(entity, layer, 0, 0, skipped)
         else:
-            items = iter([(entity, layer)])
-            group = None
-        for sub, sub_layer in items:
+            items = iter([(entity, layer, None)])
+        for sub, sub_layer, cell in items:
             if not layer_wanted(sub_layer):
                 continue
+            group = None if cell is None else groups.setdefault((index, cell), len(groups))
             for coords, closed, filled in _outlines(sub, sagitta, skipped):
                 strokes.append(Stroke(coords * factor, closed, filled, sub_layer, group))
     return strokes, skipped
 
 
-def _expand(entity, layer: str, depth: int, skipped: Counter) -> Iterator[tuple[object, str]]:
-    """Leaf entities of an INSERT/MLINE with their effective layers."""
+def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iterator[tuple[object, str, int]]:
+    """Leaf entities of an INSERT/MLINE with their effective layers and MINSERT cell index."""
     if depth > _MAX_DEPTH:
         skipped["INSERT (nested too deep)"] += 1
         return
     kind = entity.dxftype()
     if kind == "INSERT" and entity.mcount > 1:
         # MINSERT: one virtual insert per array cell.
-        for cell in entity.multi_insert():
-            yield from _expand(cell, layer, depth + 1, skipped)
+        for i, sub in enumerate(entity.multi_insert()):
+            yield from _expand(sub, layer, cell * entity.mcount + i if depth else i, depth + 1, skipped)
         return
     try:
         children = list(entity.virtual_entities())
@@ -97,9 +103,9 @@ def _expand(entity, layer: str, depth: int, skipped: Counter) -> Iterator[tuple[
         # Layer 0 inside a block means "the layer of the insert".
         effective = layer if child_layer == "0" else child_layer
         if child.dxftype() in EXPAND_TYPES:
-            yield from _expand(child, effective, depth + 1, skipped)
+            yield from _expand(child, effective, cell, depth + 1, skipped)
         else:
-            yield child, effective
+            yield child, effective, cell
 
 
 def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.ndarray, bool, bool]]:
@@ -110,7 +116,7 @@ def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.nda
     if kind in PATH_TYPES:
         filled = False
         try:
-            paths = [dxfpath.make_path(entity)]
+            paths = [dxfpath.make_path(entity, segments=_BEZIER_PER_TURN)]
         except Exception:  # noqa: BLE001 - degenerate geometry (zero-radius arc, bad spline)
             skipped[f"{kind} (degenerate)"] += 1
             return

@@ -12,8 +12,10 @@ from mapkit.errors import MapkitError
 
 log = logging.getLogger("mapkit")
 
-#: Errors ezdxf raises on files it cannot parse (it has no single base class for all).
-_READ_ERRORS = (ezdxf.DXFError, OSError, UnicodeError, ValueError, TypeError, AttributeError, IndexError, KeyError)
+#: Errors ezdxf raises on files it cannot parse. It has no common base class
+#: for them (a truncated header ends in a bare StopIteration), and the input
+#: is a user's file, so any parser failure is a user-fixable problem.
+_READ_ERRORS = (Exception,)
 
 
 def read_dxf(path: Path) -> tuple[object, list[str]]:
@@ -31,8 +33,8 @@ def read_dxf(path: Path) -> tuple[object, list[str]]:
             doc, auditor = recover.readfile(path)
         except _READ_ERRORS as exc:
             raise MapkitError(
-                f"{path.name}: cannot read this DXF ({_short(exc) or _short(strict_error)}); "
-                f"re-export it from the CAD program"
+                f"{path.name}: the file is damaged or truncated and could not be recovered "
+                f"({_short(exc)}); re-export it from the CAD program"
             ) from None
         fixed = len(auditor.fixes)
         errors = len(auditor.errors)

@@ -76,18 +76,13 @@ def decide_units(insunits: int, override: str | None, extent: float) -> tuple[st
     None), ``extent`` the largest side of the drawing's bounding box in
     drawing units. Returns ``(unit name, metres per unit, warning or None)``.
     """
-    if override:
-        name = canonical_units(override)
-        return name, UNIT_METRES[name], None
-    if insunits in INSUNITS:
-        name = INSUNITS[insunits]
+    if override or insunits in INSUNITS:
+        name = canonical_units(override) if override else INSUNITS[insunits]
         factor = UNIT_METRES[name]
         warning = None
         if extent > 0 and not _plausible(extent * factor):
-            warning = (
-                f"the drawing says its units are {name} but then it is {_fmt(extent * factor)} across; "
-                f"pass --units if that is wrong"
-            )
+            said = "--units says" if override else "the drawing says its units are"
+            warning = f"{said} {name} but then the plan is {_fmt(extent * factor)} across; pass the right --units"
         return name, factor, warning
     # No usable units: pick the unit that makes the building a plausible size.
     name = min(_GUESSES, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
