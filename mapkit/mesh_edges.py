@@ -16,7 +16,7 @@ An edge of the mesh is a *feature edge* when
 Edges between coplanar faces (the diagonals of a quad, the floor's
 triangulation) are never features. Feature edges that continue each other
 in a straight line through a shared vertex are merged into one segment;
-parts below the floor are cut off (nobody sees them); pieces shorter than
+parts below the floor or above the ceiling are cut off (nobody inside sees them); pieces shorter than
 ``min_length`` are dropped. Vertices must be merged first (see
 :func:`mapkit.importers.mesh_load.weld`): split vertices make every edge a
 border.
@@ -125,7 +125,7 @@ def feature_edges(
     segments, labels = merge_collinear(vertices, topo.edges[feature])
     rises = np.bincount(labels, weights=rises, minlength=len(segments)) > 0
 
-    segments, keep = _cut_below(segments, floor_z)
+    segments, keep = _cut_to_storey(segments, floor_z, top_z)
     rises = rises[keep]
     long = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1) >= min_length
     segments, rises = segments[long], rises[long]
@@ -253,27 +253,30 @@ def _chain_extremes(p: np.ndarray, u: np.ndarray, length: np.ndarray, labels: np
     return segments, dev <= MERGE
 
 
-def _cut_below(segments: np.ndarray, floor_z: float) -> tuple[np.ndarray, np.ndarray]:
-    """Drop segments under the floor, cut those reaching below it at ``floor_z``.
+def _cut_to_storey(segments: np.ndarray, floor_z: float, top_z: float) -> tuple[np.ndarray, np.ndarray]:
+    """Keep what lies between floor and ceiling: drop segments wholly under
+    the floor or over the ceiling, cut the others at ``floor_z`` / ``top_z``.
 
     Returns the kept segments and the (N,) bool mask of which were kept.
-    Ends less than ``MESH_LEVEL`` below the floor (objects sunk a few
-    millimetres) are left as they are; a cut segment that was all below
-    comes out with zero length (dropped later as too short).
+    Ends less than ``MESH_LEVEL`` beyond a level (objects sunk a few
+    millimetres into the floor) are left as they are; a segment that was
+    all beyond comes out with zero length (dropped later as too short).
     """
     z = segments[:, :, 2]
-    keep = z.max(axis=1) >= floor_z - MESH_LEVEL
+    keep = (z.max(axis=1) >= floor_z - MESH_LEVEL) & (z.min(axis=1) <= top_z + MESH_LEVEL)
     seg = segments[keep].copy()
-    z = seg[:, :, 2]
-    deep = z.min(axis=1) < floor_z - MESH_LEVEL
-    if deep.any():
-        s = seg[deep]
+    for level, beyond in ((floor_z, -1.0), (top_z, 1.0)):
+        z = seg[:, :, 2]
+        out = (beyond * (z - level)).max(axis=1) > MESH_LEVEL
+        if not out.any():
+            continue
+        s = seg[out]
         rows = np.arange(len(s))
-        low = np.argmin(s[:, :, 2], axis=1)
-        a, b = s[rows, low], s[rows, 1 - low]
-        t = np.clip((floor_z - a[:, 2]) / (b[:, 2] - a[:, 2]), 0.0, 1.0)
-        s[rows, low] = a + t[:, None] * (b - a)
-        seg[deep] = s
+        far = np.argmax(beyond * s[:, :, 2], axis=1)  # the end beyond the level
+        a, b = s[rows, far], s[rows, 1 - far]
+        t = np.clip((level - a[:, 2]) / (b[:, 2] - a[:, 2]), 0.0, 1.0)
+        s[rows, far] = a + t[:, None] * (b - a)
+        seg[out] = s
     return seg, keep
 
 

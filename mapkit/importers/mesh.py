@@ -37,7 +37,7 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     path = Path(path)
     mesh, info = load_mesh(path, options)
     warnings = info["warnings"]
-    top = float(mesh.vertices[:, 2].max())
+    top = float(info["wall_height_m"])
     if top <= MESH_LEVEL:
         raise NoWallsError(f"{path}: the model is flat (nothing stands above the floor); check --up")
     cam_h = float(options.camera.get("height_m", 1.2))
@@ -74,7 +74,6 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     counts = np.bincount(kinds, minlength=len(KIND_NAMES))
     info.update(
         section_height_m=z,
-        wall_height_m=top,
         segments=int(len(segments)),
         kinds={name: int(c) for name, c in zip(KIND_NAMES, counts) if c},
         free_area_m2=float(free.area),

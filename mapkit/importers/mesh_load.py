@@ -16,7 +16,7 @@ import numpy as np
 
 from mapkit.errors import MapkitError
 from mapkit.importers.dxf_units import UNIT_METRES, canonical_units
-from mapkit.mesh_edges import face_normals
+from mapkit.mesh_edges import edge_faces, face_normals
 from mapkit.options import BuildOptions
 from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_LEVEL, PLAUSIBLE_EXTENT
 
@@ -32,7 +32,8 @@ def load_mesh(path: Path, options: BuildOptions):
 
     Returns ``(mesh, info)``: a ``trimesh.Trimesh`` (metres, z up, welded,
     floor at z = 0) and a dict of what was decided (``units``, ``scale``,
-    ``up``, ``floor``, ``floor_offset_m``, ``warnings``).
+    ``up``, ``floor``, ``floor_offset_m``, ``ceiling``, ``wall_height_m``:
+    the ceiling height, ``warnings``).
     """
     import trimesh
 
@@ -60,6 +61,7 @@ def load_mesh(path: Path, options: BuildOptions):
 
     floor_z, has_floor = find_floor(vertices, faces)
     vertices[:, 2] -= floor_z
+    top, has_ceiling = find_ceiling(vertices, faces)
     warnings = []
     size_xy = float(np.ptp(vertices[:, :2], axis=0).max())
     height = float(vertices[:, 2].max())
@@ -76,6 +78,8 @@ def load_mesh(path: Path, options: BuildOptions):
         "up": options.up,
         "floor": "floor faces" if has_floor else "lowest point (no floor faces)",
         "floor_offset_m": float(floor_z),
+        "ceiling": "ceiling faces" if has_ceiling else "highest point (no ceiling faces)",
+        "wall_height_m": top,
         "vertices": int(len(vertices)),
         "faces": int(len(faces)),
         "warnings": warnings,
@@ -120,9 +124,11 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[np.ndarray, np.ndarray]:
     """Merge vertices closer than about ``tol`` (snapped to a ``tol`` grid).
 
-    Drops faces that collapse (two corners merged), faces of zero area and
-    exact repeats (same corners in the same order). Returns the used
-    vertices (V', 3) and the faces (F', 3) re-indexed.
+    Drops faces that collapse (two corners merged) and exact repeats (same
+    corners in the same order), and removes needle triangles (corners in a
+    line: T-junction fillers) by splitting their neighbour instead, so that
+    a closed mesh stays closed. Returns the used vertices (V', 3) and the
+    faces (F', 3) re-indexed.
     """
     key = np.round(vertices / tol).astype(np.int64)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
@@ -130,38 +136,116 @@ def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[n
     merged = vertices[first]
     ok = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
     faces = faces[ok]
-    _, area = face_normals(merged, faces)
-    faces = faces[area > 0.5 * tol * tol]
     # Same triangle, same orientation: rotate each row to start at its smallest id.
     shift = np.argmin(faces, axis=1)
     rolled = np.take_along_axis(faces, (shift[:, None] + np.arange(3)) % 3, axis=1)
     _, keep = np.unique(rolled, axis=0, return_index=True)
     faces = faces[np.sort(keep)]
+    faces = split_needles(merged, faces, tol)
     used, faces = np.unique(faces, return_inverse=True)
     return merged[used], faces.reshape(-1, 3)
+
+
+#: Needle repair passes; each pass fixes every needle whose neighbour is not
+#: claimed by another needle in the same pass.
+_NEEDLE_PASSES = 8
+
+
+def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> np.ndarray:
+    """Replace needle triangles (height under ``tol``) by splitting the face
+    across their long edge at the needle's middle corner.
+
+    A needle (a, c, b) with c on the edge a-b fills a T-junction: the face
+    (a, b, x) on the other side becomes (a, c, x) and (c, b, x), with its
+    orientation kept, and the needle goes. Needles with no single neighbour
+    across the long edge are dropped as they are.
+    """
+    for _ in range(_NEEDLE_PASSES):
+        tri = vertices[faces]
+        side = np.roll(tri, -1, axis=1) - tri  # side k runs corner k -> k+1
+        length = np.linalg.norm(side, axis=2)
+        _, area = face_normals(vertices, faces)
+        longest = np.argmax(length, axis=1)
+        needle = area < 0.5 * tol * length[np.arange(len(faces)), longest]
+        if not needle.any():
+            return faces
+        ids = np.nonzero(needle)[0]
+        k = longest[ids]
+        a = faces[ids, k]
+        b = faces[ids, (k + 1) % 3]
+        c = faces[ids, (k + 2) % 3]
+        topo = edge_faces(faces)
+        n = int(faces.max()) + 1
+        edge_key = topo.edges[:, 0] * n + topo.edges[:, 1]
+        e = np.searchsorted(edge_key, np.minimum(a, b) * n + np.maximum(a, b))
+        # The neighbour: the other face on the long edge, if exactly one.
+        single = topo.counts[e] == 2
+        s0 = topo.starts[e]
+        other = np.where(topo.face[s0] == ids, topo.face[np.minimum(s0 + 1, len(topo.face) - 1)], topo.face[s0])
+        usable = single & ~needle[other]
+        _, first = np.unique(np.where(usable, other, -1 - np.arange(len(ids))), return_index=True)
+        claim = np.zeros(len(ids), dtype=bool)
+        claim[first] = True
+        fix = usable & claim
+        drop = ~usable
+        nb = other[fix]
+        row = faces[nb]
+        # Rotate the neighbour to (p, q, x) with p-q its copy of the long edge.
+        x = np.where((row != a[fix, None]) & (row != b[fix, None]), row, -1).max(axis=1)
+        pos = np.argmax(row == x[:, None], axis=1)
+        p = row[np.arange(len(nb)), (pos + 1) % 3]
+        q = row[np.arange(len(nb)), (pos + 2) % 3]
+        cc = c[fix]
+        new = np.concatenate([np.stack([p, cc, x], axis=1), np.stack([cc, q, x], axis=1)])
+        remove = np.zeros(len(faces), dtype=bool)
+        remove[nb] = True
+        remove[ids[fix | drop]] = True
+        faces = np.concatenate([faces[~remove], new])
+    return faces
 
 
 def find_floor(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, bool]:
     """Height of the floor: the lowest large upward-facing horizontal surface.
 
-    Upward faces (normal within ``AXIS_DEG`` of +z) are grouped into levels
-    (heights closer than ``MESH_LEVEL`` chain together); the lowest level
-    covering ``MESH_FLOOR_FRACTION`` of the plan's bounding box is the floor.
     Returns ``(z, True)``, or ``(lowest z, False)`` for a mesh without floor
-    faces (walls only).
+    faces (walls only). See :func:`large_levels`.
+    """
+    levels = large_levels(vertices, faces, up=True)
+    if len(levels):
+        return float(levels[0]), True
+    return float(vertices[:, 2].min()), False
+
+
+def find_ceiling(vertices: np.ndarray, faces: np.ndarray, floor_z: float = 0.0) -> tuple[float, bool]:
+    """Height of the ceiling: the lowest large downward-facing horizontal
+    surface above the floor. Returns ``(z, True)``, or ``(highest z, False)``
+    for a mesh without a ceiling."""
+    levels = large_levels(vertices, faces, up=False)
+    levels = levels[levels > floor_z + MESH_LEVEL]
+    if len(levels):
+        return float(levels[0]), True
+    return float(vertices[:, 2].max()), False
+
+
+def large_levels(vertices: np.ndarray, faces: np.ndarray, up: bool) -> np.ndarray:
+    """Sorted heights (L,) of the large horizontal surfaces facing up (or down).
+
+    Faces whose normal is within ``AXIS_DEG`` of +z (or -z) are grouped into
+    levels (heights closer than ``MESH_LEVEL`` chain together); a level is
+    large if its faces cover ``MESH_FLOOR_FRACTION`` of the plan's bounding
+    box. Each height is the area-weighted mean of its faces.
     """
     normals, areas = face_normals(vertices, faces)
-    up = normals[:, 2] >= math.cos(math.radians(AXIS_DEG))
+    sign = 1.0 if up else -1.0
+    facing = sign * normals[:, 2] >= math.cos(math.radians(AXIS_DEG))
     box = np.ptp(vertices[:, :2], axis=0)
     need = MESH_FLOOR_FRACTION * float(box[0] * box[1])
-    if up.any() and need > 0:
-        z = vertices[faces[up]][:, :, 2].mean(axis=1)
-        order = np.argsort(z)
-        z, a = z[order], areas[up][order]
-        level = np.r_[0, np.cumsum(np.diff(z) > MESH_LEVEL)]
-        level_area = np.bincount(level, weights=a)
-        big = np.nonzero(level_area >= need)[0]
-        if len(big):
-            at = level == big[0]
-            return float(np.average(z[at], weights=a[at])), True
-    return float(vertices[:, 2].min()), False
+    if not facing.any() or need <= 0:
+        return np.zeros(0)
+    z = vertices[faces[facing]][:, :, 2].mean(axis=1)
+    order = np.argsort(z)
+    z, a = z[order], areas[facing][order]
+    level = np.r_[0, np.cumsum(np.diff(z) > MESH_LEVEL)]
+    level_area = np.bincount(level, weights=a)
+    big = np.nonzero(level_area >= need)[0]
+    return np.array([np.average(z[level == k], weights=a[level == k]) for k in big])
