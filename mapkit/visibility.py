@@ -35,6 +35,9 @@ from mapkit.tolerances import (
     VIS_RAY_OFFSET_DEG,
 )
 
+# Vertices this close to the line through their neighbours are dropped, metres.
+_COLLINEAR = 1e-9
+
 # Rays x edges per numpy block: bounds the temporaries of the sweep (~50 MB).
 _BLOCK = 400_000
 
@@ -349,7 +352,12 @@ def segment_regions(
     vp = np.empty(len(xy), dtype=object)
     for k in tqdm(range(len(xy)), desc="visibility polygons", disable=not progress, leave=False):
         vp[k] = visibility_polygon(xy[k], occ, box)
-    vp = np.array([Polygon(v) for v in vp] + [None])[:-1]
+    # Rays hitting one edge give collinear points; each later overlay pays per
+    # vertex, so drop them (the outline moves by at most _COLLINEAR m).
+    raw = np.array([Polygon(v) for v in vp] + [None])[:-1]
+    vp = shapely.simplify(raw, _COLLINEAR, preserve_topology=False)
+    bad = ~shapely.is_valid(vp)
+    vp[bad] = raw[bad]
     t_vis = time.perf_counter()
 
     regions = np.array([Polygon()] * n, dtype=object)
