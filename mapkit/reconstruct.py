@@ -55,7 +55,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     free = interior.difference(walls)
     if not obstacles.is_empty:
         free = free.difference(obstacles)
-    free = free.buffer(-options.robot_radius)
+    # Radii below a nanometre are zero (GEOS empties polygons buffered by denormal distances).
+    if options.robot_radius > 1e-9:
+        free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
     if free.is_empty:
         raise MapkitError(
@@ -96,6 +98,8 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
         if gap is None:
             glass_parts.append(glass_footprint(item))
             continue
+        if _claimed(gap, window_gaps):
+            continue
         window_gaps.append(gap)
         openings.append(Opening(gap, "window", options.window_sill, options.window_head))
     glass = unary_union(glass_parts) if glass_parts else Polygon()
@@ -108,6 +112,8 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
         gap = find_opening(item, barriers, options.max_wall_thickness)
         if gap is None:
             lost.append(item.centroid)
+            continue
+        if _claimed(gap, door_gaps + window_gaps):
             continue
         door_gaps.append(gap)
         openings.append(Opening(gap, "door", 0.0, options.door_height))
@@ -124,6 +130,11 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
     return openings, obstacles, door_gaps
+
+
+def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
+    """Whether most of ``gap`` is already an opening (two drawings in one gap)."""
+    return any(gap.intersection(t).area > 0.5 * min(gap.area, t.area) for t in taken)
 
 
 def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPolygon, floor: list[Stroke]):

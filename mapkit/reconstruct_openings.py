@@ -14,14 +14,14 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import unary_union
 
 from mapkit.reconstruct_types import Stroke
-from mapkit.tolerances import JAMB_REACH, MERGE, MIN_OPENING_WIDTH, SNAP_GAP, THIN_WALL
+from mapkit.tolerances import JAMB_REACH, MERGE, MIN_OPENING_WIDTH, THIN_WALL
 
 
 def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:
     """The separate doors (or windows) of a layer's strokes.
 
-    Strokes of one block insert form one item; loose strokes that touch
-    (within ``SNAP_GAP``) are one item.
+    Strokes of one block insert form one item; loose strokes closer than
+    ``JAMB_REACH`` (the lines of one window, a leaf and its arc) are one item.
     """
     groups: dict[int, list] = {}
     loose = []
@@ -38,7 +38,7 @@ def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:
             loose.append(line)
     items = [unary_union(lines) for lines in groups.values()]
     if loose:
-        blobs = shapely.get_parts(unary_union([g.buffer(SNAP_GAP) for g in loose]))
+        blobs = shapely.get_parts(unary_union([g.buffer(JAMB_REACH / 2) for g in loose]))
         tree = shapely.STRtree(loose)
         for blob in blobs:
             items.append(unary_union([loose[i] for i in tree.query(blob, predicate="contains")]))
@@ -66,7 +66,11 @@ def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> 
     width = float(d[i, k])
     if width < MIN_OPENING_WIDTH:
         return None
-    axis = (b - a) / width
+    axis = _wall_direction((b - a) / width, barriers, (jambs[i], jambs[k]))
+    width = float((b - a) @ axis)
+    if width < 0:
+        axis, width = -axis, -width
+    b = a + axis * width  # on the axis through a: the zone below is a rectangle
     normal = np.array([-axis[1], axis[0]])
     bands = [_thickness_band(p, normal, a, barriers, max_wall_thickness) for p in (a, b)]
     bands = [band for band in bands if band is not None]
@@ -96,6 +100,29 @@ def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> 
     best = max(pieces, key=lambda g: g.intersection(touching).area)
     if best.intersection(touching).area <= 0:
         return None
+    return best
+
+
+def _wall_direction(axis: np.ndarray, barriers, jambs) -> np.ndarray:
+    """The direction of the wall faces at the jambs closest to ``axis`` (within 15 degrees).
+
+    Points inside the two jambs give the gap's direction only roughly; the
+    wall's own edges give it exactly, so the footprint is square to the wall.
+    """
+    edges = barriers.boundary.intersection(shapely.union_all([j.buffer(MERGE) for j in jambs]))
+    best, best_len = axis, 0.0
+    cos_max = np.cos(np.radians(15.0))
+    for part in shapely.get_parts(edges):
+        coords = np.asarray(getattr(part, "coords", []))
+        for p, q in zip(coords[:-1], coords[1:]):
+            d = np.asarray(q[:2]) - np.asarray(p[:2])
+            length = float(np.hypot(*d))
+            if length <= MERGE:
+                continue
+            d = d / length
+            c = float(d @ axis)
+            if abs(c) >= cos_max and length > best_len:
+                best, best_len = (d if c > 0 else -d), length
     return best
 
 
