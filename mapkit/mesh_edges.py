@@ -299,3 +299,63 @@ def classify(segments: np.ndarray, rises: np.ndarray, floor_z: float, top_z: flo
     kinds[horizontal & (np.abs(z - floor_z) <= MESH_LEVEL) & rises] = SegmentKind.FLOOR
     kinds[sin_z >= math.cos(math.radians(AXIS_DEG))] = SegmentKind.VERTICAL
     return kinds
+
+
+#: Sample spacing, metres, along segments when looking for overlapping
+#: collinear pairs: pairs overlapping by more than this are always found.
+_OVERLAP_STEP = 0.05
+
+
+def merge_overlapping(segments: np.ndarray, kinds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge segments of one kind that lie on one line and overlap or touch.
+
+    Separate objects with coplanar faces (two wall pieces in a row, a box on
+    a slab) give collinear edges that share no vertex, so
+    :func:`merge_collinear` cannot join them. Two segments join when their
+    directions differ by less than ``COLLINEAR_DEG``, each end of one is
+    within ``MERGE`` of the other's line, and they overlap or their gap is
+    under ``MERGE``. Candidate pairs come from a k-d tree over points
+    sampled along the segments. Returns ``(segments (M, 2, 3), kinds (M,))``.
+    """
+    from scipy.spatial import cKDTree
+
+    n = len(segments)
+    if n < 2:
+        return segments, kinds
+    a, b = segments[:, 0], segments[:, 1]
+    d = b - a
+    length = np.linalg.norm(d, axis=1)
+    u = d / np.maximum(length, 1e-12)[:, None]
+    count = np.maximum(2, np.ceil(length / _OVERLAP_STEP).astype(np.int64) + 1)
+    owner = np.repeat(np.arange(n), count)
+    start = np.r_[0, np.cumsum(count)[:-1]]
+    t = (np.arange(len(owner)) - np.repeat(start, count)) / np.repeat(count - 1, count)
+    pts = a[owner] + t[:, None] * d[owner]
+    pairs = cKDTree(pts).query_pairs(_OVERLAP_STEP / 2 + MERGE, output_type="ndarray")
+    i, j = owner[pairs[:, 0]], owner[pairs[:, 1]]
+    ok = (i != j) & (kinds[i] == kinds[j])
+    i, j = i[ok], j[ok]
+    ok = np.abs(np.einsum("ij,ij->i", u[i], u[j])) > math.cos(math.radians(COLLINEAR_DEG))
+    i, j = i[ok], j[ok]
+
+    def off_line(p, k):  # distance of points p (m, 3) from the lines of segments k
+        rel = p - a[k]
+        return np.linalg.norm(rel - np.einsum("ij,ij->i", rel, u[k])[:, None] * u[k], axis=1)
+
+    ok = (off_line(a[j], i) <= MERGE) & (off_line(b[j], i) <= MERGE)
+    ok &= (off_line(a[i], j) <= MERGE) & (off_line(b[i], j) <= MERGE)
+    i, j = i[ok], j[ok]
+    if len(i) == 0:
+        return segments, kinds
+    graph = coo_matrix((np.ones(len(i), dtype=np.int8), (i, j)), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    merged, straight = _chain_extremes(segments, u, length, labels)
+    if not straight.all():  # a fan of near-collinear pieces: leave it alone
+        bent = ~straight[labels]
+        labels = labels.copy()
+        labels[bent] = labels.max() + 1 + np.arange(bent.sum())
+        _, labels = np.unique(labels, return_inverse=True)
+        merged, _ = _chain_extremes(segments, u, length, labels)
+    out_kinds = np.zeros(len(merged), dtype=kinds.dtype)
+    out_kinds[labels] = kinds
+    return merged, out_kinds

@@ -3,6 +3,7 @@
     file --mesh_load--> welded mesh (metres, z up, floor at 0)
          --mesh_section--> walls at camera height, low obstacles, rooms
          --mesh_edges--> 3D feature edges and their kinds
+         --mesh_hidden--> without the parts buried inside other solids
 
 Doors in a mesh are just geometry (gaps and lintels), so ``openings`` is
 empty; the importer provides the edges itself, so the pipeline does not
@@ -19,10 +20,11 @@ import shapely
 from shapely.geometry import MultiPolygon
 
 from mapkit.errors import MapkitError, NoWallsError
+from mapkit.importers.mesh_hidden import drop_hidden
 from mapkit.importers.mesh_load import load_mesh
 from mapkit.importers.mesh_section import MeshSections, as_multipolygon, boundary_outline
 from mapkit.lmap import KIND_NAMES
-from mapkit.mesh_edges import face_normals, feature_edges
+from mapkit.mesh_edges import face_normals, feature_edges, merge_overlapping
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene
 from mapkit.tolerances import AXIS_DEG, MESH_LEVEL, MESH_MAX_SECTIONS, MESH_OBSTACLE_HEIGHTS, MIN_FREE_AREA
@@ -71,6 +73,9 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
         raise MapkitError(f"{path}: no free space is left for the robot; check --robot-radius and --units")
 
     segments, kinds = feature_edges(mesh, options.crease_deg, options.min_edge_length, 0.0, top)
+    segments, kinds, hidden_warnings = drop_hidden(segments, kinds, sections, options.min_edge_length)
+    warnings += hidden_warnings
+    segments, kinds = merge_overlapping(segments, kinds)
     counts = np.bincount(kinds, minlength=len(KIND_NAMES))
     info.update(
         section_height_m=z,
