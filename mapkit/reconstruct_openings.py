@@ -109,7 +109,12 @@ def _wall_direction(axis: np.ndarray, barriers, jambs) -> np.ndarray:
     Points inside the two jambs give the gap's direction only roughly; the
     wall's own edges give it exactly, so the footprint is square to the wall.
     """
-    edges = barriers.boundary.intersection(shapely.union_all([j.buffer(MERGE) for j in jambs]))
+    near = shapely.union_all([j.buffer(MERGE) for j in jambs])
+    # Clip first: the boundary of a whole building's walls is costly to build per opening.
+    # The clip box reaches past ``near`` so that its own cut edges fall outside it.
+    x0, y0, x1, y1 = near.bounds
+    pad = 10 * MERGE
+    edges = shapely.clip_by_rect(barriers, x0 - pad, y0 - pad, x1 + pad, y1 + pad).boundary.intersection(near)
     best, best_len = axis, 0.0
     cos_max = np.cos(np.radians(15.0))
     for part in shapely.get_parts(edges):

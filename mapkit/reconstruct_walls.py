@@ -21,10 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from shapely.geometry import LineString, MultiLineString, MultiPolygon, Point, Polygon
-from shapely.ops import unary_union
+from shapely.ops import nearest_points, unary_union
 
 from mapkit.reconstruct_types import Stroke
 from mapkit.tolerances import COLUMN_MAX_AREA, MERGE, SNAP_GAP, THIN_WALL
@@ -154,7 +155,7 @@ def _snap_gaps(noded) -> list[LineString]:
             if d > MERGE * 1e-3 and d <= SNAP_GAP and (best is None or d < best[0]):
                 best = (d, target)
         if best is not None:
-            q = shapely.ops.nearest_points(best[1], p)[0]
+            q = nearest_points(best[1], p)[0]
             out.append(LineString([ends[k], (q.x, q.y)]))
     return out
 
@@ -178,22 +179,21 @@ def _cap_ends(noded, max_gap: float) -> list[LineString]:
     dirs = np.array(dirs)
     pts = ends[dangling]
     cos_par = np.cos(np.radians(_CAP_ANGLE_DEG))
-    sin_sq = np.sin(np.radians(_CAP_ANGLE_DEG))
+    sin_off = np.sin(np.radians(_CAP_ANGLE_DEG))
     candidates = []
-    for i in range(len(dangling)):
-        for j in range(i + 1, len(dangling)):
-            if dangling[i] // 2 == dangling[j] // 2 and len(parts[dangling[i] // 2].coords) == 2:
-                continue  # the two ends of one straight line
-            gap = pts[j] - pts[i]
-            dist = float(np.hypot(*gap))
-            if dist <= MERGE or dist > max_gap:
-                continue
-            if float(dirs[i] @ dirs[j]) < cos_par:
-                continue  # not parallel, or pointing at each other (a door gap)
-            u = gap / dist
-            if abs(float(u @ dirs[i])) > sin_sq or abs(float(u @ dirs[j])) > sin_sq:
-                continue  # staggered ends, not a square cap
-            candidates.append((dist, i, j))
+    for i, j in sorted(cKDTree(pts).query_pairs(max_gap)):
+        if dangling[i] // 2 == dangling[j] // 2 and len(parts[dangling[i] // 2].coords) == 2:
+            continue  # the two ends of one straight line
+        gap = pts[j] - pts[i]
+        dist = float(np.hypot(*gap))
+        if dist <= MERGE:
+            continue
+        if float(dirs[i] @ dirs[j]) < cos_par:
+            continue  # not parallel, or pointing at each other (a door gap)
+        u = gap / dist
+        if abs(float(u @ dirs[i])) > sin_off or abs(float(u @ dirs[j])) > sin_off:
+            continue  # staggered ends, not a square cap
+        candidates.append((dist, i, j))
     used: set[int] = set()
     caps = []
     for dist, i, j in sorted(candidates):

@@ -6,7 +6,6 @@ loads them. Regenerate with ``python tests/data/dxf/make_cases.py``.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import ezdxf
