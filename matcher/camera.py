@@ -143,6 +143,28 @@ class Camera:
         uv = np.asarray(uv, dtype=float)
         return np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy, np.ones(uv.shape[:-1])], axis=-1)
 
+    def interpretation_normals(self, lines: np.ndarray) -> np.ndarray:
+        """Unit normals (M, 3), camera frame, of the planes through the optical
+        centre and image lines (M, 2, 2) pixels (method.md section 4).
+
+        The sign is arbitrary (every use squares it or takes its absolute value).
+        Lines must be undistorted (see :meth:`undistort_pixels`)."""
+        rays = self.pixel_rays(np.asarray(lines, dtype=float))
+        n = np.cross(rays[:, 0], rays[:, 1])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def undistort_pixels(self, uv: np.ndarray) -> np.ndarray:
+        """Pixels (..., 2) of the real (distorted) camera -> pixels of the ideal
+        pinhole with the same K. Identity when there is no distortion."""
+        uv = np.asarray(uv, dtype=float)
+        if not self.distortion or uv.size == 0:
+            return uv.copy()
+        import cv2  # only needed with distortion; keeps this module numpy-only otherwise
+
+        pts = uv.reshape(-1, 1, 2).astype(np.float64)
+        out = cv2.undistortPoints(pts, self.K, np.asarray(self.distortion, dtype=np.float64), P=self.K)
+        return out.reshape(uv.shape)
+
     def elevation_range(self) -> tuple[float, float]:
         """(lowest, highest) elevation angle, radians, that any pixel looks at.
 

@@ -1,0 +1,247 @@
+"""The paper's geometric tests on 2D-3D pairs (method.md sections 4 to 6).
+
+No pose is computed here: each test says whether a correspondence, or a
+couple of correspondences, can hold for some pose of the prior set
+``{(x, y, yaw): |(x, y) - (xe, ye)| <= dt, |yaw - yaw_e| <= dyaw}``.
+
+Shapes: image lines (M, 2, 2) pixels; interpretation-plane normals (M, 3)
+unit, camera frame; model directions (N, 3) unit, world frame. Angles in
+radians.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from matcher.camera import Camera
+
+
+def wrap(a):
+    """Angles to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2 * np.pi)
+
+
+def _perturbed_lines(lines: np.ndarray, px: float, deg: float) -> np.ndarray:
+    """(4, M, 2, 2): each line rotated by +-deg about its midpoint and shifted
+    by +-px along its normal, the extreme cases of the noise model."""
+    a, b = lines[:, 0], lines[:, 1]
+    mid = 0.5 * (a + b)
+    half = 0.5 * (b - a)
+    ln = np.linalg.norm(half, axis=1, keepdims=True)
+    d = half / ln
+    perp = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    out = []
+    for s_rot in (-1.0, 1.0):
+        c, s = math.cos(s_rot * math.radians(deg)), math.sin(s_rot * math.radians(deg))
+        dr = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
+        for s_off in (-1.0, 1.0):
+            m = mid + s_off * px * perp
+            out.append(np.stack([m - ln * dr, m + ln * dr], axis=1))
+    return np.stack(out)
+
+
+def plane_noise(camera: Camera, lines: np.ndarray, px: float, deg: float) -> np.ndarray:
+    """(M,) largest angle, radians, between the interpretation plane of each
+    line and that of the line moved by the noise bounds (``px`` offset, ``deg``
+    rotation about its midpoint). Any residual ``n . X`` of a unit vector X
+    lying in the true plane is then at most this (plus second order)."""
+    n = camera.interpretation_normals(lines)
+    pert = _perturbed_lines(lines, px, deg)
+    worst = np.zeros(len(lines))
+    for p in pert:
+        n2 = camera.interpretation_normals(p)
+        worst = np.maximum(worst, np.linalg.norm(np.cross(n, n2), axis=1))
+    return np.arcsin(np.clip(worst, 0.0, 1.0)) * 1.05 + 1e-4
+
+
+def vertical_residual(camera: Camera, normals: np.ndarray) -> np.ndarray:
+    """(M,) ``|n . R e_z| = |ny cos p + nz sin p|``: zero when the interpretation
+    plane contains the vertical direction, for every yaw (method.md section 6)."""
+    p = camera.pitch
+    return np.abs(normals[:, 1] * math.cos(p) + normals[:, 2] * math.sin(p))
+
+
+def vertical_candidates(camera: Camera, normals: np.ndarray, eps: np.ndarray) -> np.ndarray:
+    """(M,) bool: lines that may be images of vertical edges (exact test,
+    widened by each line's plane noise ``eps`` (M,))."""
+    return vertical_residual(camera, normals) <= eps
+
+
+def vertical_bearing(camera: Camera, lines: np.ndarray) -> np.ndarray:
+    """(M,) bearing alpha, radians, of the vertical edge imaged by each line,
+    positive to the right of the optical axis (horizon correction of
+    method.md section 6: ``tan alpha = cos p (u_h - cx) / fx`` where the line
+    meets the horizon row ``v_h = cy - fy tan p``)."""
+    p = camera.pitch
+    v_h = camera.cy - camera.fy * math.tan(p)
+    a, b = lines[:, 0], lines[:, 1]
+    dv = b[:, 1] - a[:, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (v_h - a[:, 1]) / dv
+    u_h = np.where(np.abs(dv) > 1e-9, a[:, 0] + t * (b[:, 0] - a[:, 0]), 0.5 * (a[:, 0] + b[:, 0]))
+    return np.arctan(math.cos(p) * (u_h - camera.cx) / camera.fx)
+
+
+def bearing_noise(camera: Camera, lines: np.ndarray, px: float, deg: float) -> np.ndarray:
+    """(M,) largest change of :func:`vertical_bearing` under the noise bounds."""
+    alpha = vertical_bearing(camera, lines)
+    worst = np.zeros(len(lines))
+    for p in _perturbed_lines(lines, px, deg):
+        worst = np.maximum(worst, np.abs(vertical_bearing(camera, p) - alpha))
+    return worst * 1.05 + 1e-4
+
+
+# --------------------------------------------------------------------------
+# Unary constraint (non-vertical segments), method.md section 5
+
+
+def unary_coefficients(normals: np.ndarray, directions: np.ndarray, pitch: float):
+    """``A, B, G`` of ``A cos yaw + B sin yaw + G = n . R(yaw) v``, for every
+    pair: normals (M, 3), directions (N, 3) -> three (N, M) arrays."""
+    nx, ny, nz = (normals[None, :, k] for k in range(3))
+    vx, vy, vz = (directions[:, None, k] for k in range(3))
+    k = nz * math.cos(pitch) - ny * math.sin(pitch)
+    m = ny * math.cos(pitch) + nz * math.sin(pitch)
+    return k * vx - nx * vy, nx * vx + k * vy, -m * vz
+
+
+def unary_yaws(normals: np.ndarray, directions: np.ndarray, pitch: float):
+    """Both yaw solutions of ``n . R v = 0`` for every pair.
+
+    Returns ``(yaw1, yaw2, slope)``, each (N, M): yaws in (-pi, pi] (NaN where
+    ``|G| > sqrt(A^2 + B^2)``: no solution), and ``slope = sqrt(A^2+B^2-G^2)``,
+    the rate of change of ``n . R v`` with yaw at the roots (small slope:
+    poorly determined yaw)."""
+    A, B, G = unary_coefficients(normals, directions, pitch)
+    rad = np.hypot(A, B)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.arccos(np.clip(-G / rad, -1.0, 1.0))
+    base = np.arctan2(B, A)
+    none = (np.abs(G) > rad) | (rad < 1e-12)
+    y1 = np.where(none, np.nan, wrap(base + c))
+    y2 = np.where(none, np.nan, wrap(base - c))
+    slope = np.sqrt(np.maximum(rad**2 - G**2, 0.0))
+    return y1, y2, slope
+
+
+def position_line(normal_world: np.ndarray, point: np.ndarray, height: float):
+    """Floor-plane line ``a . (x, y) = d`` on which the camera must lie for the
+    world point ``point`` (..., 3) to be in the plane of world normal
+    ``normal_world`` (..., 3) = R^T n. Returns ``a`` (..., 2) and ``d`` (...)."""
+    a = normal_world[..., :2]
+    d = np.einsum("...k,...k->...", normal_world, point) - normal_world[..., 2] * height
+    return a, d
+
+
+def unary_constraint(
+    camera: Camera,
+    normals: np.ndarray,
+    eps: np.ndarray,
+    segments: np.ndarray,
+    prior: tuple[float, float, float],
+    dt: float,
+    dyaw: float,
+    model_m: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The paper's unary test on every pair (non-vertical segment i, image line j).
+
+    ``normals`` (M, 3) unit, camera frame; ``eps`` (M,) plane noise of each
+    line (radians); ``segments`` (N, 2, 3) world. A pair is acceptable if a
+    yaw solution lies within ``dyaw`` of the prior yaw (widened by the yaw
+    uncertainty ``eps / slope``) and, at that yaw, the position line meets the
+    disk of radius ``dt`` around the prior position (widened by the plane
+    noise times the distance to the segment, plus ``model_m``).
+
+    Returns ``(ok (N, M) bool, yaw (N, M))``, yaw the accepted solution (NaN
+    where none).
+    """
+    xe, ye, yaw_e = prior
+    v = segments[:, 1] - segments[:, 0]
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    y1, y2, slope = unary_yaws(normals, v, camera.pitch)
+    with np.errstate(divide="ignore"):
+        dyaw_noise = np.minimum(np.arcsin(np.clip(eps[None, :] / np.maximum(slope, 1e-12), 0, 1)), math.pi)
+    ce = np.array([xe, ye, camera.height_m])
+    # Point of each segment's line nearest to the prior camera centre.
+    t = np.einsum("nk,nk->n", ce - segments[:, 0], v)
+    near = segments[:, 0] + t[:, None] * v
+    reach = np.linalg.norm(near - ce, axis=1) + dt  # farthest the camera can be from it
+    ok = np.zeros(y1.shape, dtype=bool)
+    best = np.full(y1.shape, np.nan)
+    for yaw in (y1, y2):
+        yaw_ok = np.abs(wrap(yaw - yaw_e)) <= dyaw + dyaw_noise
+        yaw_c = np.where(yaw_ok, yaw_e + np.clip(wrap(yaw - yaw_e), -dyaw, dyaw), yaw_e)
+        R = _rotations(yaw_c, camera.pitch)  # (N, M, 3, 3)
+        w = np.einsum("nmki,mk->nmi", R, normals)  # R^T n
+        a, d = position_line(w, near[:, None, :], camera.height_m)
+        na = np.linalg.norm(a, axis=-1)
+        dist = np.abs(a[..., 0] * xe + a[..., 1] * ye - d)  # residual at the disk centre
+        slack = (eps[None, :] + np.abs(wrap(yaw - yaw_c))) * reach[:, None] + model_m
+        meets = dist <= na * dt + slack
+        hit = yaw_ok & meets & ~np.isnan(yaw)
+        best = np.where(hit & ~ok, yaw, best)
+        ok |= hit
+    return ok, best
+
+
+def _rotations(yaw: np.ndarray, pitch: float) -> np.ndarray:
+    """(..., 3, 3) world-to-camera rotations for an array of yaws."""
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    z = np.zeros_like(cy)
+    r = np.stack([sy, -cy, z], -1)
+    d = np.stack([-sp * cy, -sp * sy, z - cp], -1)
+    f = np.stack([cp * cy, cp * sy, z - sp], -1)
+    return np.stack([r, d, f], -2)
+
+
+rotations = _rotations
+
+
+# --------------------------------------------------------------------------
+# Binary constraint (vertical segments), method.md section 6
+
+#: Samples on the uncertainty circle for the range of the viewing angle; the
+#: angle is harmonic in the camera position, so its extremes over the disk
+#: lie on the circle. 72 samples: 5 degree steps, far finer than the angle
+#: varies for corners more than dt away.
+_CIRCLE_SAMPLES = 72
+
+
+def binary_constraint(
+    points_i: np.ndarray,
+    points_k: np.ndarray,
+    alpha_i: np.ndarray,
+    alpha_k: np.ndarray,
+    centre: tuple[float, float],
+    dt: float,
+    tol: np.ndarray,
+) -> np.ndarray:
+    """The paper's binary test on couples of vertical correspondences.
+
+    For couples ``(L_i - l_i, L_k - l_k)`` with floor points ``points_i``,
+    ``points_k`` (C, 2) and edge bearings ``alpha_i``, ``alpha_k`` (C,)
+    (positive to the right, from :func:`vertical_bearing`), the camera sees
+    ``P_k`` at ``rho = alpha_i - alpha_k`` counter-clockwise of ``P_i``; the
+    positions doing so form an arc through both points (inscribed angle),
+    on the side that keeps the left/right order. The couple is acceptable if
+    that arc, widened by ``tol`` (C,) radians, meets the disk of radius
+    ``dt`` around ``centre``. Returns (C,) bool.
+    """
+    c = np.asarray(centre, dtype=float)
+    rho = alpha_i - alpha_k
+    th = np.linspace(0, 2 * np.pi, _CIRCLE_SAMPLES, endpoint=False)
+    ring = c + dt * np.stack([np.cos(th), np.sin(th)], 1)  # (S, 2)
+    di = points_i[:, None, :] - ring[None]
+    dk = points_k[:, None, :] - ring[None]
+    g = np.arctan2(dk[..., 1], dk[..., 0]) - np.arctan2(di[..., 1], di[..., 0])
+    h = wrap(g - rho[:, None])  # (C, S): zero on the arc
+    # Sampling slack: between samples the angle moves by at most the step
+    # times dt over the distance to the nearer point.
+    dmin = np.minimum(np.linalg.norm(points_i - c, axis=1), np.linalg.norm(points_k - c, axis=1))
+    inside = dmin <= dt * 1.0001
+    step = 2 * np.pi / _CIRCLE_SAMPLES * dt / np.maximum(dmin, 1e-9)
+    t = tol + step
+    return inside | ((h.min(axis=1) <= t) & (h.max(axis=1) >= -t))

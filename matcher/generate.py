@@ -1,0 +1,328 @@
+"""Stage 1: matching hypotheses without computing poses (method.md sections 3-7).
+
+Pipeline, for candidate model segments L (from the regions met by the prior
+disk, cut to the horizontal field of view) and image lines l:
+
+1. split L into vertical ``Lv`` and non-vertical ``Lh`` segments, and pick
+   the image lines that may be vertical edges (exact test ``|n . R e_z|``);
+2. unary test on ``Lh x l`` (yaw solution in the interval, position line
+   meets the disk), bearing test on ``Lv x lv``: the survivors are the
+   correspondences;
+3. pairwise compatibility: one-to-one, the paper's binary test on couples of
+   vertical correspondences, and for every couple a common pose in the prior
+   set (strips of both meet inside the disk at one yaw of the grid);
+4. interpretation tree (:mod:`matcher.tree`): the maximal sets of
+   correspondences that are pairwise compatible and whose whole feasible
+   pose set is non-empty, with at least the minimum number of matches.
+
+Each hypothesis carries the grid yaw and position at which it is feasible:
+the starting point of stage 2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from matcher import posegrid
+from matcher.camera import Camera
+from matcher.constraints import binary_constraint, rotations, unary_constraint, wrap
+from matcher.occlusion import ray_cast
+from matcher.tolerances import VERTICAL_AXIS_DEG, Tolerances
+from matcher.tree import TreeInput, search
+
+
+@dataclass
+class ImageLines:
+    """Per-line quantities, computed once per frame.
+
+    ``lines`` (M, 2, 2) undistorted pixels; ``normals`` (M, 3) unit, camera
+    frame; ``eps`` (M,) plane noise, radians, split into ``eps_rot`` (turn
+    about the midpoint ray, from orientation noise) and ``eps_off`` (from
+    offset noise); ``mid_rays`` (M, 3) unit rays of the midpoints; ``vertical`` (M,) bool vertical
+    candidates; ``alpha`` (M,) bearings of vertical candidates, radians, to
+    the right; ``alpha_eps`` (M,) their noise bound; ``usable`` (M,) bool long
+    enough to use."""
+
+    lines: np.ndarray
+    normals: np.ndarray
+    eps: np.ndarray
+    vertical: np.ndarray
+    alpha: np.ndarray
+    alpha_eps: np.ndarray
+    usable: np.ndarray
+    eps_rot: np.ndarray
+    eps_off: np.ndarray
+    mid_rays: np.ndarray
+
+
+@dataclass
+class Hypotheses:
+    """Stage 1 output. Correspondence k pairs ``segment[k]`` (map id) with
+    ``line[k]`` (image line index). ``sets`` lists hypotheses as arrays of
+    correspondence indices; ``init`` (H, 3) their feasible ``(x, y, yaw)``."""
+
+    segment: np.ndarray
+    line: np.ndarray
+    sets: list[np.ndarray]
+    init: np.ndarray
+    n_segments: int
+    n_correspondences: int
+    truncated: bool = False
+    counts: dict = field(default_factory=dict)
+
+
+def segment_is_vertical(segments: np.ndarray) -> np.ndarray:
+    """(N,) bool: direction within ``VERTICAL_AXIS_DEG`` of the vertical."""
+    v = segments[:, 1] - segments[:, 0]
+    vz = np.abs(v[:, 2]) / np.maximum(np.linalg.norm(v, axis=1), 1e-12)
+    return vz >= math.cos(math.radians(VERTICAL_AXIS_DEG))
+
+
+def in_field_of_view(segments: np.ndarray, camera: Camera, prior, dt: float, dyaw: float) -> np.ndarray:
+    """(N,) bool: segments that some heading of the interval and position of
+    the disk can have within the horizontal field of view.
+
+    From the disk centre a segment covers the bearings between its end
+    points; moving within the disk shifts any bearing by at most
+    ``asin(dt / distance)``. Segments closer than ``dt`` are kept."""
+    xe, ye, yaw_e = prior
+    if dyaw >= math.pi:
+        return np.ones(len(segments), dtype=bool)
+    c = np.array([xe, ye])
+    p0, p1 = segments[:, 0, :2] - c, segments[:, 1, :2] - c
+    b0 = wrap(np.arctan2(p0[:, 1], p0[:, 0]) - yaw_e)
+    span = wrap(np.arctan2(p1[:, 1], p1[:, 0]) - yaw_e - b0)  # short way: the segment misses c
+    lo = np.minimum(b0, b0 + span)
+    hi = np.maximum(b0, b0 + span)
+    seg = p1 - p0
+    L2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-12)
+    t = np.clip(-np.einsum("ij,ij->i", p0, seg) / L2, 0.0, 1.0)
+    dist = np.linalg.norm(p0 + t[:, None] * seg, axis=1)
+    widen = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0.0, 1.0))
+    reach = dyaw + camera.horizontal_half_fov() + widen
+    ok = np.zeros(len(segments), dtype=bool)
+    for shift in (-2 * math.pi, 0.0, 2 * math.pi):
+        ok |= (lo + shift <= reach) & (hi + shift >= -reach)
+    return ok | (dist <= dt) | (reach >= math.pi)
+
+
+#: Bearing step of the sight rays cast from vertical edges, radians (the
+#: visible stretch of a ray changes little within a degree).
+_SIGHT_STEP = math.radians(1.0)
+#: Rays start this far from the edge, which stands on the walls it belongs to.
+_SIGHT_SKIP_M = 0.05
+
+
+def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls) -> np.ndarray:
+    """(Kv, Y) bool: for a vertical edge at floor point ``points[k]`` seen at
+    bearing ``alpha[k]`` (right of the axis) with heading ``yaws[g]``, the
+    camera lies on the ray back from the edge at world bearing ``yaw - alpha``,
+    up to the first wall that would hide the edge. True where that stretch
+    comes within ``dt + width[k, g]`` of the disk centre. Rays are cast once
+    per distinct edge on a 1 degree bearing grid."""
+    uniq, inv = np.unique(points, axis=0, return_inverse=True)
+    inv = inv.reshape(-1)
+    rel = uniq - centre
+    dist = np.linalg.norm(rel, axis=1)
+    to_edge = np.arctan2(rel[:, 1], rel[:, 0])
+    half = np.where(dist > dt, np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1)), np.pi) + 2 * step
+    n_b = np.ceil(2 * half / _SIGHT_STEP).astype(int) + 1
+    seg_of = np.repeat(np.arange(len(uniq)), n_b)
+    k_in = np.arange(n_b.sum()) - np.repeat(np.cumsum(n_b) - n_b, n_b)
+    b0 = to_edge - half
+    bear = b0[seg_of] + k_in * _SIGHT_STEP
+    back = -np.stack([np.cos(bear), np.sin(bear)], axis=1)
+    reach = np.minimum(ray_cast(uniq[seg_of], back, walls, _SIGHT_SKIP_M), dist[seg_of] + dt + 1.0)
+    starts = np.cumsum(n_b) - n_b
+    # For each correspondence and yaw: the bearing from camera to edge.
+    beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
+    j = np.rint(wrap(beta - b0[inv][:, None]) / _SIGHT_STEP).astype(int)
+    inside = (j >= 0) & (j < n_b[inv][:, None])
+    idx = starts[inv][:, None] + np.clip(j, 0, n_b[inv][:, None] - 1)
+    lam = reach[idx]  # (Kv, Y) visible length of the ray
+    # Distance from the disk centre to the stretch P - s u, s in [0, lam].
+    u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
+    pc = centre - points[:, None, :]  # (Kv, 1, 2)
+    s_ = np.clip(-np.einsum("kgi,kgi->kg", np.broadcast_to(pc, u.shape), u), 0.0, lam)
+    closest = points[:, None, :] - s_[..., None] * u
+    gap = np.linalg.norm(closest - centre, axis=-1)
+    slack = width + dist[inv][:, None] * (0.5 * step + _SIGHT_STEP)
+    return ~inside | (gap <= dt + slack)
+
+
+def collinear_classes(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float = 0.01):
+    """Group segments (N, 2, 3) lying on one 3D line (pieces of a wall split by
+    a door, say): image lines cannot tell them apart, so stage 1 works on one
+    representative per group. Returns ``(label (N,), reps (G, 2, 3))``, each
+    representative spanning all its members."""
+    n = len(segments)
+    v = segments[:, 1] - segments[:, 0]
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    par = np.linalg.norm(np.cross(v[:, None], v[None]), axis=2) <= math.sin(math.radians(angle_deg))
+    rel = segments[None, :, :, :] - segments[:, None, None, 0, :]  # (N, N, 2, 3): j's ends from i's start
+    off = np.linalg.norm(np.cross(rel, v[:, None, None, :]), axis=3).max(axis=2)
+    same = par & (off <= dist_m)
+    same &= same.T
+    label = np.full(n, -1, dtype=np.int64)
+    reps = []
+    for i in range(n):
+        if label[i] >= 0:
+            continue
+        members = np.nonzero(same[i] & (label < 0))[0]
+        label[members] = len(reps)
+        pts = segments[members].reshape(-1, 3)
+        t = (pts - segments[i, 0]) @ v[i]
+        reps.append([segments[i, 0] + t.min() * v[i], segments[i, 0] + t.max() * v[i]])
+    return label, np.array(reps).reshape(-1, 2, 3)
+
+
+def yaw_grid(yaw_e: float, dyaw: float, step: float) -> np.ndarray:
+    """(Y,) yaws covering the interval with spacing at most ``step`` (radians)."""
+    if dyaw >= math.pi:
+        n = int(math.ceil(2 * math.pi / step))
+        return wrap(yaw_e + np.arange(n) * (2 * math.pi / n))
+    n = int(math.ceil(2 * dyaw / step)) + 1
+    return yaw_e + np.linspace(-dyaw, dyaw, n)
+
+
+def generate(
+    segments: np.ndarray,
+    seg_ids: np.ndarray,
+    camera: Camera,
+    img: ImageLines,
+    prior: tuple[float, float, float],
+    dt: float,
+    dyaw: float,
+    tol: Tolerances,
+    walls: tuple[np.ndarray, np.ndarray] | None = None,
+    debug: dict | None = None,
+) -> Hypotheses:
+    """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
+
+    ``walls``: wall edges ``(a (E, 2), b (E, 2))`` for the visibility check
+    of the tree's final test, or None. ``debug``, if a dict, receives the intermediate arrays (for tools)."""
+    xe, ye, yaw_e = prior
+    step = math.radians(tol.yaw_step_deg)
+    h = camera.height_m
+    ce = np.array([xe, ye, h])
+    yaws = yaw_grid(yaw_e, dyaw, step)
+    Rg = rotations(yaws, camera.pitch)  # (Y, 3, 3)
+    W = np.einsum("gki,mk->mgi", Rg, img.normals)  # (M, Y, 3) world normals R^T n
+    fwd = Rg[:, 2, :]  # (Y, 3) optical axis
+
+    vert_seg = segment_is_vertical(segments)
+    v = segments[:, 1] - segments[:, 0]
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    tpar = np.einsum("nk,nk->n", ce - segments[:, 0], v)
+    near = segments[:, 0] + tpar[:, None] * v  # point of each line nearest the prior centre
+    reach = np.linalg.norm(near - ce, axis=1) + dt
+    usable = img.usable
+
+    # ---- correspondences ------------------------------------------------
+    ih = np.nonzero(~vert_seg)[0]
+    uh, _ = unary_constraint(camera, img.normals, img.eps, segments[ih], prior, dt, dyaw, tol.model_m)
+    uh &= usable[None, :]
+    hi_, hj = np.nonzero(uh)
+    hi_ = ih[hi_]
+    iv = np.nonzero(vert_seg)[0]
+    jv = np.nonzero(img.vertical & usable)[0]
+    vi_, vj = (np.repeat(iv, len(jv)), np.tile(jv, len(iv)))
+    seg_k = np.concatenate([hi_, vi_]).astype(np.int64)
+    line_k = np.concatenate([hj, vj]).astype(np.int64)
+    is_v = np.concatenate([np.zeros(len(hi_), bool), np.ones(len(vi_), bool)])
+    counts = {"segments": int(len(segments)), "vertical_segments": int(vert_seg.sum()),
+              "lines": int(len(img.lines)), "vertical_lines": int(len(jv)),
+              "unary_pairs": int(len(hi_)), "vertical_pairs": int(len(vi_))}
+    empty = Hypotheses(seg_ids[seg_k] if len(seg_k) else np.zeros(0, np.int64), line_k, [], np.zeros((0, 3)),
+                       len(segments), 0, False, counts)
+    if len(seg_k) < tol.min_matches:
+        return empty
+
+    Wk = W[line_k]  # (K, Y, 3)
+    # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
+    mask = np.empty((len(seg_k), len(yaws)), dtype=bool)
+    dir_res = np.abs(np.einsum("kgi,ki->kg", Wk, v[seg_k]))
+    mask[~is_v] = (dir_res <= img.eps[line_k][:, None] + 0.5 * step)[~is_v]
+    if is_v.any():
+        pv = near[seg_k[is_v], :2] - ce[:2]
+        dist = np.linalg.norm(pv, axis=1)
+        beta = np.arctan2(pv[:, 1], pv[:, 0])
+        half = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1))
+        half = np.where(dist <= dt, np.pi, half) + img.alpha_eps[line_k[is_v]] + 0.5 * step
+        mask[is_v] = np.abs(wrap(yaws[None, :] - img.alpha[line_k[is_v]][:, None] - beta[:, None])) <= half[:, None]
+    # Position strips (relative to the disk centre). The point of each model
+    # line used is the one nearest the ray of the image line's midpoint (from
+    # the disk centre, at each grid yaw). The line's orientation noise turns
+    # its plane about that ray, so for a true correspondence the residual at
+    # that point moves by the turn times the lever arm: how far the true ray
+    # can pass from the point (the camera's offset in the disk, the yaw step,
+    # the offset noise), not the distance to the whole segment.
+    U = np.einsum("gki,mk->mgi", Rg, img.mid_rays)[line_k]  # (K, Y, 3) world direction of the midpoint ray
+    P0, vk = segments[seg_k, 0], v[seg_k]
+    w0 = ce - P0  # (K, 3)
+    b_ = np.einsum("kgi,ki->kg", U, vk)
+    d_ = np.einsum("kgi,ki->kg", U, w0)
+    e_ = np.einsum("ki,ki->k", vk, w0)[:, None]
+    den = np.maximum(1.0 - b_ * b_, 1e-9)
+    lam = (b_ * e_ - d_) / den
+    sp = np.where(1.0 - b_ * b_ > 1e-9, (e_ - b_ * d_) / den, e_)
+    Pstar = P0[:, None, :] + sp[..., None] * vk[:, None, :]  # (K, Y, 3)
+    D = np.linalg.norm(Pstar - ce, axis=-1) + dt
+    a = Wk[..., :2]
+    d = np.einsum("kgi,kgi->kg", Wk, Pstar) - Wk[..., 2] * h - np.einsum("kgi,i->kg", a, ce[:2])
+    e_rot = img.eps_rot[line_k][:, None]
+    e_off = img.eps_off[line_k][:, None]
+    # Between grid yaws the residual moves at d r / d yaw = (-w_y, w_x) . (P - C).
+    dr_dyaw = np.abs(-Wk[..., 1] * (Pstar[..., 0] - ce[0]) + Wk[..., 0] * (Pstar[..., 1] - ce[1]))
+    dr_dyaw += np.linalg.norm(a, axis=-1) * dt
+    t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
+    quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
+    if is_v.any() and walls is not None:
+        mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt,
+                                      (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v], step, walls)
+    val, _ = posegrid.minimise(quad, dt)
+    mask &= val <= 2.0
+    keep = mask.any(axis=1)
+    seg_k, line_k, is_v, mask, quad = seg_k[keep], line_k[keep], is_v[keep], mask[keep], quad[keep]
+    K = len(seg_k)
+    counts["correspondences"] = int(K)
+    empty.segment, empty.line, empty.n_correspondences = seg_ids[seg_k], line_k, K
+    if K < tol.min_matches:
+        return empty
+
+    # ---- pairwise compatibility ----------------------------------------
+    iu, ju = np.triu_indices(K, 1)
+    distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
+    iu, ju = iu[distinct], ju[distinct]
+    pm = mask[iu] & mask[ju]
+    p, g = np.nonzero(pm)
+    qi, qj = quad[iu[p], g], quad[ju[p], g]
+    pval, z = posegrid.minimise(qi + qj, dt)
+    ok = (pval <= 3.0) & (posegrid.evaluate(qi, z) <= tol.q_max) & (posegrid.evaluate(qj, z) <= tol.q_max)
+    pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
+    both_v = is_v[iu] & is_v[ju]
+    if both_v.any():
+        sel = np.nonzero(both_v & pair_ok)[0]
+        if len(sel):
+            a_i, a_j = iu[sel], ju[sel]
+            tol_ab = img.alpha_eps[line_k[a_i]] + img.alpha_eps[line_k[a_j]]
+            bok = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], img.alpha[line_k[a_i]],
+                                    img.alpha[line_k[a_j]], (xe, ye), dt, tol_ab)
+            pair_ok[sel] = bok
+    compat = np.zeros((K, K), dtype=bool)
+    compat[iu[pair_ok], ju[pair_ok]] = True
+    compat |= compat.T
+    counts["compatible_pairs"] = int(pair_ok.sum())
+    if debug is not None:
+        debug.update(seg_k=seg_k, line_k=line_k, is_v=is_v, mask=mask, quad=quad, compat=compat, yaws=yaws,
+                     uh=uh, ih=ih)
+
+    # ---- interpretation tree -------------------------------------------
+    inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls)
+    sets, init, truncated, nodes = search(inp, tol)
+    counts["tree_nodes"] = int(nodes)
+    return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
+                      truncated, counts)

@@ -1,0 +1,53 @@
+"""Occlusion by the map's walls, seen from above (numpy only).
+
+Walls are extruded to the full height of the map and the camera is below
+their top, so a sight line is blocked exactly when its floor projection
+crosses a wall outline. Wall outlines come as edges ``(a (E, 2), b (E, 2))``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def wall_edges(linemap) -> tuple[np.ndarray, np.ndarray] | None:
+    """The map's wall outlines as edges ``(a (E, 2), b (E, 2))``, or None."""
+    rings = linemap.wall_rings()
+    if not rings:
+        return None
+    return np.concatenate(rings), np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+
+
+def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float) -> np.ndarray:
+    """(R,) distance along each ray (origins (R, 2), unit dirs (R, 2)) to the
+    first wall edge crossed beyond ``skip`` metres; inf if none."""
+    if walls is None or len(walls[0]) == 0:
+        return np.full(len(origins), np.inf)
+    ea, eb = walls
+    s = eb - ea  # (E, 2)
+    den = dirs[:, None, 0] * s[None, :, 1] - dirs[:, None, 1] * s[None, :, 0]
+    w = ea[None] - origins[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / den
+        u = (w[..., 0] * dirs[:, None, 1] - w[..., 1] * dirs[:, None, 0]) / den
+    hit = (np.abs(den) > 1e-12) & (t > skip) & (u >= 0) & (u <= 1)
+    return np.where(hit, t, np.inf).min(axis=1)
+
+
+def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -> np.ndarray:
+    """(Q,) bool: the floor sight line from ``cam`` (2,) to each of ``points``
+    (Q, 2) crosses no wall edge farther than ``end_margin`` metres from both
+    its ends (the points lie on wall faces; the camera may be a little off)."""
+    if walls is None or len(walls[0]) == 0:
+        return np.ones(len(points), dtype=bool)
+    ea, eb = walls
+    r = points - cam
+    s = eb - ea
+    den = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
+    w = ea[None] - cam[None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / den
+        u = (w[..., 0] * r[:, None, 1] - w[..., 1] * r[:, None, 0]) / den
+    margin = end_margin / np.maximum(np.linalg.norm(r, axis=1), 1e-9)[:, None]
+    hit = (np.abs(den) > 1e-12) & (t > margin) & (t < 1 - margin) & (u >= 0) & (u <= 1)
+    return ~hit.any(axis=1)

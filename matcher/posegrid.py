@@ -1,0 +1,53 @@
+"""Feasible pose sets of correspondences, on a grid of yaws.
+
+For a fixed yaw every correspondence (model segment i, image line j) says
+that the camera centre lies on a floor-plane line (method.md section 5):
+``a . c = d`` with ``a, d`` from the world normal ``w = R^T n``. Image noise
+widens it to a strip ``|a . c - d| <= t``. A set of correspondences is
+consistent if, for one yaw of the grid, its strips and the uncertainty disk
+have a common point.
+
+The test is run on quadratic forms, so that a set is checked with a sum and
+a 2x2 solve: with ``q_k(c) = ((a_k . c - d_k) / t_k)^2`` and
+``q_0(c) = |c - c_e|^2 / dt^2``, a feasible point makes every term <= 1, hence
+
+    min_c  q_0(c) + sum_k q_k(c)  <=  |S| + 1.
+
+That bound is a necessary condition (it never rejects a truly feasible set);
+each term at the minimiser must also stay below ``q_max``. Coordinates are
+relative to the disk centre. Quadratic layout (6,): ``[Axx, Axy, Ayy, bx, by,
+c]`` for ``q(z) = z^T A z - 2 b . z + c``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def strip_quadratics(a: np.ndarray, d: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(..., 6) quadratics of strips ``|a . z - d| <= t``; a (..., 2), d and t (...)."""
+    s = 1.0 / (t * t)
+    return np.stack(
+        [a[..., 0] ** 2 * s, a[..., 0] * a[..., 1] * s, a[..., 1] ** 2 * s, a[..., 0] * d * s, a[..., 1] * d * s, d * d * s],
+        axis=-1,
+    )
+
+
+def minimise(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Minimum over z of ``q(z) + |z|^2/dt^2`` for quadratics q (..., 6).
+
+    Returns ``(value (...), z (..., 2))``."""
+    inv = 1.0 / (dt * dt)
+    axx, axy, ayy = q[..., 0] + inv, q[..., 1], q[..., 2] + inv
+    bx, by = q[..., 3], q[..., 4]
+    det = axx * ayy - axy * axy
+    zx = (ayy * bx - axy * by) / det
+    zy = (axx * by - axy * bx) / det
+    val = q[..., 5] - (bx * zx + by * zy)
+    return val, np.stack([zx, zy], axis=-1)
+
+
+def evaluate(q: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """q(z) for quadratics (..., 6) and points (..., 2)."""
+    x, y = z[..., 0], z[..., 1]
+    return q[..., 0] * x * x + 2 * q[..., 1] * x * y + q[..., 2] * y * y - 2 * (q[..., 3] * x + q[..., 4] * y) + q[..., 5]

@@ -1,0 +1,77 @@
+"""Every threshold of the matcher, in one documented place.
+
+Lengths in metres, angles in degrees, image quantities in pixels. The
+defaults fit a detector whose lines are good to about 1 px in position and
+1 degree in orientation (LSD on a sharp 640x480 frame; the paper's simulated
+noise); a noisier source should widen ``line_px`` / ``line_deg``, and every
+test derived from them widens with it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    #: Bound on the perpendicular offset error of a detected line, pixels.
+    #: With ``line_deg`` it sets, per image line, the largest angle by which
+    #: its interpretation plane can be off (see constraints.plane_noise):
+    #: every unary, binary and vertical test is widened by that angle, so a
+    #: true correspondence passes whenever the noise stays within the bounds.
+    line_px: float = 1.5
+    #: Bound on the orientation error of a detected line, degrees.
+    line_deg: float = 1.5
+    #: Error of the map and of the calibration (wall positions, camera
+    #: height), metres: added to every position residual's tolerance. A
+    #: height error dh moves a floor line's strip by dh * distance / height,
+    #: so this is the one to raise for a robot whose camera height varies.
+    model_m: float = 0.01
+    #: Yaw step of the pose grid used by the consistency tests, degrees. The
+    #: position tolerances grow by half a step times the range, so a coarser
+    #: grid is faster but prunes less.
+    yaw_step_deg: float = 1.0
+    #: A hypothesis needs this many correspondences: three independent line
+    #: correspondences are the fewest that fix a 3-DOF pose.
+    min_matches: int = 3
+    #: Relative minimum number of matches: hypotheses with fewer than the
+    #: largest consistent set minus this are dropped (a subset of the true
+    #: match that lost one line to noise is still kept; a handful of lines
+    #: that happen to agree is not).
+    match_slack: int = 0
+    #: Consistency of a set of correspondences at the least-squares point of
+    #: its strips: each correspondence's normalised residual (residual over
+    #: tolerance) squared must stay below this. 4 = twice the tolerance, since
+    #: the least-squares point is not the true pose.
+    q_max: float = 1.5
+    #: Acceptance threshold on the paper's score E of the best hypothesis.
+    #: E of a correct match with 1 px / 1 deg noise stays below about 2e-4 on
+    #: the simulated flat, false ones are above 1e-2 (docs/matcher.md); 2e-3
+    #: is the paper's value and sits between the two.
+    e_accept: float = 2e-3
+    #: Stage 1 stops enumerating after this many consistent sets (a guard
+    #: against pathological scenes; the result says so when it is hit).
+    max_hypotheses: int = 400
+    #: Lines shorter than this many pixels are ignored: their orientation is
+    #: too uncertain to constrain anything.
+    min_line_px: float = 15.0
+    #: Image lines may stick out of the image by this many pixels (noise on
+    #: end points of lines clipped at the border).
+    image_margin_px: float = 5.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not (v == v) or v < 0:
+                raise ValueError(f"tolerance {f.name} must be >= 0, got {v}")
+        if self.yaw_step_deg <= 0 or self.yaw_step_deg > 10:
+            raise ValueError(f"tolerance yaw_step_deg must be in (0, 10], got {self.yaw_step_deg}")
+        if self.min_matches < 2:
+            raise ValueError(f"tolerance min_matches must be >= 2, got {self.min_matches}")
+
+
+DEFAULT = Tolerances()
+
+#: Segments whose direction is within this many degrees of the vertical are
+#: vertical (same value as the map builder's axis tolerance).
+VERTICAL_AXIS_DEG = 2.0

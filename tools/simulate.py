@@ -1,0 +1,331 @@
+"""Synthetic frames for the paper's protocol (docs/method.md section 9).
+
+A frame: a random camera pose in free space (inside a region of the map),
+the model segments it sees (occluded by the map's walls, extruded to
+``meta["wall_height"]``, clipped to the image), uniform noise on each line's
+orientation, offset and end points, random clutter lines, and a prior drawn
+within the bounds of a PEQ. ``python tools/simulate.py`` prints one frame.
+
+Also the baseline the paper sets out to beat: :func:`baseline_localize`, a
+classic interpretation tree that computes a pose at every node.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from matcher.camera import Camera  # noqa: E402
+from matcher.constraints import wrap  # noqa: E402
+
+PEQ = {1: (0.2, 10.0), 2: (0.4, 20.0), 3: (0.6, 30.0), 4: (0.8, 40.0), 5: (1.0, 50.0)}
+
+#: The paper's camera; height and pitch are ours (the paper gives none).
+PAPER_CAMERA = dict(width=640, height=480, fx=900.0, fy=900.0, cx=320.0, cy=240.0, height_m=1.2, pitch_deg=0.0)
+
+
+def paper_camera(height_m: float = 1.2, pitch_deg: float = 0.0) -> Camera:
+    return Camera.from_dict({**PAPER_CAMERA, "height_m": height_m, "pitch_deg": pitch_deg})
+
+
+@dataclass
+class Frame:
+    """One simulated frame. ``lines`` (M, 2, 2) pixels; ``truth`` (M,) model
+    segment id of each line, -1 for clutter; ``pose`` and ``prior`` are
+    ``(x, y, yaw_deg)``."""
+
+    pose: tuple[float, float, float]
+    prior: tuple[float, float, float]
+    dt: float
+    dyaw: float
+    lines: np.ndarray
+    truth: np.ndarray
+
+    def true_matches(self) -> list[list[int]]:
+        return sorted([int(s), j] for j, s in enumerate(self.truth) if s >= 0)
+
+
+def _wall_edges(linemap) -> tuple[np.ndarray, np.ndarray]:
+    a, b = [], []
+    for ring in linemap.wall_rings():
+        a.append(ring)
+        b.append(np.roll(ring, -1, axis=0))
+    return np.concatenate(a), np.concatenate(b)
+
+
+def _occluded(c: np.ndarray, q: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """(S,) bool: sight lines from c (2,) to points q (S, 2) cross a wall edge.
+
+    Sight lines are shortened by 2 mm at q, which lies on a wall face."""
+    d = q - c
+    ln = np.linalg.norm(d, axis=1, keepdims=True)
+    q2 = c + d * np.maximum(ln - 2e-3, 0) / np.maximum(ln, 1e-12)
+    r = q2 - c  # (S, 2)
+    s = eb - ea  # (E, 2)
+    denom = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
+    w = ea[None] - c[None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / denom
+        u = (w[..., 0] * r[:, None, 1] - w[..., 1] * r[:, None, 0]) / denom
+    hit = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
+    return hit.any(axis=1)
+
+
+def _clip_to_frustum(seg: np.ndarray, camera: Camera, x, y, yaw) -> np.ndarray | None:
+    """Part of a segment (2, 3) in front of the camera and inside the image pyramid."""
+    R = camera.world2cam(yaw)
+    C = camera.centre(x, y)
+    p = (seg - C) @ R.T  # camera coords
+    w, h = camera.width, camera.height
+    # Half-spaces n . X >= 0 of the view pyramid, and the near plane.
+    planes = [
+        np.array([camera.fx, 0.0, camera.cx]),  # u >= 0
+        np.array([-camera.fx, 0.0, w - camera.cx]),  # u <= w
+        np.array([0.0, camera.fy, camera.cy]),  # v >= 0
+        np.array([0.0, -camera.fy, h - camera.cy]),  # v <= h
+    ]
+    t0, t1 = 0.0, 1.0
+    a, b = p[0], p[1]
+    for n, off in [(pl, 0.0) for pl in planes] + [(np.array([0.0, 0.0, 1.0]), -0.05)]:
+        fa, fb = n @ a + off, n @ b + off
+        if fa < 0 and fb < 0:
+            return None
+        if fa < 0:
+            t0 = max(t0, fa / (fa - fb))
+        elif fb < 0:
+            t1 = min(t1, fa / (fa - fb))
+    if t1 - t0 < 1e-6:
+        return None
+    return np.array([seg[0] + t0 * (seg[1] - seg[0]), seg[0] + t1 * (seg[1] - seg[0])])
+
+
+def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: int = 160):
+    """Ideal image lines of the visible model segments at ``pose`` (x, y, yaw_deg).
+
+    Returns ``(lines (n, 2, 2) pixels, segment ids (n,))``: the longest
+    unoccluded run of each segment inside the image, if at least ``min_px``
+    long."""
+    x, y, yaw_deg = pose
+    yaw = math.radians(yaw_deg)
+    ea, eb = _wall_edges(linemap)
+    c = np.array([x, y])
+    out, ids = [], []
+    for i, seg in enumerate(linemap.segments):
+        part = _clip_to_frustum(seg, camera, x, y, yaw)
+        if part is None:
+            continue
+        t = np.linspace(0.0, 1.0, samples)
+        pts = part[0] + t[:, None] * (part[1] - part[0])
+        vis = ~_occluded(c, pts[:, :2], ea, eb)
+        if not vis.any():
+            continue
+        # Longest run of visible samples.
+        best, start, best_rng = 0, None, None
+        for k, ok in enumerate(np.append(vis, False)):
+            if ok and start is None:
+                start = k
+            elif not ok and start is not None:
+                if k - start > best:
+                    best, best_rng = k - start, (start, k - 1)
+                start = None
+        p3 = pts[[best_rng[0], best_rng[1]]]
+        uv, z = camera.project(p3, x, y, yaw)
+        if (z <= 0).any() or np.linalg.norm(uv[1] - uv[0]) < min_px:
+            continue
+        out.append(uv)
+        ids.append(i)
+    if not out:
+        return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
+    return np.array(out), np.array(ids, dtype=np.int64)
+
+
+def add_noise(lines: np.ndarray, rng, px: float, deg: float, end_px: float, camera: Camera) -> np.ndarray:
+    """Uniform noise on the line parameters: rotation about the midpoint in
+    [-deg, deg], offset along the normal in [-px, px], each end point moved
+    along the line by [-end_px, end_px]; then clipped to the image."""
+    a, b = lines[:, 0], lines[:, 1]
+    mid = 0.5 * (a + b)
+    d = b - a
+    ln = np.linalg.norm(d, axis=1, keepdims=True)
+    d = d / ln
+    th = np.radians(rng.uniform(-deg, deg, len(lines)))
+    c, s = np.cos(th), np.sin(th)
+    d = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
+    nrm = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    mid = mid + rng.uniform(-px, px, (len(lines), 1)) * nrm
+    ta = -0.5 * ln[:, 0] + rng.uniform(-end_px, end_px, len(lines))
+    tb = 0.5 * ln[:, 0] + rng.uniform(-end_px, end_px, len(lines))
+    out = np.stack([mid + ta[:, None] * d, mid + tb[:, None] * d], axis=1)
+    out[..., 0] = np.clip(out[..., 0], 0, camera.width)
+    out[..., 1] = np.clip(out[..., 1], 0, camera.height)
+    return out
+
+
+def clutter_lines(rng, n: int, camera: Camera, min_len: float = 30.0, max_len: float = 200.0) -> np.ndarray:
+    """``n`` random lines inside the image (non-modelled objects)."""
+    out = []
+    while len(out) < n:
+        m = rng.uniform([0, 0], [camera.width, camera.height])
+        th = rng.uniform(0, np.pi)
+        half = 0.5 * rng.uniform(min_len, max_len) * np.array([np.cos(th), np.sin(th)])
+        a, b = m - half, m + half
+        a = np.clip(a, 0, [camera.width, camera.height])
+        b = np.clip(b, 0, [camera.width, camera.height])
+        if np.linalg.norm(b - a) >= min_len:
+            out.append([a, b])
+    return np.array(out).reshape(-1, 2, 2)
+
+
+def random_free_pose(linemap, rng, margin: float = 0.0):
+    """(x, y, yaw_deg) uniform over the map's regions, yaw uniform."""
+    pts = linemap.ring_points
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    while True:
+        x, y = rng.uniform(lo, hi)
+        if len(linemap.regions_at(x, y)):
+            return float(x), float(y), float(rng.uniform(-180.0, 180.0))
+
+
+def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, noise_deg: float = 1.0,
+               end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int = 9) -> Frame:
+    """A frame of the paper's protocol: a pose seeing ``min_seen`` to ``max_seen``
+    segments (redrawn otherwise), noisy lines, clutter, a prior within PEQ bounds."""
+    dt, dyaw = PEQ[peq]
+    while True:
+        pose = random_free_pose(linemap, rng)
+        ideal, ids = visible_lines(linemap, camera, pose)
+        if min_seen <= len(ids) <= max_seen:
+            break
+    noisy = add_noise(ideal, rng, noise_px, noise_deg, end_px, camera)
+    extra = clutter_lines(rng, clutter, camera)
+    lines = np.concatenate([noisy, extra])
+    truth = np.concatenate([ids, -np.ones(len(extra), dtype=np.int64)])
+    perm = rng.permutation(len(lines))
+    r = dt * math.sqrt(rng.uniform())
+    phi = rng.uniform(0, 2 * math.pi)
+    prior = (pose[0] + r * math.cos(phi), pose[1] + r * math.sin(phi),
+             float(math.degrees(wrap(math.radians(pose[2] + rng.uniform(-dyaw, dyaw))))))
+    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm])
+
+
+def pose_error(a, b) -> tuple[float, float]:
+    """(position error m, |yaw error| deg) between two (x, y, yaw_deg) poses."""
+    return float(math.hypot(a[0] - b[0], a[1] - b[1])), float(abs(math.degrees(wrap(math.radians(a[2] - b[2])))))
+
+
+# --------------------------------------------------------------------------
+# Baseline: interpretation tree with a pose computed at every node
+
+
+def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limit_s: float = 2.0,
+                      min_matches: int = 3, tol_px: float = 6.0):
+    """The classic tree (Grimson, with line features): depth-first over the
+    candidate model segments (same regions and field-of-view selection as
+    ours), each branching on every image line and on "unmatched". At every
+    node with ``min_matches`` or more correspondences a pose is computed by
+    Gauss-Newton from the prior and the node is kept only if every matched
+    line lies within ``tol_px`` of its model segment's projection and the
+    pose stays within the prior bounds; nodes with fewer correspondences
+    cannot be checked and are expanded. A branch is cut when it cannot beat
+    the largest interpretation found. Returns ``(pose (x, y, yaw_deg) or
+    None, matches, nodes, timed_out)``."""
+    from matcher.checks import check_lines, check_prior
+    from matcher.generate import in_field_of_view
+    from matcher.tolerances import DEFAULT
+    from matcher import verify
+
+    arr = check_lines(lines, camera, DEFAULT)
+    xe, ye, yaw_e, dt, dyaw = check_prior(prior, dt, dyaw)
+    ids = linemap.candidate_segments(xe, ye, dt)
+    segs = linemap.segments[ids]
+    keep = in_field_of_view(segs, camera, (xe, ye, yaw_e), dt, dyaw)
+    ids, segs = ids[keep], segs[keep]
+    rays = camera.pixel_rays(arr)
+    rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+    tol = tol_px / camera.fx
+    t_end = time.perf_counter() + time_limit_s
+    best = {"n": min_matches - 1, "pose": None, "matches": []}
+    nodes = 0
+    timed_out = False
+    M = len(arr)
+
+    def check(assign):
+        seg_i = np.array([i for i, _ in assign])
+        line_j = np.array([j for _, j in assign])
+        hyp = np.zeros(len(assign), dtype=np.int64)
+        p = verify.refine(np.array([[xe, ye, yaw_e]]), hyp, segs[seg_i, 0], segs[seg_i, 1],
+                          rays[line_j, 0], rays[line_j, 1], camera.pitch, camera.height_m)
+        r = verify._residuals(p, hyp, segs[seg_i, 0], segs[seg_i, 1], rays[line_j, 0], rays[line_j, 1],
+                              camera.pitch, camera.height_m)
+        ok = np.abs(r).max() <= tol
+        ok &= math.hypot(p[0, 0] - xe, p[0, 1] - ye) <= dt + 0.05
+        ok &= abs(float(wrap(p[0, 2] - yaw_e))) <= dyaw + 0.02
+        return bool(ok), p[0]
+
+    def rec(level, assign, used, pose):
+        nonlocal nodes, timed_out
+        if timed_out:
+            return
+        if time.perf_counter() > t_end:
+            timed_out = True
+            return
+        if len(assign) + (len(ids) - level) <= best["n"]:
+            return
+        if level == len(ids):
+            best.update(n=len(assign), pose=pose, matches=list(assign))
+            return
+        for j in range(M):
+            if j in used:
+                continue
+            nodes += 1
+            cand = assign + [(level, j)]
+            if len(cand) >= min_matches:
+                ok, p = check(cand)
+                if not ok:
+                    continue
+            else:
+                p = pose
+            rec(level + 1, cand, used | {j}, p)
+        rec(level + 1, assign, used, pose)
+
+    rec(0, [], frozenset(), None)
+    if best["pose"] is None:
+        return None, [], nodes, timed_out
+    x, y, yaw = best["pose"]
+    matches = sorted([int(ids[i]), int(j)] for i, j in best["matches"])
+    return (float(x), float(y), float(math.degrees(wrap(yaw)))), matches, nodes, timed_out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--map", help=".lmap map (default: the synthetic flat)")
+    ap.add_argument("--peq", type=int, default=3, choices=sorted(PEQ))
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--noise-px", type=float, default=1.0)
+    ap.add_argument("--noise-deg", type=float, default=1.0)
+    ap.add_argument("--clutter", type=int, default=3)
+    args = ap.parse_args(argv)
+    import matcher
+    from _synthetic_map import cached_flat_map
+
+    m = matcher.load_map(args.map) if args.map else cached_flat_map()
+    cam = paper_camera()
+    fr = make_frame(m, cam, np.random.default_rng(args.seed), args.peq, args.noise_px, args.noise_deg,
+                    clutter=args.clutter)
+    res = matcher.localize(m, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+    print(f"pose {fr.pose}  prior {fr.prior}  {len(fr.lines)} lines")
+    print(res.to_dict())
+    print("true matches", fr.true_matches())
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
