@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 from shapely.geometry import LineString, MultiLineString, Polygon
-from shapely.ops import unary_union
+from shapely.ops import nearest_points, unary_union
 
 from mapkit.reconstruct_types import Stroke
 from mapkit.tolerances import JAMB_REACH, MERGE, MIN_OPENING_WIDTH, THIN_WALL
@@ -59,11 +59,14 @@ def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> 
         return None
     # The two jambs farthest apart span the gap (a door near a corner may
     # touch a third wall piece; the gap is still between the outer two).
-    probes = np.array([[p.x, p.y] for p in (j.representative_point() for j in jambs)])
-    d = np.linalg.norm(probes[:, None] - probes[None], axis=-1)
+    centres = np.array([[p.x, p.y] for p in (j.representative_point() for j in jambs)])
+    d = np.linalg.norm(centres[:, None] - centres[None], axis=-1)
     i, k = np.unravel_index(np.argmax(d), d.shape)
-    a, b = probes[i], probes[k]
-    width = float(d[i, k])
+    # The gap runs between the jambs' facing points (a swing arc can graze a
+    # long stretch of wall, so the pieces' centres may be far from the jamb).
+    pa, pb = nearest_points(jambs[i], jambs[k])
+    a, b = np.array([pa.x, pa.y]), np.array([pb.x, pb.y])
+    width = float(np.hypot(*(b - a)))
     if width < MIN_OPENING_WIDTH:
         return None
     axis = _wall_direction((b - a) / width, barriers, (jambs[i], jambs[k]))
@@ -72,7 +75,10 @@ def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> 
         axis, width = -axis, -width
     b = a + axis * width  # on the axis through a: the zone below is a rectangle
     normal = np.array([-axis[1], axis[0]])
-    bands = [_thickness_band(p, normal, a, barriers, max_wall_thickness) for p in (a, b)]
+    # Probe the wall thickness just inside each jamb face.
+    inset = 5 * MERGE
+    probes = (a - axis * inset, b + axis * inset)
+    bands = [_thickness_band(p, normal, a, barriers, max_wall_thickness) for p in probes]
     bands = [band for band in bands if band is not None]
     if bands:
         lo, hi = min(band[0] for band in bands), max(band[1] for band in bands)
