@@ -33,7 +33,7 @@ from scipy.sparse.csgraph import connected_components
 
 from mapkit.assemble import polygon_parts
 from mapkit.tolerances import OVERLAY_GRID, VIR_EPS_SLACK, VIR_MERGE_GROWTH, VIR_MIN_CELL
-from mapkit.visibility import Occluders, segment_regions
+from mapkit.visibility import Occluders, polygonal, segment_regions
 
 # Round joins of the eps buffer: this many segments per quarter circle; the
 # radius is scaled so that the chords circumscribe the true circle.
@@ -150,7 +150,7 @@ def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
     """``(R_S & free_space) + disk(eps + VIR_EPS_SLACK)``, the disk circumscribed
     by the buffer's chords. ``regions`` (N,) object array; returns (N,) prepared
     geometries (empty where S is never visible)."""
-    clipped = shapely.intersection(regions, free_space, grid_size=OVERLAY_GRID)
+    clipped = polygonal(shapely.intersection(regions, free_space, grid_size=OVERLAY_GRID))
     radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * _QUAD_SEGS))
     grown = shapely.buffer(clipped, radius, quad_segs=_QUAD_SEGS)
     shapely.prepare(grown)

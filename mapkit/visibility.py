@@ -32,6 +32,7 @@ from mapkit.tolerances import (
     MERGE,
     OCCLUSION_SHRINK,
     OVERLAY_GRID,
+    VIS_BUILD_SHRINK,
     VIS_RAY_OFFSET_DEG,
 )
 
@@ -62,7 +63,7 @@ class Occluders:
     geometry: object
 
     @classmethod
-    def from_geometry(cls, occluders, shrink: float = OCCLUSION_SHRINK) -> "Occluders":
+    def from_geometry(cls, occluders, shrink: float = VIS_BUILD_SHRINK) -> "Occluders":
         """Shrink ``occluders`` (shapely (Multi)Polygon) by ``shrink`` metres and
         collect their edges; walls thinner than ``2 * shrink`` vanish (they are
         drawing noise at that scale)."""
@@ -91,14 +92,15 @@ def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarr
     """Star-shaped polygon of the floor points whose sight line to ``p`` is clear.
 
     ``p`` (2,) metres; returns the (K, 2) vertices, counter-clockwise around
-    ``p``. Exact up to the ray offset ``VIS_RAY_OFFSET_DEG`` within the square
-    of half-side ``radius`` around ``p``; outside that square the outline is
-    only a bound (callers intersect with disks of radius <= ``radius``).
+    ``p``, within the square of half-side ``radius`` around ``p`` (callers
+    intersect with disks of radius <= ``radius``). Exact up to the ray offset
+    ``VIS_RAY_OFFSET_DEG``.
 
     Angular sweep, vectorised: rays just either side of every vertex of a
-    front-facing edge, nearest hit among those edges and the square. Between
-    two consecutive rays the nearest edge cannot change (occluder edges do not
-    cross, and every endpoint is a ray), so joining the hits is exact. Edges
+    front-facing edge (clipped to the square), nearest hit among those edges
+    and the square's sides. Between two consecutive rays the nearest edge
+    cannot change (the edges do not cross, and every endpoint is a ray), so
+    joining the hits is exact. Edges
     facing away from ``p`` are never first hit (a ray enters a solid through
     a front face), which halves the work.
     """
@@ -107,12 +109,13 @@ def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarr
     lo, hi = p - half, p + half
     e = occ.edges
     near = (occ.hi[:, 0] >= lo[0]) & (occ.lo[:, 0] <= hi[0]) & (occ.hi[:, 1] >= lo[1]) & (occ.lo[:, 1] <= hi[1])
-    e = e[near]
-    a, b = e[:, 0], e[:, 1]
+    a, b = e[near, 0], e[near, 1]
     ab = b - a
     # Solid on the left of a->b: the edge faces p iff p is strictly on its right.
     front = ab[:, 0] * (p[1] - a[:, 1]) - ab[:, 1] * (p[0] - a[:, 0]) < 0.0
-    a, b = a[front], b[front]
+    # Clip to the square: an edge crossing its side would switch the nearest
+    # hit between two rays, and the chord joining them would cut the corner.
+    a, b = clip_segments(a[front], b[front], lo, hi)
     sq = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
     a = np.concatenate([a, sq])
     b = np.concatenate([b, np.roll(sq, -1, axis=0)])
@@ -124,6 +127,24 @@ def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarr
     d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
     t = _nearest_hits(d, a - p, b - a)
     return p + d * t[:, None]
+
+
+def clip_segments(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Clip segments ``a -> b`` ((M, 2) each) to the box ``[lo, hi]`` (Liang-Barsky,
+    vectorised); segments outside the box, or reduced to a point, are dropped."""
+    d = b - a
+    t0, t1 = np.zeros(len(a)), np.ones(len(a))
+    keep = np.ones(len(a), dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for k in (0, 1):
+            flat = d[:, k] == 0
+            keep &= ~flat | ((a[:, k] >= lo[k]) & (a[:, k] <= hi[k]))
+            ta, tb = (lo[k] - a[:, k]) / d[:, k], (hi[k] - a[:, k]) / d[:, k]
+            t0 = np.where(flat, t0, np.maximum(t0, np.minimum(ta, tb)))
+            t1 = np.where(flat, t1, np.minimum(t1, np.maximum(ta, tb)))
+    keep &= t1 > t0
+    a, d, t0, t1 = a[keep], d[keep], t0[keep], t1[keep]
+    return a + t0[:, None] * d, a + t1[:, None] * d
 
 
 def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
@@ -254,6 +275,18 @@ def annuli(centres: np.ndarray, r_in: np.ndarray, r_out: np.ndarray, sides: int 
 # Per-segment visibility regions
 
 
+def polygonal(geoms: np.ndarray) -> np.ndarray:
+    """The areal part of each geometry of an (M,) object array: overlays of
+    touching polygons may return collections with stray lines or points."""
+    geoms = np.asarray(geoms, dtype=object)
+    out = geoms.copy()
+    for k in np.nonzero(shapely.get_type_id(geoms) == 7)[0]:  # GeometryCollection
+        parts = [g for g in polygon_parts(geoms[k]) if g.area > 0]
+        out[k] = shapely.MultiPolygon(parts) if parts else Polygon()
+    return out
+
+
+
 @dataclass
 class SegmentRegions:
     """What :func:`segment_regions` returns.
@@ -370,7 +403,7 @@ def segment_regions(
         if ok.any():
             idx = np.nonzero(ok)[0]
             ann = annuli(xy[np.asarray(vert_keys)[idx]], dmin[idx], dmax[idx])
-            regions[vert_ids[idx]] = shapely.intersection(vp[np.asarray(vert_keys)[idx]], ann, grid_size=OVERLAY_GRID)
+            regions[vert_ids[idx]] = polygonal(shapely.intersection(vp[np.asarray(vert_keys)[idx]], ann, grid_size=OVERLAY_GRID))
 
     # ---- pairs: V(s_i) & V(s_j), the polygon pair shared by equal xy pairs
     n_pairs = len(pair_seg)
@@ -379,15 +412,16 @@ def segment_regions(
         lo_k, hi_k = np.minimum(pa, pb), np.maximum(pa, pb)
         uniq, inv = np.unique(lo_k * len(xy) + hi_k, return_inverse=True)
         ua, ub = uniq // len(xy), uniq % len(xy)
-        both = shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID)
+        both = polygonal(shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID))
         ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
-        pieces = shapely.intersection(both[inv], ann)
+        pieces = polygonal(shapely.intersection(both[inv], ann))
         pair_seg = np.array(pair_seg)
         order = np.argsort(pair_seg, kind="stable")
         bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
         for i in tqdm(range(n), desc="segment regions", disable=not progress, leave=False):
             if bounds[i + 1] > bounds[i]:
                 regions[i] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
+        regions = polygonal(regions)
     t_union = time.perf_counter()
     stats = {
         "segments": n,
@@ -406,6 +440,7 @@ __all__ = [
     "SegmentRegions",
     "annuli",
     "distance_band",
+    "polygonal",
     "sample_segment",
     "segment_regions",
     "vertical_distance_band",
