@@ -123,3 +123,11 @@ MESH_MAX_EDGE_FACES = 8
 #: of overlapping visibility polygons; the shift (< 1e-5 m) is absorbed by
 #: ``VIR_EPS_SLACK``.
 OVERLAY_GRID = 1e-5
+
+#: The region builder shrinks occluders by this for its sight tests, more
+#: than ``OCCLUSION_SHRINK``: a line grazing a wall face near a segment on
+#: that face is decided by the tolerance itself (1 mm there can swing a
+#: shadow by decimetres farther out), so the lists must also hold what
+#: slightly smaller walls would let through; brute-force checks use twice
+#: ``OCCLUSION_SHRINK``, and this leaves a margin over them.
+VIS_BUILD_SHRINK = 3e-3
