@@ -112,23 +112,29 @@ class Chromium:
         raise TimeoutError("chromium opened no page")
 
     # ---- protocol ----------------------------------------------------------
-    def call(self, method: str, **params) -> dict:
-        """Send one CDP command and return its result (events in between are dropped)."""
+    def call(self, method: str, _until_event: str | None = None, **params) -> dict:
+        """Send one CDP command and return its result. Events are dropped, except
+        that with ``_until_event`` the call also waits until that event arrives."""
         msg_id = next(self._ids)
         self._ws.send(json.dumps({"id": msg_id, "method": method, "params": params}))
         deadline = time.monotonic() + self.timeout
-        while True:
+        result, seen = None, _until_event is None
+        while result is None or not seen:
             left = deadline - time.monotonic()
             if left <= 0:
-                raise TimeoutError(f"chromium did not answer {method}")
+                raise TimeoutError(f"chromium did not answer {method}" + (f" / {_until_event}" if _until_event else ""))
             reply = json.loads(self._ws.recv(timeout=left))
             if reply.get("id") == msg_id:
                 if "error" in reply:
                     raise RuntimeError(f"{method} failed: {reply['error']}")
-                return reply.get("result", {})
+                result = reply.get("result", {})
+            elif reply.get("method") == _until_event:
+                seen = True
+        return result
 
     def navigate(self, url: str) -> None:
-        self.call("Page.navigate", url=url)
+        """Open ``url`` and wait for its load event (scripts loaded, not the scene drawn)."""
+        self.call("Page.navigate", _until_event="Page.loadEventFired", url=url)
 
     def evaluate(self, expression: str):
         """Value of a JavaScript expression in the page."""
@@ -173,11 +179,11 @@ class Chromium:
 
 
 def wait_for(predicate, timeout: float, interval: float = 0.25, what: str = "condition"):
-    """Poll ``predicate()`` until it returns a truthy value; TimeoutError names ``what``."""
+    """Poll ``predicate()`` until it returns a truthy value (or any array); TimeoutError names ``what``."""
     deadline = time.monotonic() + timeout
     while True:
         value = predicate()
-        if value:
+        if isinstance(value, np.ndarray) or value:
             return value
         if time.monotonic() > deadline:
             raise TimeoutError(f"timed out after {timeout:.0f} s waiting for {what}")

@@ -94,6 +94,11 @@ class Inspector:
             self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self.host = host
         scene = self.server.scene
+        # No shadows (nothing here needs them; they are costly in software
+        # WebGL) and a dimmer environment light, which otherwise washes the
+        # region colours out towards white.
+        scene.configure_default_lights(enabled=True, cast_shadow=False)
+        scene.configure_environment_map(None)
         self.layers = scene_nodes.add_map_layers(scene, m, self.triangles, self.region_colour, plan)
         lo, hi = map_bounds(m)
         self.bounds = (lo, hi)
@@ -120,6 +125,11 @@ class Inspector:
         self.server.initial_camera.look_at = (ax, float(centre[1]), 0.0)
         self.server.initial_camera.position = (ax, float(centre[1] - 0.7 * span), 0.8 * span)
         self.server.initial_camera.up = (0.0, 0.0, 1.0)
+        # The floor layers are millimetres apart; a near plane at 1 cm (viser's
+        # default) leaves too little depth precision at building scale under
+        # software WebGL, and the highlights z-fight with the fills.
+        self.server.initial_camera.near = max(0.05, 0.005 * span)
+        self.server.initial_camera.far = 50.0 * span
 
     def _start_position(self) -> tuple[float, float]:
         """The pose tool starts at the region nearest the middle of the free space
