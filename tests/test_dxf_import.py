@@ -69,6 +69,11 @@ def test_unitless_guess_picks_a_building_sized_unit(extent, expected):
     assert "assumed" in warning
 
 
+def test_unitless_imperial_drawing_guesses_inches_or_feet():
+    assert decide_units(0, None, 540.0, imperial=True)[0] == "in"  # a 45 ft house in inches
+    assert decide_units(0, None, 45.0, imperial=True)[0] == "ft"
+
+
 def test_implausible_header_units_warn():
     # A house drawn in mm but labelled metres: 27000 "m" is 27 km across.
     name, factor, warning = decide_units(6, None, 27000.0)

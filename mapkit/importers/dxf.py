@@ -52,7 +52,8 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
     extent = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
-    unit, per_unit, unit_warning = decide_units(insunits, options.units, extent)
+    imperial = doc.header.get("$MEASUREMENT", 1) == 0
+    unit, per_unit, unit_warning = decide_units(insunits, options.units, extent, imperial)
     if unit_warning:
         log.warning(unit_warning)
         warnings.append(unit_warning)

@@ -39,8 +39,10 @@ _ALIASES = {
 #: astronomical or micro units no floor plan uses).
 INSUNITS = {1: "in", 2: "ft", 4: "mm", 5: "cm", 6: "m", 7: "km", 10: "yd", 14: "dm", 21: "us-ft"}
 
-#: Units tried, in order, when the file has none (metric CAD first).
+#: Units tried, in order, when the file has none (metric CAD first); drawings
+#: whose $MEASUREMENT says imperial try inches and feet instead.
 _GUESSES = ("m", "mm", "cm")
+_GUESSES_IMPERIAL = ("in", "ft")
 
 #: Typical building size, metres: unitless drawings get the unit that puts
 #: their extent closest to this (in log scale).
@@ -69,12 +71,15 @@ def _plausible(extent_m: float) -> bool:
     return lo <= extent_m <= hi
 
 
-def decide_units(insunits: int, override: str | None, extent: float) -> tuple[str, float, str | None]:
+def decide_units(
+    insunits: int, override: str | None, extent: float, imperial: bool = False
+) -> tuple[str, float, str | None]:
     """Choose the drawing units.
 
     ``insunits`` is the header code, ``override`` the user's ``--units`` (or
     None), ``extent`` the largest side of the drawing's bounding box in
-    drawing units. Returns ``(unit name, metres per unit, warning or None)``.
+    drawing units, ``imperial`` whether ``$MEASUREMENT`` is 0 (English).
+    Returns ``(unit name, metres per unit, warning or None)``.
     """
     if override or insunits in INSUNITS:
         name = canonical_units(override) if override else INSUNITS[insunits]
@@ -85,7 +90,8 @@ def decide_units(insunits: int, override: str | None, extent: float) -> tuple[st
             warning = f"{said} {name} but then the plan is {_fmt(extent * factor)} across; pass the right --units"
         return name, factor, warning
     # No usable units: pick the unit that makes the building a plausible size.
-    name = min(_GUESSES, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
+    guesses = _GUESSES_IMPERIAL if imperial else _GUESSES
+    name = min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
     factor = UNIT_METRES[name]
     code = f"$INSUNITS {insunits}" if insunits else "$INSUNITS 0, unitless"
     warning = (
