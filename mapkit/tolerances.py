@@ -100,6 +100,10 @@ MESH_LEVEL = 0.02
 #: from above; table tops and wall tops are smaller.
 MESH_FLOOR_FRACTION = 0.1
 
+#: ... and only in the lowest half of the model's height (the ceiling: the
+#: highest half): the tops of thick walls around a small room are large too.
+MESH_FLOOR_RISE = 0.5
+
 #: Walls modelled as single surfaces (no thickness) are given this
 #: thickness, metres, so that they occlude and bound the free space.
 MESH_THIN_WALL = 0.05

@@ -18,7 +18,7 @@ from mapkit.errors import MapkitError
 from mapkit.importers.dxf_units import UNIT_METRES, canonical_units
 from mapkit.mesh_edges import edge_faces, face_normals
 from mapkit.options import BuildOptions
-from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_LEVEL, PLAUSIBLE_EXTENT
+from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_FLOOR_RISE, MESH_LEVEL, PLAUSIBLE_EXTENT
 
 log = logging.getLogger("mapkit")
 
@@ -207,24 +207,33 @@ def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -
 def find_floor(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, bool]:
     """Height of the floor: the lowest large upward-facing horizontal surface.
 
-    Returns ``(z, True)``, or ``(lowest z, False)`` for a mesh without floor
-    faces (walls only). See :func:`large_levels`.
+    Only levels in the lowest ``MESH_FLOOR_RISE`` of the model's height
+    count. Returns ``(z, True)``, or ``(lowest z, False)`` for a mesh
+    without floor faces (walls only). See :func:`large_levels`.
     """
     levels = large_levels(vertices, faces, up=True)
+    lo, hi = float(vertices[:, 2].min()), float(vertices[:, 2].max())
+    # The tops of thick walls in a small room are large too: a floor is in
+    # the lower part of the model.
+    levels = levels[levels <= lo + MESH_FLOOR_RISE * (hi - lo)]
     if len(levels):
         return float(levels[0]), True
-    return float(vertices[:, 2].min()), False
+    return lo, False
 
 
 def find_ceiling(vertices: np.ndarray, faces: np.ndarray, floor_z: float = 0.0) -> tuple[float, bool]:
     """Height of the ceiling: the lowest large downward-facing horizontal
-    surface above the floor. Returns ``(z, True)``, or ``(highest z, False)``
+    surface above the floor, in the top ``MESH_FLOOR_RISE`` of the model's
+    height. Returns ``(z, True)``, or ``(highest z, False)``
     for a mesh without a ceiling."""
     levels = large_levels(vertices, faces, up=False)
-    levels = levels[levels > floor_z + MESH_LEVEL]
+    hi = float(vertices[:, 2].max())
+    # Large undersides low in the model are lintels of wide openings or
+    # table tops, not a ceiling.
+    levels = levels[(levels > floor_z + MESH_LEVEL) & (levels >= hi - MESH_FLOOR_RISE * (hi - floor_z))]
     if len(levels):
         return float(levels[0]), True
-    return float(vertices[:, 2].max()), False
+    return hi, False
 
 
 def large_levels(vertices: np.ndarray, faces: np.ndarray, up: bool) -> np.ndarray:

@@ -14,17 +14,35 @@ that are not wall material are the rooms enclosed at that height.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from shapely.geometry import MultiPolygon
+from shapely.geometry import MultiLineString, MultiPolygon
 
 from mapkit.mesh_edges import edge_faces, face_normals
 from mapkit.tolerances import MERGE, MESH_THIN_WALL
 
 #: Points per chunk in winding-number tests (memory: chunk x segments booleans).
 _CHUNK = 2_000_000
+
+
+@dataclass
+class Section:
+    """A horizontal section of a mesh (2D, metres).
+
+    - ``solid``: material of closed solids;
+    - ``sheets``: lines where open surfaces (single-sheet walls) are cut;
+    - ``walls``: ``solid`` plus the sheets thickened to ``MESH_THIN_WALL``;
+    - ``enclosed``: bounded regions that are not wall material (rooms).
+    """
+
+    solid: MultiPolygon
+    sheets: MultiLineString
+    walls: MultiPolygon
+    enclosed: MultiPolygon
 
 
 class MeshSections:
@@ -40,11 +58,16 @@ class MeshSections:
     def cut(self, z: float) -> tuple[MultiPolygon, MultiPolygon]:
         """``(walls, enclosed)`` at height ``z``: wall material, and the
         bounded regions of the section that are not wall material (rooms)."""
+        sec = self.section(z)
+        return sec.walls, sec.enclosed
+
+    def section(self, z: float) -> Section:
+        """Everything the plane at height ``z`` shows (see :class:`Section`)."""
         from trimesh.intersections import mesh_plane
 
         lines, face = mesh_plane(self.mesh, [0.0, 0.0, 1.0], [0.0, 0.0, z], return_faces=True)
         if len(lines) == 0:
-            return MultiPolygon(), MultiPolygon()
+            return Section(MultiPolygon(), MultiLineString(), MultiPolygon(), MultiPolygon())
         seg = orient(np.asarray(lines)[:, :, :2], self.normals[face, :2])
         thin = self.open_face[face]
         return section_regions(seg[~thin], seg[thin])
@@ -103,8 +126,8 @@ def winding_numbers(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
     return out
 
 
-def section_regions(closed: np.ndarray, thin: np.ndarray) -> tuple[MultiPolygon, MultiPolygon]:
-    """Wall material and enclosed non-wall regions from section segments.
+def section_regions(closed: np.ndarray, thin: np.ndarray) -> Section:
+    """The :class:`Section` made by section segments.
 
     ``closed`` (S, 2, 2): segments of solids, oriented solid-on-left;
     ``thin`` (T, 2, 2): segments of open surfaces (any orientation).
@@ -113,12 +136,18 @@ def section_regions(closed: np.ndarray, thin: np.ndarray) -> tuple[MultiPolygon,
     faces = np.asarray(shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.union_all(lines)))))
     faces = faces[shapely.area(faces) > MERGE * MERGE] if len(faces) else faces
     inside = winding_numbers(shapely.get_coordinates(shapely.point_on_surface(faces)), closed) > 0
-    thin_walls = shapely.buffer(
-        shapely.set_precision(shapely.linestrings(thin), MERGE), MESH_THIN_WALL / 2, cap_style="square", join_style="mitre"
-    ) if len(thin) else []
-    walls = shapely.union_all(np.concatenate([faces[inside], np.atleast_1d(thin_walls)]))
+    solid = shapely.union_all(faces[inside])
+    # Solids that touch leave hairline slivers between them where their
+    # section lines do not snap to the same grid points: close them.
+    solid = solid.buffer(MERGE, join_style="mitre").buffer(-MERGE, join_style="mitre")
+    sheets = MultiLineString()
+    walls = solid
+    if len(thin):
+        sheets = shapely.line_merge(shapely.union_all(shapely.set_precision(shapely.linestrings(thin), MERGE)))
+        thick = sheets.buffer(MESH_THIN_WALL / 2, cap_style="square", join_style="mitre")
+        walls = shapely.union_all([solid, thick])
     enclosed = shapely.difference(shapely.union_all(faces[~inside]), walls)
-    return as_multipolygon(walls), as_multipolygon(enclosed)
+    return Section(as_multipolygon(solid), sheets, as_multipolygon(walls), as_multipolygon(enclosed))
 
 
 def as_multipolygon(geom) -> MultiPolygon:
@@ -148,5 +177,4 @@ def boundary_outline(vertices: np.ndarray, faces: np.ndarray) -> MultiPolygon:
     a = f[np.arange(len(f)), (k + 1) % 3]
     b = f[np.arange(len(f)), (k + 2) % 3]
     seg = np.stack([vertices[a, :2], vertices[b, :2]], axis=1)
-    walls, _ = section_regions(seg, np.zeros((0, 2, 2)))
-    return walls
+    return section_regions(seg, np.zeros((0, 2, 2))).solid
