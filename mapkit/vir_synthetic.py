@@ -39,7 +39,8 @@ def scene_from_walls(walls, interior, doors, wall_height=2.5, door_head=2.1, rob
     ceiling (z=wall_height) junctions on every edge, a vertical at every
     corner turning more than ``CORNER_DEG``, and for every door gap polygon
     in ``doors`` the two lintels (z=door_head) across it."""
-    open_space = interior.difference(walls)
+    # Drop collinear outline vertices: one straight wall, one segment.
+    open_space = shapely.simplify(interior.difference(walls), 1e-9)
     segs, kinds = [], []
     for poly in polygon_parts(open_space):
         for ring in [poly.exterior, *poly.interiors]:

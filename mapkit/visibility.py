@@ -176,7 +176,7 @@ def distance_band(z: np.ndarray, h: float, e_min: float, e_max: float, max_range
     centre (height ``h``) is <= ``max_range``, and the elevation
     ``atan2(z - h, d)`` lies in ``[e_min, e_max]`` (radians). For a fixed
     ``z`` both say ``dmin <= d <= dmax``. Returns ``(dmin, dmax)`` arrays shaped
-    like ``z``; an empty band has ``dmax < dmin`` (both -1 then).
+    like ``z``; an empty band has ``dmax < 0`` (both are -1 then).
     """
     z = np.asarray(z, dtype=float)
     dz = z - h
@@ -224,7 +224,7 @@ def vertical_extent(d: np.ndarray, z0: np.ndarray, z1: np.ndarray, h: float, e_m
 def vertical_distance_band(z0, z1, need, h, e_min, e_max, max_range) -> tuple[np.ndarray, np.ndarray]:
     """Horizontal distances from which vertical segments ``[z0, z1]`` (arrays
     (M,)) show a visible extent >= ``need`` (M,). Returns ``(dmin, dmax)``,
-    widened outwards by 1 um; ``dmax < dmin`` (both -1) when never.
+    widened outwards by 1 um; ``dmax < 0`` (both -1) when never.
 
     The extent is concave in ``d``: a ternary search finds its maximum, then
     bisections find where it crosses ``need`` on either side."""
@@ -399,7 +399,7 @@ def segment_regions(
         z = np.sort(segs[vert_ids, :, 2], axis=1)
         need = np.minimum(L, z[:, 1] - z[:, 0])
         dmin, dmax = vertical_distance_band(z[:, 0], z[:, 1], need, h, e_min, e_max, max_range)
-        ok = dmax > dmin
+        ok = dmax >= 0
         if ok.any():
             idx = np.nonzero(ok)[0]
             ann = annuli(xy[np.asarray(vert_keys)[idx]], dmin[idx], dmax[idx])
