@@ -22,6 +22,8 @@ class BuildOptions:
     doors: list[str] = field(default_factory=list)
     windows: list[str] = field(default_factory=list)
     ignore: list[str] = field(default_factory=list)
+    #: Layers whose outlines give the floor (the interior) of an open plan.
+    floor: list[str] = field(default_factory=list)
     #: Mesh up axis: "z" or "y" (glTF is y-up).
     up: str = "z"
 

@@ -9,18 +9,17 @@ from __future__ import annotations
 from mapkit.errors import MapkitError
 from mapkit.options import BuildOptions
 
-_UNITS = ("m", "cm", "mm", "in", "ft", "yd", "dm", "km")
-
 
 def add_import_arguments(p) -> None:
     """Add the plan/mesh import flags to an argparse parser."""
     d = BuildOptions()
     g = p.add_argument_group("import")
-    g.add_argument("--units", choices=_UNITS, help="drawing units, overriding the file's ($INSUNITS for DXF)")
+    g.add_argument("--units", metavar="UNIT", help="drawing units, overriding the file's: m, cm, mm, in, ft, ... ($INSUNITS for DXF)")
     g.add_argument("--scale", type=float, default=d.scale, help="extra scale factor after unit conversion (default 1)")
     g.add_argument("--walls", action="append", default=[], metavar="GLOB", help="layer(s) holding walls and columns (repeatable; default: guessed from names)")
     g.add_argument("--doors", action="append", default=[], metavar="GLOB", help="layer(s) holding doors (repeatable)")
     g.add_argument("--windows", action="append", default=[], metavar="GLOB", help="layer(s) holding windows or glass (repeatable)")
+    g.add_argument("--floor", action="append", default=[], metavar="GLOB", help="layer(s) outlining the floor of an open plan (repeatable)")
     g.add_argument("--ignore", action="append", default=[], metavar="GLOB", help="layer(s) to leave out (repeatable)")
     g.add_argument("--up", choices=("z", "y"), default=d.up, help="mesh up axis (glTF is y-up; default z)")
     g = p.add_argument_group("reconstruction")
@@ -34,6 +33,10 @@ def add_import_arguments(p) -> None:
 
 def import_options_from_args(args) -> BuildOptions:
     """BuildOptions holding the import flags of ``args`` (other fields default)."""
+    if args.units is not None:
+        from mapkit.importers.dxf_units import canonical_units
+
+        args.units = canonical_units(args.units)  # one-line error for unknown units
     if not (args.scale > 0):
         raise MapkitError(f"--scale must be positive, got {args.scale}")
     for name in ("wall_height", "door_height", "window_head", "max_wall_thickness"):
@@ -48,6 +51,7 @@ def import_options_from_args(args) -> BuildOptions:
         doors=list(args.doors),
         windows=list(args.windows),
         ignore=list(args.ignore),
+        floor=list(args.floor),
         up=args.up,
         wall_height=args.wall_height,
         door_height=args.door_height,
