@@ -249,11 +249,12 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         ps = np.repeat(ps, 4)
     nbytes = (n + 7) // 8
     bits = np.concatenate(out_bits) if out_bits else np.zeros((0, nbytes), dtype=np.uint8)
+    level = np.concatenate(out_level).astype(np.int64)
     return Leaves(
-        np.concatenate(out_level).astype(np.int64),
+        level,
         np.concatenate(out_ix).astype(np.int64),
         np.concatenate(out_iy).astype(np.int64),
-        bits.reshape(-1, nbytes),
+        bits.reshape(len(level), nbytes),
         origin,
         size,
         depth,

@@ -1,0 +1,170 @@
+"""The VIR partition: the superset property at random points against the
+brute-force reference, tightness, and that the regions tile the free space."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import Point, box
+
+from mapkit.assemble import assemble_map
+from mapkit.lmap import load_map, save_map
+from mapkit.vir import build_regions
+from mapkit.vir_synthetic import apartment, single_room
+from matcher.camera import Camera
+from visibility_oracle import VisibilityOracle, random_points
+
+CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)
+EPS = 0.05
+
+
+@pytest.fixture(scope="module")
+def flat():
+    scene = apartment()
+    part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS)
+    return scene, part
+
+
+@pytest.fixture(scope="module")
+def samples(flat):
+    """300 seeded free-space points with their reference visible sets."""
+    scene, _ = flat
+    oracle = VisibilityOracle(scene.segments, scene.walls, CAMERA.height_m, CAMERA.elevation_range(), 10.0, 0.3)
+    pts = random_points(scene.free_space, 300, np.random.default_rng(2024))
+    return pts, [oracle.visible(q) for q in pts]
+
+
+def test_every_visible_segment_is_listed_by_every_region_within_eps(flat, samples):
+    scene, part = flat
+    polys = np.array(part.polygons + [None])[:-1]
+    tree = shapely.STRtree(polys)
+    checked = 0
+    for q, vis in zip(*samples):
+        near = tree.query(Point(q), predicate="dwithin", distance=EPS)
+        assert len(near), q
+        for r in near:
+            missing = np.setdiff1d(vis, part.lists[r])
+            assert len(missing) == 0, f"region {r} near {q} lacks {missing}"
+            checked += 1
+    assert checked > 300  # some points see several regions within eps
+
+
+def test_lists_are_tight(flat, samples):
+    """The list of the region holding q is close to what q really sees."""
+    _, part = flat
+    polys = np.array(part.polygons + [None])[:-1]
+    tree = shapely.STRtree(polys)
+    listed, seen = [], []
+    for q, vis in zip(*samples):
+        inside = tree.query(Point(q), predicate="intersects")
+        listed.append(max(len(part.lists[r]) for r in inside))
+        seen.append(len(vis))
+    ratio = np.mean(listed) / np.mean(seen)
+    assert 1.0 <= ratio < 1.6, ratio
+    assert np.mean(seen) > 10  # the scene is not trivial
+    assert part.stats["mean_list_length"] < 0.5 * len(flat[0].segments)
+
+
+def test_regions_tile_the_free_space(flat):
+    scene, part = flat
+    polys = np.array(part.polygons + [None])[:-1]
+    assert shapely.is_valid(polys).all()
+    total = shapely.area(polys).sum()
+    assert total == pytest.approx(scene.free_space.area, rel=1e-6)
+    assert shapely.union_all(polys).symmetric_difference(scene.free_space).area < 1e-6
+    a, b = shapely.STRtree(polys).query(polys, predicate="overlaps")
+    pairs = a < b
+    overlap = shapely.area(shapely.intersection(polys[a[pairs]], polys[b[pairs]]))
+    assert overlap.sum() < 1e-6
+
+
+def test_lists_sorted_unique_int64_and_stats_json(flat):
+    import json
+
+    scene, part = flat
+    assert len(part.polygons) == len(part.lists) == part.stats["regions"]
+    for lst in part.lists:
+        assert lst.dtype == np.int64 and (np.diff(lst) > 0).all()
+        assert lst.min() >= 0 and lst.max() < len(scene.segments)
+    json.dumps(part.stats)
+    assert part.stats["time_total_s"] > 0 and part.stats["quadtree_leaves"] >= part.stats["regions"]
+
+
+def test_neighbouring_ids_are_neighbouring_regions(flat):
+    """Morton order: consecutive regions are close (the file XOR-codes them)."""
+    _, part = flat
+    polys = part.polygons
+    gaps = [polys[i].distance(polys[i + 1]) for i in range(len(polys) - 1)]
+    shuffled = np.random.default_rng(0).permutation(len(polys))
+    gaps_random = [polys[shuffled[i]].distance(polys[shuffled[i + 1]]) for i in range(len(polys) - 1)]
+    assert np.median(gaps) < 0.5 * np.median(gaps_random) + 1e-9
+
+
+def test_map_round_trip_is_small(flat, tmp_path):
+    scene, part = flat
+    m = assemble_map(scene.segments, scene.kinds, part.polygons, part.lists, scene.walls, {"wall_height": 2.5})
+    size = save_map(tmp_path / "flat.lmap", m)
+    back = load_map(tmp_path / "flat.lmap")
+    assert size < 100_000
+    for r, lst in enumerate(part.lists):
+        assert np.array_equal(back.region_list(r), lst)
+    # A point lookup in the loaded map lists what the point sees.
+    q = scene.free_space.representative_point()
+    assert len(back.candidate_segments(q.x, q.y, EPS)) > 0
+
+
+def test_merging_trades_regions_for_list_length():
+    scene = apartment()
+    exact = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, merge_growth=0.0)
+    merged = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, merge_growth=0.5)
+    assert merged.stats["regions"] < exact.stats["regions"]
+    assert exact.stats["mean_list_length"] <= merged.stats["mean_list_length"] <= 1.5 * exact.stats["mean_list_length"] + 1e-9
+
+
+def test_one_room_is_one_region_when_all_is_seen_everywhere():
+    """A 6 x 4 m room seen whole from every point beyond the near field?
+    No: near a wall its floor edge is too close. But merging equal lists
+    must still leave few regions, each listing only existing segments."""
+    scene = single_room(6.0, 4.0)
+    part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA)
+    assert 1 <= part.stats["regions"] <= 40
+    centre = [r for r, g in enumerate(part.polygons) if g.intersects(Point(3.0, 2.0))]
+    assert all(len(part.lists[r]) == 12 for r in centre)
+
+
+def test_progress_bar_goes_to_stderr(capsys):
+    scene = single_room(3.0, 3.0)
+    build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, progress=True)
+    captured = capsys.readouterr()
+    assert captured.out == ""
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"segments": np.zeros((3, 3))}, "expected shape"),
+        ({"segments": np.full((1, 2, 3), np.nan)}, "finite"),
+        ({"max_range": 0.0}, "max_range"),
+        ({"min_visible_length": -1.0}, "min_visible_length"),
+        ({"eps": -0.1}, "eps"),
+        ({"free_space": shapely.MultiPolygon()}, "free_space"),
+        ({"min_cell": float("inf")}, "min_cell"),
+        ({"merge_growth": -1.0}, "merge_growth"),
+    ],
+)
+def test_bad_input_is_named(kwargs, match):
+    scene = single_room(3.0, 3.0)
+    args = {"segments": scene.segments, "occluders": scene.walls, "free_space": scene.free_space, "camera": CAMERA}
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=match):
+        build_regions(**args)
+
+
+def test_no_occluders_and_no_segments_work():
+    free = box(0, 0, 4, 4)
+    part = build_regions(np.zeros((0, 2, 3)), shapely.MultiPolygon(), free, CAMERA)
+    assert part.stats["regions"] == 1 and len(part.lists[0]) == 0
+    seg = np.array([[[2.0, 9.0, 0.0], [2.0, 9.0, 2.5]]])  # a pole 5+ m away, no walls
+    part = build_regions(seg, shapely.MultiPolygon(), free, CAMERA)
+    assert sum(len(x) for x in part.lists) > 0
