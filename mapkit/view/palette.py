@@ -90,14 +90,14 @@ def legend_html() -> str:
     rows = [(KIND_COLOURS[k], f"{k.label} segments") for k in SegmentKind]
     rows += [
         (WALL, "walls (extruded)"),
-        (REGION_PALETTE[0], "regions (fills, grey outlines)"),
+        (REGION_PALETTE[0], "regions"),
         (SELECTED_REGION, "clicked region"),
         (SELECTED_SEGMENTS, "its visible segments"),
-        (POSE_DISK, "pose: uncertainty disk, retained regions"),
-        (CANDIDATE, "candidate segments in view"),
-        (CANDIDATE_OUT_OF_VIEW, "candidates out of the field of view"),
+        (POSE_DISK, "pose: disk, retained regions"),
+        (CANDIDATE, "candidates in view"),
+        (CANDIDATE_OUT_OF_VIEW, "candidates out of view"),
         (MATCHED, "matched segments (result)"),
-        (RAYS, "image lines back-projected (result)"),
+        (RAYS, "image lines as rays (result)"),
     ]
     cells = "".join(
         f'<div style="display:flex;align-items:center;gap:6px;font-size:12px">'
@@ -105,4 +105,5 @@ def legend_html() -> str:
         f'background:rgb({int(c[0])},{int(c[1])},{int(c[2])})"></span>{name}</div>'
         for c, name in rows
     )
-    return f'<div style="display:flex;flex-direction:column;gap:2px;padding:4px 0">{cells}</div>'
+    # Two columns: the legend stays short enough to leave the pose tool in view.
+    return f'<div style="display:grid;grid-template-columns:1fr 1fr;gap:2px 8px;padding:4px 0">{cells}</div>'

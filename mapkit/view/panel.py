@@ -60,13 +60,6 @@ def build_panel(gui, layer_names: list[str], bounds: tuple[np.ndarray, np.ndarra
     gui.configure_theme(control_width="large")
     with gui.add_folder("Legend", expand_by_default=True):
         gui.add_html(palette.legend_html())
-    with gui.add_folder("Layers", expand_by_default=False):
-        for name in layer_names:
-            panel.toggles[name] = gui.add_checkbox(name, initial_value=True)
-    with gui.add_folder("Selection", expand_by_default=True):
-        panel.selection = gui.add_markdown(SELECTION_HINT)
-        panel.click_moves_pose = gui.add_checkbox("Click moves the pose", initial_value=False,
-                                                  hint="A click on the floor also moves the pose tool there")
     lo, hi = bounds
     with gui.add_folder("Pose", expand_by_default=True):
         show = gui.add_checkbox("Show pose tool", initial_value=True)
@@ -81,12 +74,19 @@ def build_panel(gui, layer_names: list[str], bounds: tuple[np.ndarray, np.ndarra
         summary = gui.add_markdown("")
         image = gui.add_image(blank, label=f"Synthetic image ({camera_note})", format="png")
         panel.pose = PoseControls(x, y, yaw, dt, dyaw, fov, show, summary, image)
+    with gui.add_folder("Selection", expand_by_default=True):
+        panel.selection = gui.add_markdown(SELECTION_HINT)
+        panel.click_moves_pose = gui.add_checkbox("Click moves the pose", initial_value=False,
+                                                  hint="A click on the floor also moves the pose tool there")
     if has_result:
         with gui.add_folder("Matcher result", expand_by_default=True):
             panel.result_text = gui.add_markdown("")
             panel.result_image = gui.add_image(blank, label="Model at the estimated pose, image lines over it",
                                                format="png")
             panel.pose_from_result = gui.add_button("Move the pose tool to the result")
+    with gui.add_folder("Layers", expand_by_default=False):
+        for name in layer_names:
+            panel.toggles[name] = gui.add_checkbox(name, initial_value=True)
     with gui.add_folder("Statistics", expand_by_default=False):
         panel.stats = gui.add_markdown(stats_md)
     return panel

@@ -99,6 +99,7 @@ class Inspector:
         # region colours out towards white.
         scene.configure_default_lights(enabled=True, cast_shadow=False)
         scene.configure_environment_map(None)
+        scene.add_light_ambient("/lights/ambient", intensity=1.2)
         self.layers = scene_nodes.add_map_layers(scene, m, self.triangles, self.region_colour, plan)
         lo, hi = map_bounds(m)
         self.bounds = (lo, hi)
