@@ -60,9 +60,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
     if free.is_empty:
+        layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
         raise MapkitError(
-            f"no free space left inside the walls after keeping {options.robot_radius:g} m from them; "
-            f"check the wall layers in 'mapkit preview' or lower --robot-radius"
+            f"no free space left inside the walls (layers {layers}) after keeping {options.robot_radius:g} m "
+            f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius"
         )
 
     info["interior"] = interior_source

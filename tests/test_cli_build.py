@@ -1,0 +1,118 @@
+"""`mapkit build`: user errors are one line, exit 2, and nothing is written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import ezdxf
+import pytest
+
+from mapkit.cli import main
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_error(code, out, err, *needles):
+    assert code == 2, (code, out, err)
+    lines = [ln for ln in err.splitlines() if not ln.startswith("mapkit: warning:")]
+    assert len(lines) == 1 and lines[0].startswith("mapkit: error: "), err
+    assert "Traceback" not in err
+    for n in needles:
+        assert n.lower() in lines[0].lower(), lines[0]
+
+
+def assert_nothing_written(folder: Path):
+    assert [p.name for p in folder.iterdir() if p.suffix in (".lmap", ".tmp")] == []
+
+
+def test_missing_plan(tmp_path, capsys):
+    assert_one_line_error(*run(capsys, "build", tmp_path / "nope.dxf", "-o", tmp_path / "o.lmap"), "no such file")
+    assert_nothing_written(tmp_path)
+
+
+def test_unsupported_suffix(tmp_path, capsys):
+    f = tmp_path / "plan.pdf"
+    f.write_bytes(b"%PDF-1.4")
+    assert_one_line_error(*run(capsys, "build", f, "-o", tmp_path / "o.lmap"), "unsupported file type")
+    assert_nothing_written(tmp_path)
+
+
+def test_not_a_dxf(tmp_path, capsys):
+    f = tmp_path / "plan.dxf"
+    f.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)) * 4)
+    assert_one_line_error(*run(capsys, "build", f, "-o", tmp_path / "o.lmap"), "dxf")
+    assert_nothing_written(tmp_path)
+
+
+def test_truncated_dxf(tmp_path, capsys):
+    text = (ROOT / "maps" / "flat.dxf").read_text(errors="replace")
+    f = tmp_path / "cut.dxf"
+    f.write_text(text[: len(text) // 40])
+    assert_one_line_error(*run(capsys, "build", f, "-o", tmp_path / "o.lmap"))
+    assert_nothing_written(tmp_path)
+
+
+def _drawing(tmp_path, layers):
+    doc = ezdxf.new()
+    msp = doc.modelspace()
+    for i, name in enumerate(layers):
+        doc.layers.add(name)
+        msp.add_line((0, i), (1, i), dxfattribs={"layer": name})
+        msp.add_circle((2, 2 + i), 0.3, dxfattribs={"layer": name})
+    f = tmp_path / "nowalls.dxf"
+    doc.saveas(f)
+    return f
+
+
+def test_no_recognisable_walls_lists_layers(tmp_path, capsys):
+    f = _drawing(tmp_path, ["Furniture", "Kitchen stuff", "Misc"])
+    assert_one_line_error(*run(capsys, "build", f, "-o", tmp_path / "o.lmap"), "--walls", "Kitchen stuff", "Misc")
+    assert_nothing_written(tmp_path)
+
+
+def test_missing_output_folder(tmp_path, capsys):
+    assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "no" / "o.lmap"), "does not exist")
+
+
+def test_output_must_be_lmap(tmp_path, capsys):
+    assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.txt"), ".lmap")
+
+
+@pytest.mark.parametrize(
+    "opts, needle",
+    [
+        (["--eps", "0"], "--eps"),
+        (["--max-range", "-1"], "--max-range"),
+        (["--wall-height", "0"], "--wall-height"),
+        (["--door-height", "9"], "--door-height"),
+        (["--pitch", "120"], "pitch"),
+        (["--image-size", "big"], "--image-size"),
+        (["--hfov", "500"], "field of view"),
+    ],
+)
+def test_bad_options(tmp_path, capsys, opts, needle):
+    assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.lmap", *opts), needle)
+    assert_nothing_written(tmp_path)
+
+
+def test_camera_file_missing_field(tmp_path, capsys):
+    cam = tmp_path / "cam.json"
+    cam.write_text(json.dumps({"width": 640, "height": 480, "fx": 500}))
+    assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.lmap", "--camera", cam), "lacks")
+    assert_nothing_written(tmp_path)
+
+
+def test_existing_map_survives_a_failed_build(tmp_path, capsys):
+    out = tmp_path / "o.lmap"
+    out.write_bytes(b"previous map")
+    bad = tmp_path / "bad.dxf"
+    bad.write_text("0\nSECTION\n2\nENTITIES\n0\nLINE\n")
+    code, _, _ = run(capsys, "build", bad, "-o", out)
+    assert code == 2 and out.read_bytes() == b"previous map"
