@@ -19,9 +19,10 @@ from matcher.tolerances import DEFAULT, Tolerances
 
 
 def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLines:
-    """Per-line quantities of validated pixel lines (M, 2, 2): undistortion,
-    plane normals and their noise, vertical candidates and their bearings."""
-    und = camera.undistort_pixels(lines)
+    """Per-line quantities of validated pixel lines (M, 2, 2) of the ideal
+    (undistorted) camera: plane normals and their noise, vertical candidates
+    and their bearings."""
+    und = lines
     normals = camera.interpretation_normals(und)
     eps = plane_noise(camera, und, tol.line_px, tol.line_deg)
     vert = vertical_candidates(camera, normals, eps)
@@ -36,7 +37,9 @@ def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLi
 
 
 def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
-    """Localise the camera from image ``lines`` (M, 2, 2) or (M, 4) pixels.
+    """Localise the camera from image ``lines`` (M, 2, 2) or (M, 4) pixels of
+    the ideal pinhole (as :func:`matcher.detect_lines` gives them: undistorted
+    when the camera has distortion).
 
     ``prior`` is ``(x, y, yaw_deg)``; the true pose is within ``dt`` metres
     and ``dyaw`` degrees of it. Returns a :class:`LocalizeResult`, falsy with
@@ -61,9 +64,13 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         return LocalizeResult(False, reason, hypotheses=hyps, time_ms=times)
 
     # ---- selection: regions met by the disk, field of view ---------------
-    ids = linemap.candidate_segments(xe, ye, dt) if candidate_ids is None else candidate_ids
+    # The region query divides by zero on horizontal ring edges (harmless, the
+    # result is right); keep its warnings off the robot's console.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ids = linemap.candidate_segments(xe, ye, dt) if candidate_ids is None else candidate_ids
+        near = len(linemap.regions_near(xe, ye, dt)) if len(ids) == 0 else 1
     if len(ids) == 0:
-        if len(linemap.regions_near(xe, ye, dt)) == 0:
+        if near == 0:
             return fail(f"the prior ({xe:.2f}, {ye:.2f}) is farther than dt={dt:g} m from every region of the map; "
                         "check the prior or use localize_global")
         return fail("no model segment is visible from the regions met by the prior disk")
@@ -97,12 +104,25 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     poses = verify.refine(hyps.init, hyp, reps[cls, 0], reps[cls, 1], rays[:, 0], rays[:, 1],
                           camera.pitch, camera.height_m)
     local = _resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
+    # Matches that do not fit at the hypothesis's pose (a clutter line that
+    # lay within the stage-1 tolerance of a model line) are dropped and the
+    # pose refitted on the others.
+    inl = _fits(camera, img, poses[hyp], segs[local], line_ids, tol)
+    n_in = np.bincount(hyp, inl, minlength=n_h)
+    if not inl.all():
+        keep = inl & (n_in[hyp] >= tol.min_matches)
+        hyp, cls, line_ids, local, rays = hyp[keep], cls[keep], line_ids[keep], local[keep], rays[keep]
+        poses = verify.refine(poses, hyp, segs[local, 0], segs[local, 1], rays[:, 0], rays[:, 1],
+                              camera.pitch, camera.height_m)
     E = verify.score_e(poses, hyp, img.normals[line_ids], segs[local, 0], segs[local, 1], camera.pitch,
                        camera.height_m)
     # A refined pose that left the prior set is not a solution of this problem.
     off = np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) > dt + tol.model_m + 0.05
     off |= np.abs(wrap(poses[:, 2] - yaw_e)) > dyaw + math.radians(2.0)
-    E = np.where(off | ~np.isfinite(E), np.inf, E)
+    # Ranked by E among the hypotheses that keep the most fitting matches: a
+    # hypothesis trimmed down to a few lines fits them well but explains less.
+    few = n_in < max(tol.min_matches, int(n_in.max()))
+    E = np.where(off | ~np.isfinite(E) | few, np.inf, E)
     order = np.argsort(E, kind="stable")
 
     def matches_of(sel_local, sel_lines):
@@ -160,6 +180,19 @@ def _resolve_pieces(camera, poses, label, cls, segs, lines):
     o = np.lexsort((-ov, t))
     first = np.concatenate([[True], t[o][1:] != t[o][:-1]])
     return cand[o][first]
+
+
+def _fits(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
+    """(T,) bool: the image line lies within its noise bound (plus 2 px for
+    the pose) of the projected segment, and inside its extent: occlusion and
+    the image border only ever shorten the image of a segment, so a line
+    sticking out beyond a projected end point by more than the end-point
+    noise shows another segment."""
+    lines = img.lines[line_ids]
+    L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
+    dist, ov = distance_and_overlap(camera, poses, segments, lines)
+    thr = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * L + 2.0
+    return (dist <= thr) & (ov >= L - 2 * tol.line_end_px - 2.0)
 
 
 def _extend(camera, img, segs, pose, local, line_ids, tol):

@@ -22,6 +22,9 @@ class Tolerances:
     line_px: float = 1.5
     #: Bound on the orientation error of a detected line, degrees.
     line_deg: float = 1.5
+    #: Bound on how far a detected line's end point may be off along the
+    #: line, pixels (end points are the least reliable part of a line).
+    line_end_px: float = 4.0
     #: Error of the map and of the calibration (wall positions, camera
     #: height), metres: added to every position residual's tolerance. A
     #: height error dh moves a floor line's strip by dh * distance / height,
@@ -38,7 +41,7 @@ class Tolerances:
     #: largest consistent set minus this are dropped (a subset of the true
     #: match that lost one line to noise is still kept; a handful of lines
     #: that happen to agree is not).
-    match_slack: int = 0
+    match_slack: int = 1
     #: Consistency of a set of correspondences at the least-squares point of
     #: its strips: each correspondence's normalised residual (residual over
     #: tolerance) squared must stay below this. 4 = twice the tolerance, since

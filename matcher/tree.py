@@ -30,6 +30,12 @@ from matcher.tolerances import Tolerances
 #: far from both its ends, metres: the segment itself lies on a wall face,
 #: and the pose from the grid is a few centimetres off.
 _OCCLUSION_END_M = 0.05
+_CAMERA_JITTER = np.array([[0.0, 0.0], [0.06, 0.0], [-0.06, 0.0], [0.0, 0.06], [0.0, -0.06]])
+#: Visibility is checked inside the tree only once the set's strips fix the
+#: position to within this (1-sigma of the strips, metres); before that the
+#: best point of the set may be far from the truth and the test would prune
+#: true sets.
+_PINNED_M = 0.05
 
 
 @dataclass
@@ -115,7 +121,8 @@ def search(inp: TreeInput, tol: Tolerances):
                 P2 = P2[feasible_with(R2, Q2, m2, P2)]
             if X2.size:
                 X2 = X2[feasible_with(R2, Q2, m2, X2)]
-            rec(R2, Q2, m2, P2, X2)
+            if len(R2) < tol.min_matches or _visible_at_best(inp, R2, Q2, m2):
+                rec(R2, Q2, m2, P2, X2)
             P = P[P != v]
             X = np.append(X, v)
             if len(R) + P.size < state["bound"] or state["truncated"]:
@@ -128,6 +135,24 @@ def search(inp: TreeInput, tol: Tolerances):
         sets, inits = [sets[i] for i in keep], [inits[i] for i in keep]
     sets, inits = _drop_dominated(sets, inits)
     return sets, inits, state["truncated"], state["nodes"]
+
+
+def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray) -> bool:
+    """Once a set fixes the pose (three members or more): are all its
+    segments in front of the camera and unhidden at its best grid pose?"""
+    G = np.nonzero(mR)[0]
+    if len(G) == 0:
+        return False
+    val, z = posegrid.minimise(Qsum[G], inp.dt)
+    g = int(np.argmin(val))
+    q = Qsum[G[g]]
+    # Only judge once the strips alone pin the position: smallest eigenvalue
+    # of their quadratic above 1 / _PINNED_M^2.
+    tr, det = q[0] + q[2], q[0] * q[2] - q[1] * q[1]
+    lam_min = 0.5 * (tr - np.sqrt(max(tr * tr - 4 * det, 0.0)))
+    if lam_min < 1.0 / _PINNED_M**2:
+        return True
+    return bool(_seen(inp, np.asarray(R), inp.centre[:2] + z[g], inp.forward[G[g]]).all())
 
 
 def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
@@ -171,8 +196,14 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
     pts = segs[:, None, 0] + t[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])  # (S, 7, 3)
     C = np.array([cam[0], cam[1], inp.centre[2]])
     front = (pts - C) @ forward > 0.05
-    clear = sight_clear(cam, pts[..., :2].reshape(-1, 2), inp.walls, _OCCLUSION_END_M).reshape(front.shape)
-    return (front & clear).any(axis=1)
+    flat = pts[..., :2].reshape(-1, 2)
+    clear = np.zeros(len(flat), dtype=bool)
+    # Seen from the point or from any of four points around it: the grid pose
+    # is a few centimetres off, and a sight line through a doorway far away
+    # can swing onto a jamb over that distance.
+    for off in _CAMERA_JITTER:
+        clear |= sight_clear(cam + off, flat, inp.walls, _OCCLUSION_END_M)
+    return (front & clear.reshape(front.shape)).any(axis=1)
 
 
 def _drop_dominated(sets, inits):

@@ -1,0 +1,142 @@
+"""The ``matcher`` command line (also ``python -m matcher``).
+
+    matcher localize --map MAP --camera CAM.json (--lines LINES.json | --image IMG)
+                     --prior X,Y,YAW_DEG --dt METRES --dyaw DEG [--json]
+
+Human-readable output by default, one JSON object on stdout with ``--json``
+(the result shape of docs/architecture.md). Errors a user can cause print
+one line ``matcher: error: ...`` on stderr and exit 2, never a traceback.
+A failed localisation is not an error: it prints its reason and exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+
+#: Exit codes: localised, not localised (a valid answer), user error.
+EXIT_OK, EXIT_NOT_FOUND, EXIT_USAGE = 0, 1, 2
+
+
+class UsageError(Exception):
+    """A mistake the user can fix; the message says how."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # noqa: D401 - argparse API
+        self.exit(EXIT_USAGE, f"matcher: error: {message} (see '{self.prog} --help')\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="matcher", description="Localise a camera in a line map (.lmap) from one image.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    p = sub.add_parser("localize", help="pose from image lines and a prior",
+                       description="Pose of the camera from image lines (or an image) and a pose prior.")
+    p.add_argument("--map", required=True, help=".lmap map built by 'mapkit build'")
+    p.add_argument("--camera", required=True, help="camera.json (width, height, fx, fy, cx, cy, height_m, pitch_deg)")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--lines", help='lines.json {"lines": [[u1, v1, u2, v2], ...]} (undistorted pixels)')
+    src.add_argument("--image", help="image file; lines are detected with LSD")
+    p.add_argument("--prior", required=True, help="pose prior X,Y,YAW_DEG (metres, degrees)")
+    p.add_argument("--dt", required=True, type=float, help="position bound of the prior, metres")
+    p.add_argument("--dyaw", required=True, type=float, help="heading bound of the prior, degrees")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    return parser
+
+
+def _parse_prior(text: str) -> tuple[float, float, float]:
+    try:
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        vals = []
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+        raise UsageError(f"--prior must be X,Y,YAW_DEG (three numbers), got {text!r}")
+    return vals[0], vals[1], vals[2]
+
+
+def _read_lines(path: str):
+    p = Path(path)
+    if not p.is_file():
+        raise UsageError(f"lines file {path} not found; check the path")
+    try:
+        data = json.loads(p.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise UsageError(f"lines file {path} is not valid JSON ({exc})") from None
+    if not isinstance(data, dict) or "lines" not in data or not isinstance(data["lines"], list):
+        raise UsageError(f'lines file {path} must hold {{"lines": [[u1, v1, u2, v2], ...]}}')
+    return data["lines"]
+
+
+def _read_image(path: str, camera):
+    import cv2
+
+    from matcher.lines import detect_lines
+
+    if not Path(path).is_file():
+        raise UsageError(f"image file {path} not found; check the path")
+    img = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
+    if img is None:
+        raise UsageError(f"image file {path} could not be read (PNG, JPEG, ... expected)")
+    return detect_lines(img, camera)
+
+
+def _human(res, n_lines: int) -> str:
+    t = ", ".join(f"{k} {v:.1f}" for k, v in res.time_ms.items() if k != "regions_tried")
+    if not res:
+        return f"not localised: {res.reason}\n  {res.hypotheses} hypotheses from {n_lines} lines; time ms: {t}"
+    x, y, yaw = res.pose
+    ru = "none" if res.runner_up_score is None else f"{res.runner_up_score:.3g}"
+    return (
+        f"pose x={x:.3f} m  y={y:.3f} m  yaw={yaw:.2f} deg\n"
+        f"  score E={res.score:.3g} (runner-up {ru}), {res.hypotheses} hypotheses, "
+        f"{len(res.matches)} of {n_lines} lines matched\n"
+        f"  matches [segment, line]: {res.matches}\n"
+        f"  time ms: {t}"
+    )
+
+
+def run_localize(args) -> int:
+    import matcher
+
+    from matcher.camera import Camera
+
+    prior = _parse_prior(args.prior)
+    if not Path(args.map).is_file():
+        raise UsageError(f"map file {args.map} not found; build one with 'mapkit build'")
+    if not Path(args.camera).is_file():
+        raise UsageError(f"camera file {args.camera} not found; check the path")
+    camera = Camera.load(args.camera)
+    linemap = matcher.load_map(args.map)
+    lines = _read_lines(args.lines) if args.lines else _read_image(args.image, camera)
+    res = matcher.localize(linemap, camera, lines, prior, args.dt, args.dyaw)
+    if args.json:
+        print(json.dumps(res.to_dict()))
+    else:
+        print(_human(res, len(lines)))
+    return EXIT_OK if res else EXIT_NOT_FOUND
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return run_localize(args)
+    except UsageError as exc:
+        return _fail(str(exc))
+    except ValueError as exc:  # CameraError, LmapError and input checks: clear messages
+        return _fail(str(exc))
+    except OSError as exc:
+        return _fail(f"{getattr(exc, 'filename', '') or ''}: {exc.strerror or exc}".lstrip(": "))
+
+
+def _fail(message: str) -> int:
+    print(f"matcher: error: {message}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
