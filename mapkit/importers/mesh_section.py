@@ -132,7 +132,7 @@ def section_regions(closed: np.ndarray, thin: np.ndarray) -> Section:
     ``closed`` (S, 2, 2): segments of solids, oriented solid-on-left;
     ``thin`` (T, 2, 2): segments of open surfaces (any orientation).
     """
-    lines = shapely.set_precision(shapely.linestrings(np.concatenate([closed, thin])), MERGE)
+    lines = shapely.linestrings(snap_ends(np.concatenate([closed, thin])))
     faces = np.asarray(shapely.get_parts(shapely.polygonize(shapely.get_parts(shapely.union_all(lines)))))
     faces = faces[shapely.area(faces) > MERGE * MERGE] if len(faces) else faces
     inside = winding_numbers(shapely.get_coordinates(shapely.point_on_surface(faces)), closed) > 0
@@ -143,11 +143,33 @@ def section_regions(closed: np.ndarray, thin: np.ndarray) -> Section:
     sheets = MultiLineString()
     walls = solid
     if len(thin):
-        sheets = shapely.line_merge(shapely.union_all(shapely.set_precision(shapely.linestrings(thin), MERGE)))
+        sheets = shapely.line_merge(shapely.union_all(shapely.linestrings(snap_ends(thin))))
         thick = sheets.buffer(MESH_THIN_WALL / 2, cap_style="square", join_style="mitre")
         walls = shapely.union_all([solid, thick])
     enclosed = shapely.difference(shapely.union_all(faces[~inside]), walls)
     return Section(as_multipolygon(solid), sheets, as_multipolygon(walls), as_multipolygon(enclosed))
+
+
+def snap_ends(segments: np.ndarray, tol: float = MERGE) -> np.ndarray:
+    """Segments (S, 2, 2) with end points closer than ``tol`` made identical.
+
+    Neighbouring faces compute their shared section point from the same
+    mesh edge in different orders, so the two copies differ in the last
+    bits; polygonize needs them equal. Points are clustered (k-d tree pairs,
+    connected components), not rounded to a grid, so two copies straddling
+    a grid line still meet.
+    """
+    from scipy.spatial import cKDTree
+
+    pts = segments.reshape(-1, 2)
+    if len(pts) == 0:
+        return segments
+    pairs = cKDTree(pts).query_pairs(tol, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(len(pts),) * 2)
+    _, label = connected_components(graph, directed=False)
+    first = np.full(label.max() + 1, -1)
+    first[label[::-1]] = np.arange(len(pts))[::-1]  # lowest index of each cluster
+    return pts[first[label]].reshape(segments.shape)
 
 
 def as_multipolygon(geom) -> MultiPolygon:
