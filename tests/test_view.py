@@ -18,7 +18,6 @@ import urllib.request
 
 import numpy as np
 import pytest
-import shapely
 from shapely.geometry import Polygon, box
 
 from mapkit.assemble import assemble_map
@@ -28,7 +27,9 @@ from mapkit.view import geometry, palette
 from mapkit.view.demo import DEMO_CAMERA, synthetic_flat
 from mapkit.view.fov import in_horizontal_view, wrap
 from mapkit.view.result import load_result, parse_result
-from mapkit.view.server import Inspector, camera_wxyz, floor_point
+from mapkit.view.pose_tool import camera_wxyz
+from mapkit.view.result_overlay import image_line_rays
+from mapkit.view.server import Inspector, floor_point
 from mapkit.view.stats import map_camera, map_statistics, statistics_markdown
 from mapkit.view.synthetic_image import clip_to_image, project_segments, render_segments
 from matcher.camera import Camera
@@ -305,7 +306,7 @@ def test_inspector_shows_a_result(flat):
         for name in ("/result/frustum", "/result/matched", "/result/rays"):
             assert ins.server.scene.get_handle_by_name(name) is not None, name
         assert "accepted" in ins.panel.result_text.content
-        rays = ins._rays(res)
+        rays = image_line_rays(cam, flat, res)
         # A ray through an end point of a matched line passes near the matched segment's line.
         c = cam.centre(x, y)
         seg = flat.segments[ids[idx[0]]]
@@ -436,3 +437,44 @@ def test_a_large_map_opens_fast():
         assert time.perf_counter() - t1 < 1.0
     finally:
         ins.stop()
+
+
+# --------------------------------------------------------------------------
+# A map built from a real plan, with the plan overlaid
+
+
+@pytest.fixture(scope="module")
+def built_flat(tmp_path_factory):
+    """maps/flat.dxf through ``mapkit build``: the inspector must take real maps as they come."""
+    plan = os.path.join(os.path.dirname(__file__), "..", "maps", "flat.dxf")
+    out = tmp_path_factory.mktemp("built") / "flat.lmap"
+    r = _mapkit("build", plan, "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    return plan, out
+
+
+def test_real_map_with_its_plan_overlaid(built_flat):
+    from mapkit.importers import load_scene
+    from mapkit.lmap import load_map
+
+    plan_path, map_path = built_flat
+    m = load_map(map_path)
+    with Inspector(m, port=0, map_path=map_path, plan=load_scene(plan_path)) as ins:
+        for name in ("/plan/walls", "/plan/free", "/regions/fill", "/walls"):
+            assert ins.server.scene.get_handle_by_name(name) is not None, name
+        assert "plan overlay" in ins.panel.toggles
+        ins.panel.toggles["plan overlay"].value = False
+        assert not ins.server.scene.get_handle_by_name("/plan/walls").visible
+        x, y = m.region_centres()[0]
+        assert ins.select_at(x, y) == int(m.regions_at(x, y)[0])
+        assert ins.camera_source in ("build parameters", "map")
+
+
+def test_cli_plan_and_result_on_a_real_map(built_flat, tmp_path):
+    plan_path, map_path = built_flat
+    res = tmp_path / "result.json"
+    res.write_text(json.dumps({"ok": False, "reason": "no hypothesis below the threshold", "matches": []}))
+    out = tmp_path / "snap.html"
+    r = _mapkit("view", str(map_path), "--plan", plan_path, "--result", str(res), "--html", str(out))
+    assert r.returncode == 0, r.stderr
+    assert out.stat().st_size > 100_000

@@ -120,3 +120,17 @@ def test_a_large_map_renders_quickly(browser):
     with Inspector(big, port=0) as ins:
         _, seconds = open_and_wait(browser, ins)
     assert seconds < 6.0, f"first render took {seconds:.1f} s"
+
+
+def test_html_snapshot_draws_from_file_without_a_server(browser, tmp_path):
+    from mapkit.view.snapshot import write_snapshot
+
+    path = tmp_path / "flat.html"
+    write_snapshot(synthetic_flat(), path)  # the server it used is stopped again
+    browser.navigate(path.as_uri())
+    img = wait_for(lambda: (lambda s: s if scene_drawn(s) else None)(browser.screenshot()), 60, interval=0.1,
+                   what="the snapshot to draw the map")
+    assert (img[VIEW].min(axis=2) < 235).mean() > 0.15
+    # Everything came from the file itself: no http(s) request was made.
+    urls = browser.evaluate("performance.getEntriesByType('resource').map(e => e.name)")
+    assert not [u for u in urls if u.startswith(("http:", "https:", "ws:"))], urls

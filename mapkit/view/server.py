@@ -3,13 +3,10 @@
 :class:`Inspector` builds the static layers once (:mod:`~mapkit.view.scene_nodes`)
 and redraws three small dynamic groups on demand:
 
-- ``/selection/...``: the clicked region (fill, outline) and its visible segments;
-- ``/pose/...``: the uncertainty disk, the regions it meets (``regions_near``),
-  the candidate segments (``candidate_segments``, optionally reduced to the
-  horizontal field of view over ``[yaw - dyaw, yaw + dyaw]``), the heading
-  wedge and the camera frustum; the panel shows the synthetic image;
-- ``/result/...``: a matcher result's pose, matched segments and the image
-  lines back-projected as rays.
+- ``/selection/...``: the clicked region (fill, outline) and its visible
+  segments, drawn here;
+- ``/pose/...``: the pose tool (:mod:`~mapkit.view.pose_tool`);
+- ``/result/...``: a matcher result (:mod:`~mapkit.view.result_overlay`).
 
 viser runs GUI and click callbacks on a thread pool; one lock serialises the
 redraws so that two quick slider moves cannot interleave their scene updates.
@@ -25,21 +22,15 @@ import time
 
 import numpy as np
 import viser
-import viser.transforms as vtf
 
 from mapkit.lmap import LineMap, SegmentKind
-from mapkit.view import palette, scene_nodes
-from mapkit.view.fov import in_horizontal_view
-from mapkit.view.geometry import (disk_mesh, disk_outline, lift, map_bounds, region_adjacency, region_polygons,
-                                  ring_edges, triangulate)
+from mapkit.view import palette, pose_tool, scene_nodes
+from mapkit.view.geometry import lift, map_bounds, region_adjacency, region_polygons, ring_edges, triangulate
 from mapkit.view.panel import SELECTION_HINT, build_panel, id_list_markdown
 from mapkit.view.result import MatchResult
+from mapkit.view.result_overlay import draw_result
 from mapkit.view.stats import map_camera, map_statistics, statistics_markdown
-from mapkit.view.synthetic_image import blank_image, draw_lines, project_segments, render_segments
-
-#: Length of the back-projected image-line rays when no matched segment says how far (metres).
-RAY_LENGTH_M = 4.0
-
+from mapkit.view.synthetic_image import blank_image
 
 def floor_point(origin, direction) -> tuple[float, float] | None:
     """Where a click ray meets the floor plane z = 0, or None if it never does."""
@@ -48,16 +39,6 @@ def floor_point(origin, direction) -> tuple[float, float] | None:
         return None
     t = -o[2] / d[2]
     return (float(o[0] + t * d[0]), float(o[1] + t * d[1])) if t > 0 else None
-
-
-def camera_wxyz(camera, yaw: float) -> np.ndarray:
-    """Quaternion (w, x, y, z) of the camera-to-world rotation at heading ``yaw``.
-
-    viser's frustum follows OpenCV axes (X right, Y down, Z forward), like
-    :class:`matcher.camera.Camera`, whose world-to-camera rotation R has the
-    camera axes as rows; the camera-to-world rotation is R transposed.
-    """
-    return vtf.SO3.from_matrix(camera.world2cam(yaw).T).wxyz
 
 
 class Inspector:
@@ -95,8 +76,9 @@ class Inspector:
         self.host = host
         scene = self.server.scene
         # No shadows (nothing here needs them; they are costly in software
-        # WebGL) and a dimmer environment light, which otherwise washes the
-        # region colours out towards white.
+        # WebGL) and no environment map: its image-based light washed the
+        # region colours out towards white and took seconds to prepare in
+        # software WebGL. Ambient plus the default lights keep colours true.
         scene.configure_default_lights(enabled=True, cast_shadow=False)
         scene.configure_environment_map(None)
         scene.add_light_ambient("/lights/ambient", intensity=1.2)
@@ -127,8 +109,7 @@ class Inspector:
         self.server.initial_camera.position = (ax, float(centre[1] - 0.7 * span), 0.8 * span)
         self.server.initial_camera.up = (0.0, 0.0, 1.0)
         # The floor layers are millimetres apart; a near plane at 1 cm (viser's
-        # default) leaves too little depth precision at building scale under
-        # software WebGL, and the highlights z-fight with the fills.
+        # default) wastes depth precision at building scale.
         self.server.initial_camera.near = max(0.05, 0.005 * span)
         self.server.initial_camera.far = 50.0 * span
 
@@ -225,135 +206,32 @@ class Inspector:
     # ---- pose tool ------------------------------------------------------------
     def pose_sets(self, x: float, y: float, yaw: float, dt: float, dyaw: float, fov_filter: bool = True):
         """(retained regions, candidate segments, the candidates kept in view) for a pose."""
-        regions = self.m.regions_near(x, y, dt)
-        cands = self.m.segments_for_regions(regions)
-        if fov_filter and len(cands):
-            keep = in_horizontal_view(self.m.segments[cands], x, y, dt, yaw, dyaw, self.half_fov)
-        else:
-            keep = np.ones(len(cands), dtype=bool)
-        return regions, cands, cands[keep]
+        sets = pose_tool.pose_sets(self.m, x, y, yaw, dt, dyaw, self.half_fov, fov_filter)
+        return sets.regions, sets.candidates, sets.in_view
 
     def update_pose(self) -> None:
         """Redraw the pose tool from the panel's inputs."""
         with self._lock:
-            scene = self.server.scene
             pc = self.panel.pose
-            names = ("/pose/disk", "/pose/disk_fill", "/pose/regions", "/pose/candidates", "/pose/out_of_view",
-                     "/pose/heading", "/pose/frustum")
             if not pc.show.value:
-                for n in names:
-                    scene.remove_by_name(n)
+                pose_tool.remove_pose(self.server.scene)
                 pc.summary.content = "Pose tool hidden."
                 return
-            x, y, yaw, dt, dyaw = pc.values()
-            regions, cands, in_view = self.pose_sets(x, y, yaw, dt, dyaw, bool(pc.fov_filter.value))
-            out = np.setdiff1d(cands, in_view)
-            scene.add_line_segments("/pose/disk", disk_outline(x, y, max(dt, 0.01), 0.01), palette.POSE_DISK,
-                                    thickness=3.0, thickness_units="screen")
-            dv, df = disk_mesh(x, y, max(dt, 0.01), scene_nodes.Z_RETAINED + 0.001)
-            scene.add_mesh_simple("/pose/disk_fill", dv, df, color=palette.POSE_DISK, opacity=0.35, side="double",
-                                  cast_shadow=False, receive_shadow=False)
-            verts, faces = self.triangles.subset(regions)
-            if len(faces):
-                scene.add_mesh_simple("/pose/regions", np.c_[verts, np.full(len(verts), scene_nodes.Z_RETAINED)],
-                                      faces, color=palette.RETAINED_REGION, opacity=0.55, side="double",
-                                      cast_shadow=False, receive_shadow=False)
-            else:
-                scene.remove_by_name("/pose/regions")
-            self._segments_node("/pose/candidates", in_view, palette.CANDIDATE, 3.5)
-            self._segments_node("/pose/out_of_view", out, palette.CANDIDATE_OUT_OF_VIEW, 3.0)
-            scene.add_line_segments("/pose/heading", self._heading_wedge(x, y, yaw, dyaw), palette.FRUSTUM,
-                                    thickness=2.0, thickness_units="screen")
-            self._frustum("/pose/frustum", x, y, yaw, palette.FRUSTUM)
-            img, drawn = render_segments(self.camera, self.m.segments[in_view], self.kind_colours[in_view], x, y, yaw)
+            img, summary = pose_tool.draw_pose(self.server.scene, self.m, self.triangles, self.camera,
+                                               self.kind_colours, self.half_fov, *pc.values(),
+                                               fov_filter=bool(pc.fov_filter.value))
             pc.image.image = img
-            pc.summary.content = (
-                f"**{len(regions)} regions** retained, **{len(cands)} candidate segments**, "
-                f"**{len(in_view)}** in view over yaw {math.degrees(yaw):.0f} ± {math.degrees(dyaw):.0f}° "
-                f"(half FOV {math.degrees(self.half_fov):.0f}°); {len(drawn)} project into the image at the "
-                f"nominal pose."
-            )
-
-    def _segments_node(self, name: str, ids: np.ndarray, colour, px: float) -> None:
-        if len(ids):
-            self.server.scene.add_line_segments(name, self.m.segments[ids].astype(np.float32), colour,
-                                                thickness=px, thickness_units="screen")
-        else:
-            self.server.scene.remove_by_name(name)
-
-    def _heading_wedge(self, x: float, y: float, yaw: float, dyaw: float, length: float = 1.5) -> np.ndarray:
-        """Rays on the floor: the nominal heading and the outermost edges of the field of view."""
-        reach = dyaw + self.half_fov
-        angles = [yaw, yaw - reach, yaw + reach]
-        z = 0.02
-        return np.array([[[x, y, z], [x + length * math.cos(a), y + length * math.sin(a), z]] for a in angles])
-
-    def _frustum(self, name: str, x: float, y: float, yaw: float, colour):
-        cam = self.camera
-        fov = 2.0 * math.atan2(cam.height / 2.0, cam.fy)
-        return self.server.scene.add_camera_frustum(
-            name, fov=fov, aspect=cam.width / cam.height, scale=0.5, color=colour, thickness=2.0,
-            thickness_units="screen", wxyz=camera_wxyz(cam, yaw), position=tuple(cam.centre(x, y)),
-        )
+            pc.summary.content = summary
 
     # ---- matcher result ---------------------------------------------------------
     def show_result(self, res: MatchResult) -> None:
         """Draw a result: pose frustum, matched segments, image lines as rays and in the image."""
         with self._lock:
-            scene = self.server.scene
-            handles = []
-            matched = np.unique(res.matches[:, 0]) if len(res.matches) else np.zeros(0, dtype=np.int64)
-            score = f"{res.score:.3g}" if res.score is not None else "n/a"
-            head = f"**{'accepted' if res.ok else 'rejected'}**, score E = {score}, {len(res.matches)} matches"
-            if not res.ok and res.reason:
-                head += f"; reason: {res.reason}"
-            if not res.has_pose:
-                self.panel.result_text.content = head + "\n\nNo pose to show."
-                self._result_handles = handles
-                return
-            x, y, yaw = res.x, res.y, res.yaw
-            handles.append(self._frustum("/result/frustum", x, y, yaw, palette.RESULT_POSE))
-            if len(matched):
-                handles.append(scene.add_line_segments(
-                    "/result/matched", self.m.segments[matched].astype(np.float32), palette.MATCHED,
-                    thickness=scene_nodes.HIGHLIGHT_PX + 1, thickness_units="screen"))
-            img = blank_image(self.camera)
-            visible = self.m.candidate_segments(x, y, 0.0)
-            render_segments(self.camera, self.m.segments[visible], np.full((len(visible), 3), 170), x, y, yaw,
-                            image=img, thickness=1)
-            if len(matched):
-                render_segments(self.camera, self.m.segments[matched], np.array([palette.MATCHED]), x, y, yaw,
-                                image=img, thickness=3)
-            if res.lines is not None and len(res.lines):
-                draw_lines(img, res.lines, palette.RAYS, thickness=2)
-                handles.append(scene.add_line_segments("/result/rays", self._rays(res), palette.RAYS,
-                                                       thickness=1.5, thickness_units="screen"))
-            self.panel.result_image.image = img
-            n_lines = "no image lines given" if res.lines is None else f"{len(res.lines)} image lines"
-            self.panel.result_text.content = (
-                head + f"\n\npose x = {x:.3f} m, y = {y:.3f} m, yaw = {math.degrees(yaw):.1f}°; {n_lines}.\n\n"
-                "Image: model at the estimated pose (grey), matched segments (green), image lines (blue)."
-            )
+            handles, img, text = draw_result(self.server.scene, self.m, self.camera, res)
+            if img is not None:
+                self.panel.result_image.image = img
+            self.panel.result_text.content = text
             self._result_handles = handles
-
-    def _rays(self, res: MatchResult) -> np.ndarray:
-        """(3M, 2, 3) segments: for each image line, the rays through its end points
-        from the camera centre and the segment joining their far ends (the
-        line's interpretation plane, cut at the matched segment's distance)."""
-        cam = self.camera
-        c = cam.centre(res.x, res.y)
-        R = cam.world2cam(res.yaw)
-        dirs = cam.pixel_rays(res.lines.reshape(-1, 2)) @ R  # world directions, (2M, 3)
-        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-        length = np.full(len(res.lines), RAY_LENGTH_M)
-        for seg, line in res.matches:
-            if 0 <= line < len(length):
-                length[line] = float(np.linalg.norm(self.m.segments[seg].mean(axis=0) - c))
-        far = c + dirs * np.repeat(length, 2)[:, None]
-        far = far.reshape(-1, 2, 3)
-        cc = np.broadcast_to(c, far[:, 0].shape)
-        return np.concatenate([np.stack([cc, far[:, 0]], 1), np.stack([cc, far[:, 1]], 1),
-                               np.stack([far[:, 0], far[:, 1]], 1)]).astype(np.float32)
 
     def _pose_from_result(self) -> None:
         res = self.result
