@@ -8,8 +8,8 @@ triangles, but buried in material or lying in a flat face of the union.
 Tests per height level (metres, z up, floor at 0), with sections just above
 and just below a horizontal edge (z +- ``_PROBE``):
 
-- a horizontal edge is kept only where it lies on the outline of the
-  material above or below, or on an open sheet (single-surface walls);
+- a horizontal edge is kept only where it runs along the outline of the
+  material above or below, or along an open sheet (single-surface walls);
 - and only where the four quadrants around it (left/right x above/below)
   do not make a flat face: material on one side only, continuing straight
   up and down (a wall flush on a slab's border), or above/below only,
@@ -76,44 +76,91 @@ def drop_hidden(
         hz = np.nonzero(at & horizontal)[0]
         if len(hz):
             above, below = sections.section(z + _PROBE), sections.section(z - _PROBE)
-            outline = shapely.union_all([above.solid.boundary, below.solid.boundary, above.sheets, below.sheets])
-            pieces = _clip_horizontal(segments[hz], outline.buffer(_REACH), min_length)
-            owner = np.repeat(hz, [len(p) for p in pieces])
-            flat = np.concatenate([np.asarray(p).reshape(-1, 2, 3) for p in pieces])
+            outline = _outline_segments([above.solid, below.solid, above.sheets, below.sheets])
+            flat, owner = _on_outline(segments[hz], outline, min_length)
             if len(flat):
                 real = _is_crease(flat, above, below)
                 out_segments.append(flat[real])
-                out_kinds.append(kinds[owner[real]])
+                out_kinds.append(kinds[hz[owner[real]]])
         vt = np.nonzero(at & vertical)[0]
         if len(vt):
-            core = sections.section(z).solid.buffer(-MESH_LEVEL)
-            if not core.is_empty:
-                keep[vt] = ~shapely.contains_xy(core, segments[vt, 0, 0], segments[vt, 0, 1])
-            else:
+            solid = sections.section(z).solid
+            if solid.is_empty:
                 keep[vt] = True
+            else:
+                x, y = segments[vt, 0, 0], segments[vt, 0, 1]
+                deep = shapely.contains_xy(solid, x, y) & (shapely.distance(shapely.points(x, y), solid.boundary) > MESH_LEVEL)
+                keep[vt] = ~deep
     keep[checked & ~np.isin(level, levels)] = True
     seg = np.concatenate([segments[keep], *out_segments]) if out_segments else segments[keep]
     kin = np.concatenate([kinds[keep], *out_kinds]).astype(np.uint8) if out_kinds else kinds[keep]
     return seg, kin, warnings
 
 
-def _clip_horizontal(segments: np.ndarray, region, min_length: float) -> list[list[np.ndarray]]:
-    """For each segment (N, 2, 3): its pieces (2, 3) inside the 2D ``region``."""
-    inside = shapely.intersection(shapely.linestrings(segments[:, :, :2]), region)
-    out = []
-    for seg, geom in zip(segments, inside):
-        a, b = seg[0], seg[1]
-        d2 = b[:2] - a[:2]
-        len2 = float(d2 @ d2)
-        pieces = []
-        for part in shapely.get_parts(geom):
-            if part.geom_type != "LineString" or part.length < min_length:
-                continue
-            xy = np.asarray(part.coords)[[0, -1]]
-            t = np.clip((xy - a[:2]) @ d2 / len2, 0.0, 1.0)
-            pieces.append(a + t[:, None] * (b - a))
-        out.append(pieces)
-    return out
+def _outline_segments(geoms) -> np.ndarray:
+    """(K, 2, 2) straight pieces of the rings and lines of ``geoms``."""
+    parts = []
+    for g in geoms:
+        if g.is_empty:
+            continue
+        lines = shapely.get_parts(shapely.boundary(g)) if g.geom_type.endswith("Polygon") else shapely.get_parts(g)
+        lines = shapely.get_parts(shapely.line_merge(shapely.union_all(lines))) if len(lines) else lines
+        coords, index = shapely.get_coordinates(lines, return_index=True)
+        same = index[1:] == index[:-1]
+        parts.append(np.stack([coords[:-1][same], coords[1:][same]], axis=1))
+    return np.concatenate(parts) if parts else np.zeros((0, 2, 2))
+
+
+def _on_outline(segments: np.ndarray, outline: np.ndarray, min_length: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pieces of horizontal segments (N, 2, 3) running along outline pieces (K, 2, 2).
+
+    A segment runs along an outline piece where the piece lies within
+    ``_REACH`` of the segment's line (both its ends) and their extents
+    overlap; the overlaps of one segment are joined. Returns the pieces
+    (M, 2, 3) at least ``min_length`` long and the segment each came from (M,).
+    """
+    from shapely import STRtree
+
+    empty = np.zeros((0, 2, 3)), np.zeros(0, dtype=np.int64)
+    if len(outline) == 0 or len(segments) == 0:
+        return empty
+    a, b = segments[:, 0, :2], segments[:, 1, :2]
+    d = b - a
+    length = np.linalg.norm(d, axis=1)
+    u = d / length[:, None]
+    tree = STRtree(shapely.linestrings(outline))
+    seg_i, out_j = tree.query(shapely.linestrings(segments[:, :, :2]), predicate="dwithin", distance=_REACH)
+    p, q = outline[out_j, 0], outline[out_j, 1]
+    ua, aa = u[seg_i], a[seg_i]
+
+    def off(pt):  # distance of points from the segment's line
+        rel = pt - aa
+        return np.abs(rel[:, 0] * ua[:, 1] - rel[:, 1] * ua[:, 0])
+
+    along = (off(p) <= _REACH) & (off(q) <= _REACH)
+    seg_i, p, q, ua, aa = seg_i[along], p[along], q[along], ua[along], aa[along]
+    tp = np.einsum("ij,ij->i", p - aa, ua) / length[seg_i]
+    tq = np.einsum("ij,ij->i", q - aa, ua) / length[seg_i]
+    lo = np.clip(np.minimum(tp, tq), 0.0, 1.0)
+    hi = np.clip(np.maximum(tp, tq), 0.0, 1.0)
+    keep = hi > lo
+    seg_i, lo, hi = seg_i[keep], lo[keep], hi[keep]
+    if len(seg_i) == 0:
+        return empty
+    # Join overlapping intervals per segment: offset each segment's
+    # parameters by 4 x its index so one running maximum serves all.
+    order = np.lexsort((lo, seg_i))
+    seg_i, lo, hi = seg_i[order], lo[order] + 4 * seg_i[order], hi[order] + 4 * seg_i[order]
+    gap = _REACH / length[seg_i]
+    reach = np.maximum.accumulate(hi)
+    start = np.r_[True, lo[1:] > reach[:-1] + gap[1:]]
+    t0 = lo[start] - 4 * seg_i[start]
+    t1 = np.maximum.reduceat(hi, np.nonzero(start)[0]) - 4 * seg_i[start]
+    owner = seg_i[start]
+    a3, b3 = segments[owner, 0], segments[owner, 1]
+    pieces = np.stack([a3 + t0[:, None] * (b3 - a3), a3 + t1[:, None] * (b3 - a3)], axis=1)
+    long = np.linalg.norm(pieces[:, 1] - pieces[:, 0], axis=1) >= min_length
+    return pieces[long], owner[long]
 
 
 def _is_crease(segments: np.ndarray, above, below) -> np.ndarray:
