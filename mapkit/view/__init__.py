@@ -1,7 +1,8 @@
 """The map inspector behind ``mapkit view``: a browser view of a ``.lmap`` map.
 
-Modules, one concept each (only ``server``, ``scene_nodes``, ``panel`` and
-``snapshot`` import viser; the rest is numpy/shapely and testable alone):
+Modules, one concept each (``server``, ``scene_nodes``, ``pose_tool``,
+``result_overlay``, ``panel`` and ``snapshot`` draw with viser; the rest is
+numpy/shapely and testable alone):
 
 - :mod:`~mapkit.view.geometry`: region polygons, their triangulation, ring
   edges, the wall extrusion: the arrays the scene is drawn from.
@@ -12,6 +13,9 @@ Modules, one concept each (only ``server``, ``scene_nodes``, ``panel`` and
 - :mod:`~mapkit.view.result`: reading a matcher result and image lines.
 - :mod:`~mapkit.view.stats`: the numbers shown in the panel.
 - :mod:`~mapkit.view.scene_nodes`: the static 3D layers (batched viser calls).
+- :mod:`~mapkit.view.pose_tool`: uncertainty disk, retained regions,
+  candidate segments, frustum and synthetic image for a pose estimate.
+- :mod:`~mapkit.view.result_overlay`: a matcher result over the map.
 - :mod:`~mapkit.view.panel`: the GUI panel (legend, toggles, pose controls).
 - :mod:`~mapkit.view.server`: :class:`~mapkit.view.server.Inspector`, which
   ties them together and reacts to clicks and pose changes.
