@@ -270,9 +270,14 @@ def leaf_raster(leaves: Leaves) -> np.ndarray:
     the leaf covering each fine cell, -1 where none (off the free space)."""
     g = 2**leaves.depth
     lab = np.full((g, g), -1, dtype=np.int64)
-    scale = 2 ** (leaves.depth - leaves.level)
-    for k, (x, y, w) in enumerate(zip(leaves.ix * scale, leaves.iy * scale, scale)):
-        lab[y : y + w, x : x + w] = k
+    for lev in np.unique(leaves.level):
+        k = np.nonzero(leaves.level == lev)[0]
+        w = 2 ** (leaves.depth - int(lev))
+        off = np.arange(w)
+        # Every fine cell of every leaf of this level, by broadcasting.
+        ys = (leaves.iy[k] * w)[:, None, None] + off[None, :, None]
+        xs = (leaves.ix[k] * w)[:, None, None] + off[None, None, :]
+        lab[ys, xs] = k[:, None, None]
     return lab
 
 
@@ -379,18 +384,35 @@ def _morton(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int):
     """Outlines (union of each region's cells, cut to the free space), lists,
-    and the Morton order used. Regions left empty by the cut are dropped."""
+    and the Morton order used. Regions left empty by the cut are dropped.
+
+    The union runs on the finest grid: every fine cell of a region becomes a
+    square, and squares of one grid meet edge to edge, so GEOS's coverage
+    union (linear time: shared edges cancel) applies; collinear grid
+    vertices are dropped afterwards."""
     n_groups = len(bits)
-    scale = 2 ** (leaves.depth - leaves.level)
-    key = _morton(leaves.ix * scale, leaves.iy * scale)
+    labels = leaf_raster(leaves)
+    fy, fx = np.nonzero(labels >= 0)
+    g_of_cell = group[labels[fy, fx]]
+    key = _morton(fx, fy)
     first_key = np.full(n_groups, np.iinfo(np.uint64).max, dtype=np.uint64)
-    np.minimum.at(first_key, group, key)
+    np.minimum.at(first_key, g_of_cell, key)
     order = np.argsort(first_key, kind="stable")
-    boxes = leaves.boxes()
-    by_group = np.argsort(group, kind="stable")
-    bounds = np.searchsorted(group[by_group], np.arange(n_groups + 1))
-    merged = np.array([shapely.union_all(boxes[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None])[:-1]
-    cut = shapely.intersection(merged, free_space, grid_size=OVERLAY_GRID)
+    # Grid lines computed once: neighbouring squares must share their corner
+    # coordinates bit for bit, or the coverage union sees overlaps.
+    lines = np.arange(2**leaves.depth + 1) * (leaves.size / 2.0**leaves.depth)
+    gx, gy = leaves.origin[0] + lines, leaves.origin[1] + lines
+    cells = shapely.box(gx[fx], gy[fy], gx[fx + 1], gy[fy + 1])
+    by_group = np.argsort(g_of_cell, kind="stable")
+    bounds = np.searchsorted(g_of_cell[by_group], np.arange(n_groups + 1))
+    merged = np.array(
+        [shapely.coverage_union_all(cells[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None]
+    )[:-1]
+    merged = shapely.simplify(merged, 0.0)
+    # Each region meets the free space only near itself: clip that first, so
+    # the overlay sees a few local edges rather than the whole plan's.
+    local = np.array([shapely.clip_by_rect(free_space, *b) for b in shapely.bounds(merged)] + [None])[:-1]
+    cut = polygonal(shapely.intersection(merged, polygonal(local)))
     polygons, lists = [], []
     ids = np.arange(n_segments)
     for g in order:
