@@ -116,13 +116,15 @@ _SIGHT_STEP = math.radians(1.0)
 _SIGHT_SKIP_M = 0.05
 
 
-def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls) -> np.ndarray:
+def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls, extent) -> np.ndarray:
     """(Kv, Y) bool: for a vertical edge at floor point ``points[k]`` seen at
     bearing ``alpha[k]`` (right of the axis) with heading ``yaws[g]``, the
     camera lies on the ray back from the edge at world bearing ``yaw - alpha``,
     up to the first wall that would hide the edge. True where that stretch
-    comes within ``dt + width[k, g]`` of the disk centre. Rays are cast once
-    per distinct edge on a 1 degree bearing grid."""
+    comes within ``dt + width[k, g]`` of the disk centre; the stretch is also
+    cut at ``extent[k]``, the farthest the edge can be for its image line to
+    fit inside its projection (:func:`vertical_extent_bound`). Rays are cast
+    once per distinct edge on a 1 degree bearing grid."""
     uniq, inv = np.unique(points, axis=0, return_inverse=True)
     inv = inv.reshape(-1)
     rel = uniq - centre
@@ -142,7 +144,7 @@ def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls) -> np.n
     j = np.rint(wrap(beta - b0[inv][:, None]) / _SIGHT_STEP).astype(int)
     inside = (j >= 0) & (j < n_b[inv][:, None])
     idx = starts[inv][:, None] + np.clip(j, 0, n_b[inv][:, None] - 1)
-    lam = reach[idx]  # (Kv, Y) visible length of the ray
+    lam = np.minimum(reach[idx], extent[:, None])  # (Kv, Y) usable length of the ray
     # Distance from the disk centre to the stretch P - s u, s in [0, lam].
     u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
     pc = centre - points[:, None, :]  # (Kv, 1, 2)
@@ -151,6 +153,29 @@ def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls) -> np.n
     gap = np.linalg.norm(closest - centre, axis=-1)
     slack = width + dist[inv][:, None] * (0.5 * step + _SIGHT_STEP)
     return ~inside | (gap <= dt + slack)
+
+
+def vertical_extent_bound(camera: Camera, lines: np.ndarray, segments: np.ndarray, tol: Tolerances) -> np.ndarray:
+    """(K,) largest horizontal distance, metres, at which a vertical segment
+    (K, 2, 3) can stand for its image line (K, 2, 2) to fit inside its
+    projection: an end point seen at elevation e < 0 needs the segment to
+    reach down to ``h + d tan e``, so ``d <= (h - z_bottom) / tan(-e)``;
+    likewise upwards. Elevations are moved toward the horizon by the
+    end-point noise first, so the bound never cuts a true match."""
+    rays = camera.pixel_rays(lines)  # (K, 2, 3)
+    p = camera.pitch
+    # World z of a camera ray: d_z * Y + f_z * Z with rows d, f of R.
+    z = -math.cos(p) * rays[..., 1] - math.sin(p) * rays[..., 2]
+    elev = np.arcsin(z / np.linalg.norm(rays, axis=-1))
+    slack = (tol.line_end_px + tol.line_px) / min(camera.fx, camera.fy)
+    elev = np.sign(elev) * np.maximum(np.abs(elev) - slack, 0.0)
+    h = camera.height_m
+    zlo = segments[:, :, 2].min(axis=1)[:, None]
+    zhi = segments[:, :, 2].max(axis=1)[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        down = np.where(elev < 0, np.maximum(h - zlo, 0.0) / np.tan(-elev), np.inf)
+        up = np.where(elev > 0, np.maximum(zhi - h, 0.0) / np.tan(elev), np.inf)
+    return np.minimum(down, up).min(axis=1)
 
 
 def collinear_classes(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float = 0.01):
@@ -281,8 +306,10 @@ def generate(
     t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
     quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
     if is_v.any() and walls is not None:
+        ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
         mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt,
-                                      (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v], step, walls)
+                                      (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v], step, walls,
+                                      ext)
     val, _ = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
     keep = mask.any(axis=1)
@@ -322,7 +349,8 @@ def generate(
 
     # ---- interpretation tree -------------------------------------------
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls)
-    sets, init, truncated, nodes = search(inp, tol)
+    sets, init, truncated, nodes, found = search(inp, tol)
     counts["tree_nodes"] = int(nodes)
+    counts["sets_found"] = int(found)
     return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
                       truncated, counts)

@@ -101,8 +101,10 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     cls = hyps.segment[members]
     line_ids = hyps.line[members]
     rays = _unit_rays(camera, img.lines[line_ids])
+    lengths = np.linalg.norm(img.lines[line_ids, 1] - img.lines[line_ids, 0], axis=1)
+    scale = _fit_bound_px(lengths, tol) / camera.fx
     poses = verify.refine(hyps.init, hyp, reps[cls, 0], reps[cls, 1], rays[:, 0], rays[:, 1],
-                          camera.pitch, camera.height_m)
+                          camera.pitch, camera.height_m, robust_scale=scale)
     local = _resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
     # Matches that do not fit at the hypothesis's pose (a clutter line that
     # lay within the stage-1 tolerance of a model line) are dropped and the
@@ -191,8 +193,14 @@ def _fits(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
     lines = img.lines[line_ids]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = distance_and_overlap(camera, poses, segments, lines)
-    thr = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * L + 2.0
-    return (dist <= thr) & (ov >= L - 2 * tol.line_end_px - 2.0)
+    return (dist <= _fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
+
+
+def _fit_bound_px(length, tol):
+    """Largest distance, pixels, of a true line's end points from the
+    projected segment: offset and rotation noise over half its length,
+    plus 2 px for the pose's own error."""
+    return tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length + 2.0
 
 
 def _extend(camera, img, segs, pose, local, line_ids, tol):
@@ -207,8 +215,7 @@ def _extend(camera, img, segs, pose, local, line_ids, tol):
     lines = img.lines[li]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = distance_and_overlap(camera, np.repeat(pose[None], len(li), 0), segs[si], lines)
-    thr = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * L + 2.0
-    ok = (dist <= thr) & (ov >= np.minimum(0.5 * L, 20.0))
+    ok = (dist <= _fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
     add_s, add_l = [], []
     for k in np.argsort(np.where(ok, dist, np.inf))[: int(ok.sum())]:
         if si[k] in add_s or li[k] in add_l:

@@ -41,7 +41,7 @@ class Tolerances:
     #: largest consistent set minus this are dropped (a subset of the true
     #: match that lost one line to noise is still kept; a handful of lines
     #: that happen to agree is not).
-    match_slack: int = 1
+    match_slack: int = 0
     #: Consistency of a set of correspondences at the least-squares point of
     #: its strips: each correspondence's normalised residual (residual over
     #: tolerance) squared must stay below this. 4 = twice the tolerance, since
@@ -54,7 +54,13 @@ class Tolerances:
     e_accept: float = 2e-3
     #: Stage 1 stops enumerating after this many consistent sets (a guard
     #: against pathological scenes; the result says so when it is hit).
-    max_hypotheses: int = 400
+    max_sets: int = 400
+    #: Stage 1 hands at most this many hypotheses to stage 2: the sets that
+    #: fit best at their grid pose (mean normalised residual). The paper saw
+    #: fewer than 25 at its worst prior; more come only from scenes where
+    #: the lines leave the pose undetermined (looking along a wall), and the
+    #: number of sets found is reported with the result's diagnostics.
+    max_hypotheses: int = 25
     #: Lines shorter than this many pixels are ignored: their orientation is
     #: too uncertain to constrain anything.
     min_line_px: float = 15.0

@@ -30,6 +30,9 @@ from matcher.tolerances import Tolerances
 #: far from both its ends, metres: the segment itself lies on a wall face,
 #: and the pose from the grid is a few centimetres off.
 _OCCLUSION_END_M = 0.05
+#: Greedy dives from this many best-connected correspondences before the
+#: exhaustive search (each costs a few tree nodes).
+_GREEDY_SEEDS = 2
 _CAMERA_JITTER = np.array([[0.0, 0.0], [0.06, 0.0], [-0.06, 0.0], [0.0, 0.06], [0.0, -0.06]])
 #: Visibility is checked inside the tree only once the set's strips fix the
 #: position to within this (1-sigma of the strips, metres); before that the
@@ -59,8 +62,10 @@ class TreeInput:
 
 
 def search(inp: TreeInput, tol: Tolerances):
-    """Maximal consistent sets. Returns ``(sets, inits, truncated, nodes)``:
-    sets as sorted index arrays, ``inits`` (x, y, yaw) their best grid pose."""
+    """Maximal consistent sets. Returns ``(sets, inits, truncated, nodes,
+    found)``: sets as sorted index arrays, ``inits`` (x, y, yaw) their best
+    grid pose; at most ``max_hypotheses`` of the ``found`` sets, those that
+    fit best."""
     quad, mask, compat, dt = inp.quad, inp.mask, inp.compat, inp.dt
     K, Y = mask.shape
     sets: list[np.ndarray] = []
@@ -91,8 +96,38 @@ def search(inp: TreeInput, tol: Tolerances):
             state["bound"] = new_bound
         sets.append(res[0])
         inits.append(res[1])
-        if len(sets) >= tol.max_hypotheses:
+        if len(sets) >= tol.max_sets:
             state["truncated"] = True
+
+    nbr = [int.from_bytes(row.tobytes(), "little") for row in np.packbits(compat, axis=1, bitorder="little")]
+    degree = compat.sum(axis=1)
+
+    def color_bound(P: np.ndarray) -> int:
+        """Colours of a greedy colouring of P: a clique in P has at most that many."""
+        classes: list[int] = []
+        for v in P[np.argsort(-degree[P], kind="stable")]:
+            v = int(v)
+            for i, cls in enumerate(classes):
+                if not cls & nbr[v]:
+                    classes[i] = cls | (1 << v)
+                    break
+            else:
+                classes.append(1 << v)
+        return len(classes)
+
+    def child(R, Qsum, mR, v, P, X):
+        """State of R + {v}: its quadratic, mask, and the candidates of P and X
+        compatible with v that keep the set feasible."""
+        R2 = R + [v]
+        Q2 = Qsum + quad[v]
+        m2 = mR & mask[v]
+        P2 = P[compat[v, P]]
+        X2 = X[compat[v, X]]
+        both = np.concatenate([P2, X2])
+        if both.size:
+            ok = feasible_with(R2, Q2, m2, both)
+            P2, X2 = P2[ok[: P2.size]], X2[ok[P2.size :]]
+        return R2, Q2, m2, P2, X2
 
     def rec(R: list[int], Qsum: np.ndarray, mR: np.ndarray, P: np.ndarray, X: np.ndarray) -> None:
         if state["truncated"]:
@@ -102,7 +137,7 @@ def search(inp: TreeInput, tol: Tolerances):
             if X.size == 0 and len(R) >= state["bound"]:
                 emit(R)
             return
-        if len(R) + P.size < state["bound"]:
+        if len(R) + P.size < state["bound"] or len(R) + color_bound(P) < state["bound"]:
             return
         PX = np.concatenate([P, X])
         pivot = PX[int(np.argmax(compat[np.ix_(PX, P)].sum(axis=1)))]
@@ -112,15 +147,7 @@ def search(inp: TreeInput, tol: Tolerances):
         branch = branch[np.argsort(-compat[np.ix_(branch, P)].sum(axis=1), kind="stable")]
         for v in branch:
             v = int(v)
-            R2 = R + [v]
-            Q2 = Qsum + quad[v]
-            m2 = mR & mask[v]
-            P2 = P[compat[v, P]]
-            X2 = X[compat[v, X]]
-            if P2.size:
-                P2 = P2[feasible_with(R2, Q2, m2, P2)]
-            if X2.size:
-                X2 = X2[feasible_with(R2, Q2, m2, X2)]
+            R2, Q2, m2, P2, X2 = child(R, Qsum, mR, v, P, X)
             if len(R2) < tol.min_matches or _visible_at_best(inp, R2, Q2, m2):
                 rec(R2, Q2, m2, P2, X2)
             P = P[P != v]
@@ -128,13 +155,36 @@ def search(inp: TreeInput, tol: Tolerances):
             if len(R) + P.size < state["bound"] or state["truncated"]:
                 return
 
+    def greedy(v: int) -> None:
+        """Dive from v, always adding the candidate with most neighbours: a
+        large consistent set found this way raises the bound before the
+        exhaustive search starts."""
+        R, Q, m = [], np.zeros((Y, 6)), np.ones(Y, dtype=bool)
+        P, X = np.arange(K), np.zeros(0, dtype=np.int64)
+        while P.size:
+            R2, Q2, m2, P2, _ = child(R, Q, m, v, P, X)
+            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2):
+                P = P[P != v]
+            else:
+                R, Q, m, P = R2, Q2, m2, P2
+            if P.size:
+                v = int(P[np.argmax(compat[np.ix_(P, P)].sum(axis=1))])
+        if len(R) >= state["bound"]:
+            emit(R)
+
+    for seed in np.argsort(-degree, kind="stable")[:_GREEDY_SEEDS]:
+        greedy(int(seed))
     rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.arange(K), np.zeros(0, dtype=np.int64))
     if sets:
         top = max(len(s) for s in sets)
         keep = [i for i, s in enumerate(sets) if len(s) >= top - tol.match_slack]
         sets, inits = [sets[i] for i in keep], [inits[i] for i in keep]
     sets, inits = _drop_dominated(sets, inits)
-    return sets, inits, state["truncated"], state["nodes"]
+    state["found"] = len(sets)
+    if len(sets) > tol.max_hypotheses:
+        best = np.argsort([fit for *_, fit in inits], kind="stable")[: tol.max_hypotheses]
+        sets, inits = [sets[i] for i in best], [inits[i] for i in best]
+    return sets, [p[:3] for p in inits], state["truncated"], state["nodes"], state["found"]
 
 
 def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray) -> bool:
@@ -156,13 +206,14 @@ def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndar
 
 
 def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
-    """``(members, (x, y, yaw))`` for the largest subset found feasible by
+    """``(members, (x, y, yaw, fit))`` for the largest subset found feasible by
     dropping the worst member, or None if it falls below ``min_matches``.
 
     Feasible at a grid yaw: every member's yaw mask holds, the summed strip
     quadratic's minimum is <= |S| + 1, every member's own term there is <=
     ``q_max``, and at that best point every segment has a part in front of
-    the camera and, with walls, a part not hidden by a wall."""
+    the camera and, with walls, a part not hidden by a wall. ``fit`` is the
+    summed quadratic's minimum per member."""
     ce, yaws = inp.centre, inp.yaws
     while len(members) >= tol.min_matches:
         q = inp.quad[members]  # (S, Y, 6)
@@ -183,7 +234,7 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
         cam = ce[:2] + z[g]
         seen = _seen(inp, members, cam, inp.forward[g])
         if seen.all():
-            return members, (float(cam[0]), float(cam[1]), float(yaws[g]))
+            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
         members = members[seen]
     return None
 

@@ -22,40 +22,67 @@ from matcher.constraints import rotations
 
 #: Gauss-Newton iterations: from the grid start (within half a yaw step and a
 #: few centimetres) the fit converges in 3 to 4.
-_ITERATIONS = 6
-#: Finite-difference steps for (x, y, yaw): metres, metres, radians.
-_STEPS = np.array([1e-5, 1e-5, 1e-6])
+_ITERATIONS = 5
 
 
-def _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height):
-    """(T, 2) image-side residuals; params (H, 3), hyp (T,) hypothesis of each match."""
+def _cross(a, b):
+    """Row-wise cross product of (T, 3) arrays (np.cross is slow on small arrays)."""
+    return np.stack(
+        [a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]],
+        axis=1,
+    )
+
+
+def _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
+    """(T, 2) image-side residuals, and with ``jacobian`` their derivatives
+    (T, 2, 3) in (x, y, yaw); params (H, 3), hyp (T,) hypothesis of each match."""
     p = params[hyp]
-    R = rotations(p[:, 2], pitch)  # (T, 3, 3)
+    psi = p[:, 2]
+    c, s = np.cos(psi), np.sin(psi)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    z = np.zeros_like(c)
+    R = np.stack([np.stack([s, -c, z], 1), np.stack([-sp * c, -sp * s, z - cp], 1), np.stack([cp * c, cp * s, z - sp], 1)], 1)
     C = np.stack([p[:, 0], p[:, 1], np.full(len(p), height)], axis=1)
-    qa = np.einsum("tij,tj->ti", R, seg_a - C)
-    qb = np.einsum("tij,tj->ti", R, seg_b - C)
-    m = np.cross(qa, qb)
-    m /= np.linalg.norm(m, axis=1, keepdims=True)
-    return np.stack([np.einsum("ti,ti->t", m, ray_a), np.einsum("ti,ti->t", m, ray_b)], axis=1)
+    da, db = seg_a - C, seg_b - C
+    qa = np.einsum("tij,tj->ti", R, da)
+    qb = np.einsum("tij,tj->ti", R, db)
+    m = _cross(qa, qb)
+    nm = np.linalg.norm(m, axis=1, keepdims=True)
+    mh = m / nm
+    r = np.stack([np.einsum("ti,ti->t", mh, ray_a), np.einsum("ti,ti->t", mh, ray_b)], axis=1)
+    if not jacobian:
+        return r
+    # d q / d x = -R e_x, d q / d y = -R e_y (same for both end points); d q / d yaw = R' (P - C).
+    Rp = np.stack([np.stack([c, s, z], 1), np.stack([sp * s, -sp * c, z], 1), np.stack([-cp * s, cp * c, z], 1)], 1)
+    J = np.empty(r.shape + (3,))
+    for k in range(3):
+        if k < 2:
+            dqa = dqb = -R[:, :, k]
+            dm = _cross(dqa, qb) + _cross(qa, dqb)
+        else:
+            dm = _cross(np.einsum("tij,tj->ti", Rp, da), qb) + _cross(qa, np.einsum("tij,tj->ti", Rp, db))
+        dmh = (dm - mh * np.einsum("ti,ti->t", mh, dm)[:, None]) / nm
+        J[:, 0, k] = np.einsum("ti,ti->t", dmh, ray_a)
+        J[:, 1, k] = np.einsum("ti,ti->t", dmh, ray_b)
+    return r, J
 
 
-def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height):
+def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=None, iterations=_ITERATIONS):
     """Gauss-Newton on all hypotheses together.
 
     ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,), model segment
     end points ``seg_a, seg_b`` (T, 3) world, unit rays of the image line end
-    points ``ray_a, ray_b`` (T, 3) camera frame. Returns poses (H, 3)."""
+    points ``ray_a, ray_b`` (T, 3) camera frame. With ``robust_scale`` (T,)
+    (radians), residuals are weighted by Cauchy's ``1 / (1 + (r / scale)^2)``
+    (iteratively reweighted), so that one wrong match does not drag the pose
+    of the others away. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
-    for _ in range(_ITERATIONS):
-        r0 = _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height)
-        J = np.empty(r0.shape + (3,))
-        for k in range(3):
-            dp = params.copy()
-            dp[:, k] += _STEPS[k]
-            J[..., k] = (_residuals(dp, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height) - r0) / _STEPS[k]
-        JtJ = np.einsum("tsi,tsj->tij", J, J)
-        Jtr = np.einsum("tsi,ts->ti", J, r0)
+    for _ in range(iterations):
+        r0, J = _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=True)
+        w = np.ones_like(r0) if robust_scale is None else 1.0 / (1.0 + (r0 / robust_scale[:, None]) ** 2)
+        JtJ = np.einsum("tsi,ts,tsj->tij", J, w, J)
+        Jtr = np.einsum("tsi,ts,ts->ti", J, w, r0)
         A = np.zeros((H, 3, 3))
         b = np.zeros((H, 3))
         np.add.at(A, hyp, JtJ)
