@@ -407,6 +407,7 @@ def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
     assert r.returncode == 0, r.stderr
     html = out.read_text()
     assert "window.__VISER_EMBED_DATA__=" in html
+    assert 'id="mapkit-legend"' in html and "flat.lmap" in html and "floor segments" in html
     # Nothing to fetch: no external scripts, styles or fonts.
     assert "<script src=\"http" not in html and "<link rel=\"stylesheet\" href=\"http" not in html
     assert not list(tmp_path.glob("*.tmp"))

@@ -48,7 +48,9 @@ def run(args) -> int:
     if args.html:
         from mapkit.view.snapshot import write_snapshot
 
-        size = write_snapshot(m, args.html, plan=plan, result=result, camera=camera)
+        from pathlib import Path
+
+        size = write_snapshot(m, args.html, plan=plan, result=result, camera=camera, title=Path(args.map).name)
         print(f"mapkit view: wrote {args.html} ({size / 1e6:.1f} MB); open it in a browser, no server needed")
         return 0
 

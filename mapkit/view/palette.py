@@ -85,20 +85,23 @@ def colour_regions(n: int, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     return colour
 
 
-def legend_html() -> str:
-    """HTML rows: a coloured swatch and the name of every segment kind and overlay."""
+def legend_html(interactive: bool = True) -> str:
+    """HTML rows: a coloured swatch and the name of every segment kind and
+    overlay (``interactive=False``: only what a static snapshot shows)."""
     rows = [(KIND_COLOURS[k], f"{k.label} segments") for k in SegmentKind]
-    rows += [
-        (WALL, "walls (extruded)"),
-        (REGION_PALETTE[0], "regions"),
-        (SELECTED_REGION, "clicked region"),
-        (SELECTED_SEGMENTS, "its visible segments"),
-        (POSE_DISK, "pose: disk, retained regions"),
-        (CANDIDATE, "candidates in view"),
-        (CANDIDATE_OUT_OF_VIEW, "candidates out of view"),
-        (MATCHED, "matched segments (result)"),
-        (RAYS, "image lines as rays (result)"),
-    ]
+    rows += [(WALL, "walls (extruded)"), (REGION_PALETTE[0], "regions")]
+    if not interactive:
+        rows += [(MATCHED, "matched segments (result)"), (RAYS, "image lines as rays (result)")]
+    else:
+        rows += [
+            (SELECTED_REGION, "clicked region"),
+            (SELECTED_SEGMENTS, "its visible segments"),
+            (POSE_DISK, "pose: disk, retained regions"),
+            (CANDIDATE, "candidates in view"),
+            (CANDIDATE_OUT_OF_VIEW, "candidates out of view"),
+            (MATCHED, "matched segments (result)"),
+            (RAYS, "image lines as rays (result)"),
+        ]
     cells = "".join(
         f'<div style="display:flex;align-items:center;gap:6px;font-size:12px">'
         f'<span style="display:inline-block;width:14px;height:14px;border-radius:2px;'

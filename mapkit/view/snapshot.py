@@ -3,9 +3,10 @@
 viser (1.x) serialises a server's scene messages into its own single-file web
 client (``SceneApi.as_html``): the client bundle is inlined and the scene is
 embedded as base64, so the file opens from ``file://`` with no server and no
-network. Only the 3D scene travels; the GUI panel (legend, pose tool) needs
-the live server. The pose tool is hidden first so the snapshot shows the map
-itself (and a matcher result, if one is given).
+network. Only the 3D scene travels; the GUI panel (pose tool, selection)
+needs the live server, so a static legend box is added to the page instead.
+The pose tool is hidden first so the snapshot shows the map itself (and a
+matcher result, if one is given).
 """
 
 from __future__ import annotations
@@ -14,10 +15,25 @@ import os
 import tempfile
 from pathlib import Path
 
+import html
+
 from mapkit.lmap import LineMap
+from mapkit.view.palette import legend_html
 
 
-def snapshot_html(m: LineMap, plan=None, result=None, camera=None) -> str:
+def legend_box(m: LineMap, title: str) -> str:
+    """A fixed box in the page's lower-left corner: title, counts and the legend."""
+    return (
+        '<div id="mapkit-legend" style="position:fixed;left:10px;bottom:10px;z-index:1000;max-width:420px;'
+        "padding:8px 10px;background:rgba(255,255,255,0.92);border-radius:6px;box-shadow:0 1px 4px rgba(0,0,0,.3);"
+        'font-family:sans-serif;color:#222">'
+        f"<div style=\"font-weight:600;font-size:13px\">{html.escape(title)}</div>"
+        f'<div style="font-size:12px">{m.n_segments} segments, {m.n_regions} regions</div>'
+        f"{legend_html(interactive=False)}</div>"
+    )
+
+
+def snapshot_html(m: LineMap, plan=None, result=None, camera=None, title: str = "mapkit map") -> str:
     """The HTML text of the snapshot."""
     from mapkit.view.server import Inspector
 
@@ -25,14 +41,17 @@ def snapshot_html(m: LineMap, plan=None, result=None, camera=None) -> str:
     try:
         inspector.panel.pose.show.value = False  # removes the pose tool's nodes
         inspector.update_pose()
-        return inspector.server.scene.as_html()
+        page = inspector.server.scene.as_html()
     finally:
         inspector.stop()
+    end = page.rindex("</body>")
+    return page[:end] + legend_box(m, title) + page[end:]
 
 
-def write_snapshot(m: LineMap, path: str | os.PathLike, plan=None, result=None, camera=None) -> int:
+def write_snapshot(m: LineMap, path: str | os.PathLike, plan=None, result=None, camera=None,
+                   title: str = "mapkit map") -> int:
     """Write the snapshot to ``path`` atomically; returns its size in bytes."""
-    text = snapshot_html(m, plan=plan, result=result, camera=camera).encode("utf-8")
+    text = snapshot_html(m, plan=plan, result=result, camera=camera, title=title).encode("utf-8")
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
     try:
