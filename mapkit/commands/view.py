@@ -12,7 +12,8 @@ def add_arguments(p) -> None:
     p.add_argument("--lines", metavar="LINES.json", help="image lines of the result, if the result holds none")
     p.add_argument("--camera", metavar="CAM.json", help="camera to use instead of the one recorded in the map")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1; 0.0.0.0 for all)")
-    p.add_argument("--port", type=int, default=8080, help="port (default 8080; 0 takes any free port)")
+    p.add_argument("--port", type=int, default=8080,
+                   help="port (default 8080; if it is busy the next free one is used; 0 takes any free port)")
     p.add_argument("--html", metavar="OUT.html",
                    help="write a standalone HTML snapshot of the 3D scene (opens from file://, no server) and exit")
 
