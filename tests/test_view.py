@@ -479,3 +479,20 @@ def test_cli_plan_and_result_on_a_real_map(built_flat, tmp_path):
     r = _mapkit("view", str(map_path), "--plan", plan_path, "--result", str(res), "--html", str(out))
     assert r.returncode == 0, r.stderr
     assert out.stat().st_size > 100_000
+
+
+def test_degenerate_maps_open():
+    """No regions, no walls: the inspector still opens and says so instead of crashing."""
+    from shapely.geometry import MultiPolygon
+
+    segs = np.array([[[0, 0, 0], [4, 0, 0]], [[0, 0, 0], [0, 0, 2.5]]], dtype=float)
+    empty = assemble_map(segs, [SegmentKind.FLOOR, SegmentKind.VERTICAL], [], [], MultiPolygon(), {})
+    with Inspector(empty, port=0) as ins:
+        assert ins.select_at(1.0, 1.0) is None
+        assert ins.panel.pose.summary.content.startswith("**0 regions**")
+        assert ins.camera_source.startswith("default")
+    no_walls = assemble_map(segs, [SegmentKind.FLOOR, SegmentKind.VERTICAL], [box(0, 0, 2, 2)], [[0]],
+                            MultiPolygon(), {})
+    with Inspector(no_walls, port=0) as ins:
+        assert ins.select_at(1.0, 1.0) == 0
+        assert ins.server.scene.get_handle_by_name("/walls") is None
