@@ -240,3 +240,27 @@ def test_walls_that_enclose_nothing(tmp_path):
 def test_absurd_units_and_options(options, message):
     with pytest.raises(MapkitError, match=message):
         load_scene(HOSPITAL, options)
+
+
+# ---- small edge-case files (tests/data/mesh, each says what it holds) ----------
+
+
+def test_needle_at_a_t_junction_keeps_the_box_closed():
+    from mapkit.mesh_edges import edge_faces, feature_edges
+
+    mesh, _ = load_mesh(DATA / "mesh" / "t_junction_needle.obj", BuildOptions())
+    assert set(edge_faces(mesh.faces).counts) == {2}  # no border left where the needle was
+    seg, kinds = feature_edges(mesh, 30.0, 0.2)
+    assert {K(k).name: int(c) for k, c in zip(*np.unique(kinds, return_counts=True))} == {
+        "FLOOR": 4, "CEILING": 4, "VERTICAL": 4
+    }
+
+
+@pytest.mark.parametrize("name", ["sheet_walls.obj", "inside_out_room.obj"])
+def test_rooms_without_wall_thickness(name):
+    """Single-surface walls, and a closed room box seen from inside (negative
+    volume): both have walls of no thickness, given MESH_THIN_WALL."""
+    s = load_scene(DATA / "mesh" / name, BuildOptions(robot_radius=0.2))
+    assert kinds_count(s) == {"FLOOR": 4, "CEILING": 4, "VERTICAL": 4}
+    assert s.walls.area == pytest.approx(16 * 0.05, rel=0.02)
+    assert s.free_space.area == pytest.approx((5 - 0.05 - 0.4) * (3 - 0.05 - 0.4), rel=1e-3)
