@@ -45,15 +45,20 @@ _GRID = MERGE / 10
 _CHUNK = 4_000_000
 
 
-def scene_to_mesh(scene: Scene, ceiling: bool = False):
-    """A closed triangle mesh (``trimesh.Trimesh``) of the scene's building."""
+def scene_to_mesh(scene: Scene, ceiling: bool = False, robot_radius: float = 0.0):
+    """A closed triangle mesh (``trimesh.Trimesh``) of the scene's building.
+
+    ``robot_radius`` is what the importer shrank the free space by; the
+    floor slab grows it back where the free space is not enclosed by walls
+    (open plans).
+    """
     import trimesh
 
     height = float(scene.wall_height)
     if not height > 0:
         raise ValueError(f"wall_height must be positive, got {height}")
     levels, bands = wall_bands(scene)
-    slab = floor_region(scene, bands[0])
+    slab = floor_region(scene, bands[0], robot_radius)
 
     # (region, z, faces up?) for every horizontal cap.
     caps = [(bands[0], 0.0, False)]
@@ -104,15 +109,15 @@ def wall_bands(scene: Scene) -> tuple[list[float], list[MultiPolygon]]:
     return levels, bands
 
 
-def floor_region(scene: Scene, ground_band) -> MultiPolygon:
+def floor_region(scene: Scene, ground_band, robot_radius: float = 0.0) -> MultiPolygon:
     """Where the floor slab goes: the rooms the walls enclose, the free space
-    (open plans) and the doorways, minus the wall material standing at z = 0."""
+    (grown back by ``robot_radius``: open plans) and the doorways, minus the
+    wall material standing at z = 0."""
     full = shapely.union_all([scene.walls, *[o.footprint for o in scene.openings]])
     rooms = [Polygon(ring) for p in polygon_parts(full) for ring in p.interiors]
     free = scene.free_space
-    robot = float(scene.info.get("robot_radius", 0.0)) if isinstance(scene.info, dict) else 0.0
-    if robot > 0 and not free.is_empty:
-        free = free.buffer(robot, join_style="mitre")
+    if robot_radius > 0 and not free.is_empty:
+        free = free.buffer(robot_radius, join_style="mitre")
     doors = [o.footprint for o in scene.openings if o.sill <= MERGE]
     region = shapely.union_all([*rooms, free, *doors])
     return _snap(shapely.difference(region, ground_band))

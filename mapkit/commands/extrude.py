@@ -38,7 +38,7 @@ def run(args) -> int:
     scene = load_scene(args.plan, options)
     if scene.walls.is_empty:
         raise MapkitError(f"{args.plan}: no walls to extrude; check the layer choice with 'mapkit preview'")
-    mesh = scene_to_mesh(scene, ceiling=args.ceiling)
+    mesh = scene_to_mesh(scene, ceiling=args.ceiling, robot_radius=options.robot_radius)
     data = mesh.export(file_type=kind)
     write_atomic(out, data if isinstance(data, (bytes, str)) else bytes(data))
     if not args.quiet:

@@ -176,9 +176,7 @@ def as_multipolygon(geom) -> MultiPolygon:
     """The polygonal parts of any shapely geometry as one MultiPolygon."""
     if geom is None or geom.is_empty:
         return MultiPolygon()
-    parts = [g for g in shapely.get_parts(geom) if g.geom_type == "Polygon" and not g.is_empty]
-    nested = [p for g in shapely.get_parts(geom) if g.geom_type == "MultiPolygon" for p in g.geoms]
-    return MultiPolygon(parts + nested)
+    return MultiPolygon([g for g in shapely.get_parts(geom) if g.geom_type == "Polygon" and not g.is_empty])
 
 
 def boundary_outline(vertices: np.ndarray, faces: np.ndarray) -> MultiPolygon:
