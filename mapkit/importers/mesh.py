@@ -46,7 +46,7 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     # The section must cut the walls: keep it strictly between floor and top.
     z = float(np.clip(cam_h, MESH_LEVEL, top - MESH_LEVEL))
     if z != cam_h:
-        warnings.append(f"camera height {cam_h:g} m is outside the walls (0 to {top:.3g} m); walls cut at {z:.3g} m")
+        _warn(warnings, f"camera height {cam_h:g} m is outside the walls (0 to {top:.3g} m); walls cut at {z:.3g} m")
 
     sections = MeshSections(mesh)
     walls, _ = sections.cut(z)
@@ -57,7 +57,7 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     low = [sections.cut(h)[0] for h in MESH_OBSTACLE_HEIGHTS if h < top]
     obstacles = as_multipolygon(shapely.difference(shapely.union_all(low), walls)) if low else MultiPolygon()
 
-    if info["floor"].startswith("floor"):
+    if info["floor_faces"]:
         area = floor_area(mesh)
     else:
         area = enclosed_rooms(sections, mesh, top, z)
@@ -74,7 +74,8 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
 
     segments, kinds = feature_edges(mesh, options.crease_deg, options.min_edge_length, 0.0, top)
     segments, kinds, hidden_warnings = drop_hidden(segments, kinds, sections, options.min_edge_length)
-    warnings += hidden_warnings
+    for w in hidden_warnings:
+        _warn(warnings, w)
     segments, kinds = merge_overlapping(segments, kinds)
     counts = np.bincount(kinds, minlength=len(KIND_NAMES))
     info.update(
@@ -93,6 +94,12 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
         kinds=kinds,
         info=info,
     )
+
+
+def _warn(warnings: list[str], message: str) -> None:
+    """Report a decision once: to the log and in ``scene.info["warnings"]``."""
+    log.warning(message)
+    warnings.append(message)
 
 
 def floor_area(mesh) -> MultiPolygon:

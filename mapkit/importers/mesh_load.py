@@ -77,6 +77,7 @@ def load_mesh(path: Path, options: BuildOptions):
         "scale": factor,
         "up": options.up,
         "floor": "floor faces" if has_floor else "lowest point (no floor faces)",
+        "floor_faces": bool(has_floor),
         "floor_offset_m": float(floor_z),
         "ceiling": "ceiling faces" if has_ceiling else "highest point (no ceiling faces)",
         "wall_height_m": top,
