@@ -345,6 +345,11 @@ def _scene_names(port: int, timeout: float = 10.0) -> set[str]:
     return names
 
 
+def test_unique_edges_draw_shared_edges_once():
+    e = np.array([[[0, 0], [1, 0]], [[1, 0], [0, 0]], [[1, 0], [1, 1]], [[0, 0], [1, 0.00001]]], dtype=float)
+    assert geometry.unique_edges(e).tolist() == [[[0, 0], [1, 0]], [[1, 0], [1, 1]]]
+
+
 def test_server_sends_the_scene_nodes_to_a_websocket_client(inspector):
     names = _scene_names(inspector.port)
     for expected in ("/segments/floor", "/segments/ceiling", "/segments/vertical", "/segments/jamb",
@@ -429,6 +434,11 @@ def test_a_large_map_opens_fast():
         elapsed = time.perf_counter() - t0
         assert {"/regions/fill", "/regions/outlines", "/walls", "/segments/floor"} <= names
         assert elapsed < 3.0, f"opening took {elapsed:.2f} s (build {ins.build_seconds:.2f} s)"
+        # Thousands of outlines start hidden (first-frame cost); their toggle shows them.
+        outlines = ins.server.scene.get_handle_by_name("/regions/outlines")
+        assert not outlines.visible and not ins.panel.toggles["region outlines"].value
+        ins.panel.toggles["region outlines"].value = True
+        assert outlines.visible
         # Interaction stays quick: a click and a pose change each well under a second.
         t1 = time.perf_counter()
         x, y = big.region_centres()[2000]

@@ -37,6 +37,18 @@ def ring_edges(points: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.
     return np.stack([points, points[nxt]], axis=1), ring
 
 
+def unique_edges(edges: np.ndarray, quantum: float = 1e-4) -> np.ndarray:
+    """(E, 2, 2) edges without repeats: an edge shared by two neighbouring
+    regions is drawn once (end points compared at ``quantum`` metres, either order)."""
+    if len(edges) == 0:
+        return edges
+    q = np.round(edges / quantum).astype(np.int64).reshape(-1, 4)
+    swap = (q[:, 0] > q[:, 2]) | ((q[:, 0] == q[:, 2]) & (q[:, 1] > q[:, 3]))
+    q[swap] = q[swap][:, [2, 3, 0, 1]]
+    _, first = np.unique(q, axis=0, return_index=True)
+    return edges[np.sort(first)]
+
+
 def _even_odd_polygons(points: np.ndarray, offsets: np.ndarray, group: np.ndarray, n_groups: int) -> np.ndarray:
     """One shapely geometry per group from rings under the even-odd rule.
 

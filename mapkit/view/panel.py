@@ -52,9 +52,10 @@ class Panel:
     stats: object = None
 
 
-def build_panel(gui, layer_names: list[str], bounds: tuple[np.ndarray, np.ndarray], start: tuple[float, float],
+def build_panel(gui, layer_names: dict[str, bool], bounds: tuple[np.ndarray, np.ndarray], start: tuple[float, float],
                 blank: np.ndarray, stats_md: str, camera_note: str, has_result: bool) -> Panel:
-    """Create every GUI element. ``bounds`` are the map's (min, max) corners,
+    """Create every GUI element. ``layer_names`` maps each toggle to its initial
+    state, ``bounds`` are the map's (min, max) corners,
     ``start`` the initial pose position, ``blank`` the empty synthetic image."""
     panel = Panel()
     gui.configure_theme(control_width="large")
@@ -85,8 +86,8 @@ def build_panel(gui, layer_names: list[str], bounds: tuple[np.ndarray, np.ndarra
                                                format="png")
             panel.pose_from_result = gui.add_button("Move the pose tool to the result")
     with gui.add_folder("Layers", expand_by_default=False):
-        for name in layer_names:
-            panel.toggles[name] = gui.add_checkbox(name, initial_value=True)
+        for name, shown in layer_names.items():
+            panel.toggles[name] = gui.add_checkbox(name, initial_value=shown)
     with gui.add_folder("Statistics", expand_by_default=False):
         panel.stats = gui.add_markdown(stats_md)
     return panel

@@ -20,7 +20,7 @@ import trimesh
 
 from mapkit.lmap import LineMap, SegmentKind
 from mapkit.view import palette
-from mapkit.view.geometry import Triangles, extrude, lift, ring_edges, wall_polygon
+from mapkit.view.geometry import Triangles, extrude, lift, ring_edges, unique_edges, wall_polygon
 
 #: Heights of the floor layers (metres): fills lowest, then outlines, then
 #: the highlights drawn by the inspector; model segments at z = 0 above all.
@@ -28,6 +28,11 @@ Z_FILL = -0.012
 Z_OUTLINE = -0.008
 Z_RETAINED = -0.006
 Z_SELECTED = -0.004
+
+#: Above this many regions the outlines start hidden (their toggle shows
+#: them): thousands of screen-space lines cost about a second of the first
+#: frame in software WebGL, and neighbouring fills already differ in colour.
+OUTLINES_SHOWN_UP_TO = 2000
 
 #: Line widths in screen pixels (independent of zoom, so a whole building stays legible).
 SEGMENT_PX = 2.5
@@ -40,6 +45,9 @@ class MapLayers:
     """Handles of the static layers, by the name of the GUI toggle that shows them."""
 
     handles: dict[str, list] = field(default_factory=dict)
+
+    def visible(self, layer: str) -> bool:
+        return all(h.visible for h in self.handles.get(layer, []))
 
     def set_visible(self, layer: str, visible: bool) -> None:
         for h in self.handles.get(layer, []):
@@ -110,10 +118,11 @@ def add_regions(scene, m: LineMap, tris: Triangles, region_colour: np.ndarray, l
         h = scene.add_mesh_trimesh("/regions/fill", mesh, cast_shadow=False, receive_shadow=False)
         layers.handles.setdefault("region fills", []).append(h)
     edges, _ = ring_edges(m.ring_points, m.ring_offsets)
+    edges = unique_edges(edges)  # neighbours share most edges: half the lines to draw
     if len(edges):
         h = scene.add_line_segments(
             "/regions/outlines", lift(edges, Z_OUTLINE).astype(np.float32), palette.OUTLINE,
-            thickness=OUTLINE_PX, thickness_units="screen",
+            thickness=OUTLINE_PX, thickness_units="screen", visible=m.n_regions <= OUTLINES_SHOWN_UP_TO,
         )
         layers.handles.setdefault("region outlines", []).append(h)
 

@@ -90,7 +90,9 @@ class Inspector:
         start = self._start_position()
         stats_md = statistics_markdown(map_statistics(m, map_path))
         cam_note = f"{self.camera.width}x{self.camera.height}, camera from {self.camera_source}"
-        layer_names = list(self.layers.handles) + (["matcher result"] if result else [])
+        layer_names = {name: self.layers.visible(name) for name in self.layers.handles}
+        if result is not None:
+            layer_names["matcher result"] = True
         self.panel = build_panel(self.server.gui, layer_names, (lo, hi), start, blank_image(self.camera), stats_md,
                                  cam_note, result is not None)
         self._wire()
