@@ -114,6 +114,8 @@ def test_two_rooms_round_trip_gives_the_plan_edges(tmp_path):
     assert counts == {"FLOOR": 16, "CEILING": 12, "VERTICAL": 20, "HORIZONTAL": 12}
     # Free space: the rooms and the doorway, shrunk by the robot radius.
     assert back.free_space.symmetric_difference(s.free_space).area < 0.01
+    # At camera height both openings are open: the walls are the plan's.
+    assert back.walls.symmetric_difference(s.walls).area < 1e-3
 
 
 def test_ceiling_hides_the_outer_top_edges(tmp_path):
@@ -143,6 +145,8 @@ def test_flat_dxf_round_trip_matches_the_plan_edges(tmp_path):
     plan = load_scene(FLAT, options)
     plan_seg, plan_kind = extract_edges(plan, options)
     back = round_trip(plan, tmp_path, options)
+    # The model is closed solids: its section at camera height is the plan's walls.
+    assert back.walls.symmetric_difference(plan.walls).area < 0.01 * plan.walls.area
 
     def borderline(seg):
         return np.abs(np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1) - options.min_edge_length) < 0.01

@@ -123,18 +123,31 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[np.ndarray, np.ndarray]:
-    """Merge vertices closer than about ``tol`` (snapped to a ``tol`` grid).
+    """Merge vertices closer than ``tol``.
 
+    Vertices are clustered (k-d tree pairs within ``tol``, connected
+    components), not rounded to a grid: two copies of a corner straddling a
+    grid line would stay apart and leave a sliver that opens the mesh.
     Drops faces that collapse (two corners merged) and exact repeats (same
     corners in the same order), and removes needle triangles (corners in a
     line: T-junction fillers) by splitting their neighbour instead, so that
     a closed mesh stays closed. Returns the used vertices (V', 3) and the
     faces (F', 3) re-indexed.
     """
-    key = np.round(vertices / tol).astype(np.int64)
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    faces = inverse.reshape(-1)[faces]
-    merged = vertices[first]
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    # Exact copies first (cheap), then clusters of the distinct points.
+    distinct, inverse = _unique_rows(vertices)
+    pairs = cKDTree(distinct).query_pairs(tol, output_type="ndarray")
+    n = len(distinct)
+    graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, cluster = connected_components(graph, directed=False)
+    first = np.full(cluster.max() + 1, -1)
+    first[cluster[::-1]] = np.arange(n)[::-1]  # the lowest index stands for its cluster
+    merged = distinct[first]
+    faces = cluster[inverse.reshape(-1)][faces]
     ok = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
     faces = faces[ok]
     # Same triangle, same orientation: rotate each row to start at its smallest id.
@@ -145,6 +158,18 @@ def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[n
     faces = split_needles(merged, faces, tol)
     used, faces = np.unique(faces, return_inverse=True)
     return merged[used], faces.reshape(-1, 3)
+
+
+def _unique_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct rows of ``points`` (P, 3) and the (P,) index of each row in
+    them; a lexsort, several times faster than ``np.unique(axis=0)``."""
+    order = np.lexsort(points.T[::-1])
+    ordered = points[order]
+    new = np.r_[True, (ordered[1:] != ordered[:-1]).any(axis=1)]
+    group = np.cumsum(new) - 1
+    inverse = np.empty(len(points), dtype=np.int64)
+    inverse[order] = group
+    return ordered[new], inverse
 
 
 #: Needle repair passes; each pass fixes every needle whose neighbour is not
@@ -158,8 +183,8 @@ def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -
 
     A needle (a, c, b) with c on the edge a-b fills a T-junction: the face
     (a, b, x) on the other side becomes (a, c, x) and (c, b, x), with its
-    orientation kept, and the needle goes. Needles with no single neighbour
-    across the long edge are dropped as they are.
+    orientation kept, and the needle goes. Needles with no single plain
+    neighbour across the long edge (two needles making a sliver) are kept.
     """
     for _ in range(_NEEDLE_PASSES):
         tri = vertices[faces]
@@ -184,11 +209,12 @@ def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -
         s0 = topo.starts[e]
         other = np.where(topo.face[s0] == ids, topo.face[np.minimum(s0 + 1, len(topo.face) - 1)], topo.face[s0])
         usable = single & ~needle[other]
+        if not usable.any():
+            return faces  # the rest have no plain neighbour: keep them (dropping would open the mesh)
         _, first = np.unique(np.where(usable, other, -1 - np.arange(len(ids))), return_index=True)
         claim = np.zeros(len(ids), dtype=bool)
         claim[first] = True
         fix = usable & claim
-        drop = ~usable
         nb = other[fix]
         row = faces[nb]
         # Rotate the neighbour to (p, q, x) with p-q its copy of the long edge.
@@ -200,7 +226,7 @@ def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -
         new = np.concatenate([np.stack([p, cc, x], axis=1), np.stack([cc, q, x], axis=1)])
         remove = np.zeros(len(faces), dtype=bool)
         remove[nb] = True
-        remove[ids[fix | drop]] = True
+        remove[ids[fix]] = True
         faces = np.concatenate([faces[~remove], new])
     return faces
 
