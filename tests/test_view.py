@@ -82,7 +82,8 @@ def test_region_polygons_and_triangles_respect_holes():
     assert polys[1].area == pytest.approx(4)
     tris = geometry.triangulate(polys)
     v = tris.vertices.reshape(-1, 3, 2)
-    area = 0.5 * np.abs(np.cross(np.c_[v[:, 1] - v[:, 0], np.zeros(len(v))], np.c_[v[:, 2] - v[:, 0], np.zeros(len(v))])[:, 2])
+    e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     per_region = np.bincount(tris.owner, weights=area)
     assert per_region == pytest.approx([12, 4])
     # No triangle of region 0 lies in its hole.

@@ -49,11 +49,13 @@ def synthetic_flat(
     for i in range(1, nx):  # walls between columns of rooms, one doorway per room
         x = i * rw
         walls = walls.union(box(x - t / 2, 0, x + t / 2, height))
-        doors += [box(x - t, (j + 0.5) * rh - door_width / 2, x + t, (j + 0.5) * rh + door_width / 2) for j in range(ny)]
+        mids = [(j + 0.5) * rh for j in range(ny)]
+        doors += [box(x - t, c - door_width / 2, x + t, c + door_width / 2) for c in mids]
     for j in range(1, ny):
         y = j * rh
         walls = walls.union(box(0, y - t / 2, width, y + t / 2))
-        doors += [box((i + 0.3) * rw - door_width / 2, y - t, (i + 0.3) * rw + door_width / 2, y + t) for i in range(nx)]
+        mids = [(i + 0.3) * rw for i in range(nx)]
+        doors += [box(c - door_width / 2, y - t, c + door_width / 2, y + t) for c in mids]
     door_union = shapely.union_all(doors)
     walls = walls.difference(door_union)
     # A column in every other room: holes in the regions, more vertical corners.
