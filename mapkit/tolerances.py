@@ -108,6 +108,11 @@ MESH_FLOOR_RISE = 0.5
 #: thickness, metres, so that they occlude and bound the free space.
 MESH_THIN_WALL = 0.05
 
+#: A connected surface whose border edges make more than this fraction of
+#: its edge length is an open sheet (thickened as above); below it, a solid
+#: with a few holes (a lost sliver, a scan gap).
+MESH_OPEN_FRACTION = 0.05
+
 #: Heights above the floor, metres, of the extra sections that find low
 #: obstacles (parapets under windows, desks, table legs): the robot cannot
 #: stand there although the camera sees over them.

@@ -264,3 +264,14 @@ def test_rooms_without_wall_thickness(name):
     assert kinds_count(s) == {"FLOOR": 4, "CEILING": 4, "VERTICAL": 4}
     assert s.walls.area == pytest.approx(16 * 0.05, rel=0.02)
     assert s.free_space.area == pytest.approx((5 - 0.05 - 0.4) * (3 - 0.05 - 0.4), rel=1e-3)
+
+
+def test_a_hole_in_a_solid_leaves_it_solid(tmp_path):
+    """One triangle missing (a scan gap): the walls still read as solids,
+    not as sheets (which would make hollow outlines of them)."""
+    m = trimesh.load(HOSPITAL, process=False)
+    keep = np.ones(len(m.faces), dtype=bool)
+    keep[10] = False
+    (tmp_path / "holed.stl").write_bytes(trimesh.Trimesh(m.vertices, m.faces[keep], process=False).export(file_type="stl"))
+    whole, holed = load_scene(HOSPITAL), load_scene(tmp_path / "holed.stl")
+    assert holed.walls.symmetric_difference(whole.walls).area < 1e-3

@@ -23,7 +23,7 @@ from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiLineString, MultiPolygon
 
 from mapkit.mesh_edges import edge_faces, face_normals
-from mapkit.tolerances import MERGE, MESH_THIN_WALL
+from mapkit.tolerances import MERGE, MESH_OPEN_FRACTION, MESH_THIN_WALL
 
 #: Points per chunk in winding-number tests (memory: chunk x segments booleans).
 _CHUNK = 2_000_000
@@ -76,9 +76,10 @@ class MeshSections:
 def open_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(F,) bool: faces of surfaces that do not bound a solid.
 
-    A connected surface (faces joined through shared edges) is open if it
-    has a border edge, or if it is closed but inside out (negative volume:
-    a room modelled as a box seen from within).
+    A connected surface (faces joined through shared edges) is open if its
+    border edges make more than ``MESH_OPEN_FRACTION`` of its edge length,
+    or if it is closed but inside out (negative volume: a room modelled as
+    a box seen from within).
     """
     topo = edge_faces(faces)
     counts = topo.counts
@@ -88,8 +89,13 @@ def open_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     idx = np.nonzero(follows)[0]
     graph = coo_matrix((np.ones(len(idx), dtype=np.int8), (topo.face[idx - 1], topo.face[idx])), shape=(len(faces),) * 2)
     _, label = connected_components(graph, directed=False)
-    bordered = np.zeros(label.max() + 1, dtype=bool)
-    bordered[label[topo.face[topo.starts[:-1][counts == 1]]]] = True
+    # Border length per surface, against all its edge length: a few short
+    # holes (a sliver lost in welding, a scan gap) leave a solid a solid.
+    edge_len = np.linalg.norm(vertices[topo.edges[:, 1]] - vertices[topo.edges[:, 0]], axis=1)
+    edge_label = label[topo.face[topo.starts[:-1]]]
+    total = np.bincount(edge_label, weights=edge_len)
+    border = np.bincount(edge_label, weights=edge_len * (counts == 1), minlength=len(total))
+    bordered = border > MESH_OPEN_FRACTION * total
     tri = vertices[faces]
     signed = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
     volume = np.bincount(label, weights=signed)
