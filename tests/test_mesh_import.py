@@ -41,8 +41,12 @@ def room_walls(w=6.0, d=4.0, h=2.5, t=0.2) -> list[trimesh.Trimesh]:
     ]
 
 
-def as_set(segments, digits=3) -> set:
-    return {tuple(sorted(map(tuple, s))) for s in np.round(segments, digits) + 0.0}
+def same_segments(a: np.ndarray, b: np.ndarray, tol: float) -> bool:
+    """Every segment of ``a`` (N, 2, 3) has one in ``b`` with both ends within ``tol``, and back."""
+    fwd = np.abs(a[:, None] - b[None]).max(axis=(2, 3))
+    rev = np.abs(a[:, None] - b[None, :, ::-1]).max(axis=(2, 3))
+    d = np.minimum(fwd, rev)
+    return bool((d.min(axis=1) < tol).all() and (d.min(axis=0) < tol).all())
 
 
 # ---- the real meshes --------------------------------------------------------
@@ -141,7 +145,7 @@ def test_node_transforms_and_y_up(tmp_path):
         transforms.append(to_y_up @ t)
     write_scene_glb(tmp_path / "y.glb", cubes, transforms)
     got = load_scene(tmp_path / "y.glb", BuildOptions(up="y"))
-    assert as_set(got.segments) == as_set(ref.segments)
+    assert same_segments(got.segments, ref.segments, 1e-3)
     assert kinds_count(got) == kinds_count(ref) == {"FLOOR": 8, "CEILING": 8, "VERTICAL": 8}
 
 
@@ -156,7 +160,7 @@ def test_floor_height_units_and_scale(tmp_path):
     (tmp_path / "mm.stl").write_bytes(mm.export(file_type="stl"))
     got = load_scene(tmp_path / "mm.stl", BuildOptions(units="mm"))
     assert got.info["floor_offset_m"] == pytest.approx(5.0)
-    assert as_set(got.segments) == as_set(ref.segments)
+    assert same_segments(got.segments, ref.segments, 1e-3)
     half = load_scene(tmp_path / "mm.stl", BuildOptions(units="mm", scale=0.5))
     assert half.wall_height == pytest.approx(1.25)
 
@@ -275,3 +279,35 @@ def test_a_hole_in_a_solid_leaves_it_solid(tmp_path):
     (tmp_path / "holed.stl").write_bytes(trimesh.Trimesh(m.vertices, m.faces[keep], process=False).export(file_type="stl"))
     whole, holed = load_scene(HOSPITAL), load_scene(tmp_path / "holed.stl")
     assert holed.walls.symmetric_difference(whole.walls).area < 1e-3
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_edges_move_with_the_model(tmp_path, seed):
+    """A seeded random turn about z and shift: the same edges, turned and shifted."""
+    rng = np.random.default_rng(seed)
+    walls = trimesh.util.concatenate(room_walls())
+    (tmp_path / "a.stl").write_bytes(walls.export(file_type="stl"))
+    angle, shift = rng.uniform(0, 2 * np.pi), np.r_[rng.uniform(-50, 50, 2), rng.uniform(-3, 3)]
+    move = trimesh.transformations.rotation_matrix(angle, [0, 0, 1])
+    move[:3, 3] = shift
+    turned = walls.copy()
+    turned.apply_transform(move)
+    (tmp_path / "b.stl").write_bytes(turned.export(file_type="stl"))
+    a, b = load_scene(tmp_path / "a.stl"), load_scene(tmp_path / "b.stl")
+    assert b.info["floor_offset_m"] == pytest.approx(shift[2], abs=1e-3)
+    expected = a.segments @ move[:3, :3].T + np.r_[shift[:2], 0.0]
+    assert kinds_count(a) == kinds_count(b)
+    assert len(b.segments) == len(expected)
+    assert same_segments(b.segments, expected, 1e-3)
+
+
+def test_build_a_map_from_each_real_mesh(tmp_path):
+    """The pipeline takes the mesh scenes through to a .lmap."""
+    from mapkit.cli import main
+    from mapkit.lmap import load_map
+
+    for path in (ROOM, HOSPITAL):
+        out = tmp_path / (path.stem + ".lmap")
+        assert main(["build", str(path), "-o", str(out), "-q"]) == 0
+        m = load_map(out)
+        assert 0 < m.n_segments <= len(load_scene(path).segments) and m.n_regions > 0
