@@ -13,7 +13,7 @@ FORMATS = {".glb": "glb", ".obj": "obj", ".ply": "ply", ".stl": "stl"}
 def add_arguments(p) -> None:
     from mapkit.commands._import_args import add_import_arguments
 
-    p.add_argument("plan", metavar="PLAN", help="DXF plan (or a mesh, to re-export it cleaned)")
+    p.add_argument("plan", metavar="PLAN", help="DXF plan (a mesh gives its walls at camera height as plain prisms)")
     p.add_argument("-o", "--output", required=True, metavar="MODEL", help=f"model to write ({' '.join(FORMATS)})")
     p.add_argument("--ceiling", action="store_true", help="add a ceiling slab on top of the walls")
     add_import_arguments(p)
