@@ -6,12 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from shapely.geometry import Point, box
 
 from mapkit.assemble import assemble_map
 from mapkit.lmap import load_map, save_map
 from mapkit.vir import build_regions
-from mapkit.vir_synthetic import apartment, single_room
+from mapkit.vir_synthetic import apartment, scene_from_walls, single_room
 from matcher.camera import Camera
 from visibility_oracle import VisibilityOracle, random_points
 
@@ -168,3 +170,49 @@ def test_no_occluders_and_no_segments_work():
     seg = np.array([[[2.0, 9.0, 0.0], [2.0, 9.0, 2.5]]])  # a pole 5+ m away, no walls
     part = build_regions(seg, shapely.MultiPolygon(), free, CAMERA)
     assert sum(len(x) for x in part.lists) > 0
+
+
+@pytest.mark.parametrize("pitch, height, max_range, min_len", [(20.0, 1.2, 10.0, 0.3), (-15.0, 0.6, 6.0, 0.5), (0.0, 2.0, 4.0, 0.1)])
+def test_property_holds_for_other_cameras_and_limits(pitch, height, max_range, min_len):
+    """Pitched down (ceiling mostly out of view), pitched up and low (floor
+    edges out of view), short range with a short minimum length."""
+    scene = apartment()
+    cam = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, height, pitch)
+    part = build_regions(scene.segments, scene.walls, scene.free_space, cam, max_range=max_range, min_visible_length=min_len, eps=EPS)
+    oracle = VisibilityOracle(scene.segments, scene.walls, height, cam.elevation_range(), max_range, min_len)
+    _assert_property(part, oracle, random_points(scene.free_space, 60, np.random.default_rng(int(pitch) + 100)))
+
+
+def _assert_property(part, oracle, points):
+    polys = np.array(part.polygons + [None])[:-1]
+    tree = shapely.STRtree(polys)
+    seen_any = 0
+    for q in points:
+        vis = oracle.visible(q)
+        seen_any += len(vis) > 0
+        near = tree.query(Point(q), predicate="dwithin", distance=EPS)
+        assert len(near), q
+        for r in near:
+            assert len(np.setdiff1d(vis, part.lists[r])) == 0, (q, r)
+    assert seen_any > 0
+
+
+@settings(max_examples=6, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_property_holds_in_random_rooms_with_pillars(seed):
+    """A random room with random free-standing pillars and wall stubs."""
+    rng = np.random.default_rng(seed)
+    w, d = rng.uniform(3.0, 9.0, 2)
+    blocks = []
+    for _ in range(rng.integers(1, 5)):
+        cx, cy = rng.uniform([0.8, 0.8], [w - 0.8, d - 0.8])
+        sx, sy = rng.uniform(0.1, 1.5, 2) * (rng.random(2) < [0.5, 0.5]) + 0.1
+        blocks.append(box(cx - sx / 2, cy - sy / 2, cx + sx / 2, cy + sy / 2))
+    interior = box(0, 0, w, d)
+    walls = shapely.union_all([interior.buffer(0.2, join_style="mitre").difference(interior), *blocks])
+    scene = scene_from_walls(walls, interior, [])
+    if scene.free_space.is_empty:
+        return
+    part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS)
+    oracle = VisibilityOracle(scene.segments, scene.walls, CAMERA.height_m, CAMERA.elevation_range(), 10.0, 0.3)
+    _assert_property(part, oracle, random_points(scene.free_space, 25, rng))
