@@ -286,3 +286,13 @@ def test_grid_cells_list_every_region_they_meet():
             k = iy * nx + ix
             listed = set(m.grid_regions[m.grid_offsets[k] : m.grid_offsets[k + 1]].tolist())
             assert {i for i, p in enumerate(polys) if shapely.intersects(p, cell)} <= listed
+
+
+def test_saved_map_has_ordinary_file_mode(tmp_path):
+    import os
+
+    path = tmp_path / "t.lmap"
+    save_map(path, grid_map()[0])
+    mask = os.umask(0)
+    os.umask(mask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~mask

@@ -34,7 +34,7 @@ def add_import_arguments(p) -> None:
 def import_options_from_args(args) -> BuildOptions:
     """BuildOptions holding the import flags of ``args`` (other fields default)."""
     if args.units is not None:
-        from mapkit.importers.dxf_units import canonical_units
+        from mapkit.units import canonical_units
 
         args.units = canonical_units(args.units)  # one-line error for unknown units
     if not (args.scale > 0):

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from mapkit.errors import MapkitError
-from mapkit.importers.dxf_units import UNIT_METRES, canonical_units
+from mapkit.units import UNIT_METRES, canonical_units
 from mapkit.mesh_edges import edge_faces, face_normals
 from mapkit.options import BuildOptions
 from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_FLOOR_RISE, MESH_LEVEL, PLAUSIBLE_EXTENT
