@@ -143,8 +143,11 @@ def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls, extent)
     beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
     j = np.rint(wrap(beta - b0[inv][:, None]) / _SIGHT_STEP).astype(int)
     inside = (j >= 0) & (j < n_b[inv][:, None])
-    idx = starts[inv][:, None] + np.clip(j, 0, n_b[inv][:, None] - 1)
-    lam = np.minimum(reach[idx], extent[:, None])  # (Kv, Y) usable length of the ray
+    # The longest stretch among the bin and its two neighbours: a ray that
+    # just grazes a door jamb is blocked in one bin and clear in the next.
+    hi = n_b[inv][:, None] - 1
+    near_bins = [starts[inv][:, None] + np.clip(j + o, 0, hi) for o in (-1, 0, 1)]
+    lam = np.minimum(np.maximum.reduce([reach[i] for i in near_bins]), extent[:, None])  # (Kv, Y)
     # Distance from the disk centre to the stretch P - s u, s in [0, lam].
     u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
     pc = centre - points[:, None, :]  # (Kv, 1, 2)
@@ -204,6 +207,22 @@ def collinear_classes(segments: np.ndarray, angle_deg: float = 0.5, dist_m: floa
     return label, np.array(reps).reshape(-1, 2, 3)
 
 
+def class_samples(segments: np.ndarray, label: np.ndarray, per_piece: int = 5) -> np.ndarray:
+    """(G, n, 3) points spread over the member segments of each collinear
+    group (``per_piece`` per member, groups padded by repeating points), so
+    that a visibility test sees a narrow visible piece of a long group."""
+    t = np.linspace(0.02, 0.98, per_piece)
+    pts = segments[:, None, 0] + t[None, :, None] * (segments[:, None, 1] - segments[:, None, 0])  # (N, p, 3)
+    G = int(label.max()) + 1 if len(label) else 0
+    size = np.bincount(label, minlength=G)
+    n = per_piece * int(size.max()) if G else per_piece
+    out = np.empty((G, n, 3))
+    for g in range(G):
+        p = pts[label == g].reshape(-1, 3)
+        out[g] = p[np.arange(n) % len(p)]
+    return out
+
+
 def yaw_grid(yaw_e: float, dyaw: float, step: float) -> np.ndarray:
     """(Y,) yaws covering the interval with spacing at most ``step`` (radians)."""
     if dyaw >= math.pi:
@@ -223,12 +242,15 @@ def generate(
     dyaw: float,
     tol: Tolerances,
     walls: tuple[np.ndarray, np.ndarray] | None = None,
+    samples: np.ndarray | None = None,
     debug: dict | None = None,
 ) -> Hypotheses:
     """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
 
     ``walls``: wall edges ``(a (E, 2), b (E, 2))`` for the visibility check
-    of the tree's final test, or None. ``debug``, if a dict, receives the intermediate arrays (for tools)."""
+    of the tree's final test, or None; ``samples`` (N, n, 3) points of each
+    candidate tested for visibility (spread over the pieces of a collinear
+    group, see :func:`collinear_classes`). ``debug``, if a dict, receives the intermediate arrays (for tools)."""
     xe, ye, yaw_e = prior
     step = math.radians(tol.yaw_step_deg)
     h = camera.height_m
@@ -310,7 +332,7 @@ def generate(
         mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt,
                                       (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v], step, walls,
                                       ext)
-    val, _ = posegrid.minimise(quad, dt)
+    val, _, _ = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
     keep = mask.any(axis=1)
     seg_k, line_k, is_v, mask, quad = seg_k[keep], line_k[keep], is_v[keep], mask[keep], quad[keep]
@@ -327,8 +349,8 @@ def generate(
     pm = mask[iu] & mask[ju]
     p, g = np.nonzero(pm)
     qi, qj = quad[iu[p], g], quad[ju[p], g]
-    pval, z = posegrid.minimise(qi + qj, dt)
-    ok = (pval <= 3.0) & (posegrid.evaluate(qi, z) <= tol.q_max) & (posegrid.evaluate(qj, z) <= tol.q_max)
+    pval, zx, zy = posegrid.minimise(qi + qj, dt)
+    ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
     pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
     both_v = is_v[iu] & is_v[ju]
     if both_v.any():
@@ -348,7 +370,8 @@ def generate(
                      uh=uh, ih=ih)
 
     # ---- interpretation tree -------------------------------------------
-    inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls)
+    inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
+                    None if samples is None else samples[seg_k], line_k, seg_k)
     sets, init, truncated, nodes, found = search(inp, tol)
     counts["tree_nodes"] = int(nodes)
     counts["sets_found"] = int(found)

@@ -35,16 +35,18 @@ def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float) -> np.nd
 
 
 def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -> np.ndarray:
-    """(Q,) bool: the floor sight line from ``cam`` (2,) to each of ``points``
-    (Q, 2) crosses no wall edge farther than ``end_margin`` metres from both
-    its ends (the points lie on wall faces; the camera may be a little off)."""
+    """(Q,) bool: the floor sight line from ``cam`` (2,) or (Q, 2) to each of
+    ``points`` (Q, 2) crosses no wall edge farther than ``end_margin`` metres
+    from both its ends (the points lie on wall faces; the camera may be a
+    little off)."""
     if walls is None or len(walls[0]) == 0:
         return np.ones(len(points), dtype=bool)
     ea, eb = walls
+    cam = np.broadcast_to(np.asarray(cam, dtype=float), points.shape)
     r = points - cam
     s = eb - ea
     den = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
-    w = ea[None] - cam[None, None]
+    w = ea[None] - cam[:, None]
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / den
         u = (w[..., 0] * r[:, None, 1] - w[..., 1] * r[:, None, 0]) / den

@@ -11,11 +11,16 @@ from matcher import verify
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
 from matcher.constraints import bearing_noise, plane_noise, vertical_bearing, vertical_candidates, wrap
-from matcher.generate import ImageLines, collinear_classes, generate, in_field_of_view
-from matcher.occlusion import wall_edges
+from matcher.generate import ImageLines, class_samples, collinear_classes, generate, in_field_of_view
+from matcher.occlusion import sight_clear, wall_edges
 from matcher.overlap import distance_and_overlap
 from matcher.result import LocalizeResult
 from matcher.tolerances import DEFAULT, Tolerances
+
+
+#: Stage 2's visibility test ignores wall crossings this close to the
+#: segment, metres (the segment lies on a wall face; the pose is refined).
+_VISIBLE_END_M = 0.02
 
 
 def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLines:
@@ -87,7 +92,9 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     # ---- stage 1 ---------------------------------------------------------
     t1 = time.perf_counter()
     label, reps = collinear_classes(segs)
-    hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, wall_edges(linemap))
+    walls = wall_edges(linemap)
+    hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
+                    class_samples(segs, label))
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
     if n_h == 0:
@@ -109,7 +116,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     # Matches that do not fit at the hypothesis's pose (a clutter line that
     # lay within the stage-1 tolerance of a model line) are dropped and the
     # pose refitted on the others.
-    inl = _fits(camera, img, poses[hyp], segs[local], line_ids, tol)
+    inl = _fits(camera, img, poses[hyp], segs[local], line_ids, tol) & _visible(poses[hyp], segs[local], walls)
     n_in = np.bincount(hyp, inl, minlength=n_h)
     if not inl.all():
         keep = inl & (n_in[hyp] >= tol.min_matches)
@@ -194,6 +201,20 @@ def _fits(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = distance_and_overlap(camera, poses, segments, lines)
     return (dist <= _fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
+
+
+def _visible(poses, segments, walls) -> np.ndarray:
+    """(T,) bool: some point of each segment (T, 2, 3) is in plain sight from
+    the camera at poses (T, 3), walls as occluders. At a refined pose (a
+    centimetre off) a sight line that cuts a wall 2 cm or more from the
+    segment is blocked: it tells the near and far faces of a door jamb apart."""
+    if walls is None:
+        return np.ones(len(poses), dtype=bool)
+    t = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
+    pts = segments[:, None, 0, :2] + t[None, :, None] * (segments[:, None, 1, :2] - segments[:, None, 0, :2])
+    cams = np.repeat(poses[:, :2], len(t), axis=0)
+    clear = sight_clear(cams, pts.reshape(-1, 2), walls, _VISIBLE_END_M)
+    return clear.reshape(len(poses), -1).any(axis=1)
 
 
 def _fit_bound_px(length, tol):

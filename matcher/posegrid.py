@@ -33,21 +33,22 @@ def strip_quadratics(a: np.ndarray, d: np.ndarray, t: np.ndarray) -> np.ndarray:
     )
 
 
-def minimise(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def minimise(q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Minimum over z of ``q(z) + |z|^2/dt^2`` for quadratics q (..., 6).
 
-    Returns ``(value (...), z (..., 2))``."""
+    Returns ``(value (...), zx (...), zy (...))``."""
     inv = 1.0 / (dt * dt)
     axx, axy, ayy = q[..., 0] + inv, q[..., 1], q[..., 2] + inv
     bx, by = q[..., 3], q[..., 4]
     det = axx * ayy - axy * axy
     zx = (ayy * bx - axy * by) / det
     zy = (axx * by - axy * bx) / det
-    val = q[..., 5] - (bx * zx + by * zy)
-    return val, np.stack([zx, zy], axis=-1)
+    return q[..., 5] - (bx * zx + by * zy), zx, zy
 
 
-def evaluate(q: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """q(z) for quadratics (..., 6) and points (..., 2)."""
-    x, y = z[..., 0], z[..., 1]
-    return q[..., 0] * x * x + 2 * q[..., 1] * x * y + q[..., 2] * y * y - 2 * (q[..., 3] * x + q[..., 4] * y) + q[..., 5]
+def evaluate(q: np.ndarray, zx: np.ndarray, zy: np.ndarray) -> np.ndarray:
+    """q(z) for quadratics (..., 6) at points ``(zx, zy)`` (...)."""
+    return (
+        q[..., 0] * zx * zx + 2 * q[..., 1] * zx * zy + q[..., 2] * zy * zy
+        - 2 * (q[..., 3] * zx + q[..., 4] * zy) + q[..., 5]
+    )

@@ -55,8 +55,14 @@ class Tolerances:
     #: Stage 1 stops enumerating after this many consistent sets (a guard
     #: against pathological scenes; the result says so when it is hit).
     max_sets: int = 400
-    #: Stage 1 hands at most this many hypotheses to stage 2: the sets that
-    #: fit best at their grid pose (mean normalised residual). The paper saw
+    #: ...or after this many tree nodes: a time budget (about 0.1 ms each)
+    #: for scenes where the lines leave the pose nearly undetermined, such
+    #: as a row of door jambs along one wall; the sets found by then (the
+    #: greedy dives run first) are kept.
+    max_nodes: int = 1500
+    #: Stage 1 hands at most this many hypotheses to stage 2: the largest
+    #: sets, then those that fit best at their grid pose (mean normalised
+    #: residual). The paper saw
     #: fewer than 25 at its worst prior; more come only from scenes where
     #: the lines leave the pose undetermined (looking along a wall), and the
     #: number of sets found is reported with the result's diagnostics.

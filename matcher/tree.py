@@ -1,19 +1,20 @@
 """The interpretation tree of stage 1: consistent sets of correspondences.
 
-A node is a set R of correspondences (model segment, image line) whose
-feasible pose set is non-empty; its children add one more correspondence
-that is compatible with every member (pairwise graph) and keeps the whole
-set feasible (:mod:`matcher.posegrid`, checked for all candidates at once).
-The search lists the maximal consistent sets, Bron-Kerbosch style: ``P``
-holds the candidates that may still join R, ``X`` those already tried, and
-a pivot of highest degree cuts the branches that could only rebuild a set
-found elsewhere. A branch is cut too when it cannot reach the minimum
-number of matches, which rises to the largest accepted set minus
-``match_slack`` as sets are found.
+The tree of the paper's setting: one level per image line, whose branches
+are the line's candidate model segments (those that passed the unary or
+vertical tests) and "unmatched" (clutter, or a segment not in the lists).
+A node is a set R of correspondences whose feasible pose set is non-empty:
+a child adds a candidate that is pairwise compatible with every member and
+keeps the whole set feasible (:mod:`matcher.posegrid`, checked for all the
+line's candidates at once); a segment is matched once. A branch is cut when
+it cannot reach the minimum number of matches, which rises to the largest
+set found minus ``match_slack``. A leaf is reported if it is maximal (no
+skipped line could join).
 
-Each set found gets a final check at its best grid pose (every matched
-segment has a point in front of the camera and, when the map has walls,
-not hidden behind one), then becomes a hypothesis.
+Once three members pin the position, every matched segment must be in
+front of the camera and, when the map has walls, not hidden behind one at
+the set's best grid pose; each leaf gets that check again before it
+becomes a hypothesis.
 """
 
 from __future__ import annotations
@@ -30,9 +31,8 @@ from matcher.tolerances import Tolerances
 #: far from both its ends, metres: the segment itself lies on a wall face,
 #: and the pose from the grid is a few centimetres off.
 _OCCLUSION_END_M = 0.05
-#: Greedy dives from this many best-connected correspondences before the
-#: exhaustive search (each costs a few tree nodes).
-_GREEDY_SEEDS = 2
+#: Points of a segment tested for visibility (fractions of its length).
+_SAMPLES = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
 _CAMERA_JITTER = np.array([[0.0, 0.0], [0.06, 0.0], [-0.06, 0.0], [0.0, 0.06], [0.0, -0.06]])
 #: Visibility is checked inside the tree only once the set's strips fix the
 #: position to within this (1-sigma of the strips, metres); before that the
@@ -48,7 +48,12 @@ class TreeInput:
     compatibility; ``segments`` (K, 2, 3) the matched model segment (world);
     ``centre`` (3,) the prior camera centre, ``dt`` the disk radius;
     ``forward`` (Y, 3) the optical axis at each grid yaw; ``walls`` a pair of
-    (E, 2) arrays, the wall edges' end points, or None."""
+    (E, 2) arrays, the wall edges' end points, or None; ``vertical`` (K,)
+    bool, correspondences of vertical segments (explored last: each fixes
+    only a bearing, so they are compatible with much and prune little);
+    ``samples`` (K, n, 3) points of the matched model segments tested for
+    visibility (by default 5 along ``segments``); ``line`` and ``seg`` (K,)
+    the image line and model segment (group) of each correspondence."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -59,31 +64,72 @@ class TreeInput:
     dt: float
     forward: np.ndarray
     walls: tuple[np.ndarray, np.ndarray] | None
+    vertical: np.ndarray | None = None
+    samples: np.ndarray | None = None
+    line: np.ndarray | None = None
+    seg: np.ndarray | None = None
 
 
 def search(inp: TreeInput, tol: Tolerances):
     """Maximal consistent sets. Returns ``(sets, inits, truncated, nodes,
     found)``: sets as sorted index arrays, ``inits`` (x, y, yaw) their best
-    grid pose; at most ``max_hypotheses`` of the ``found`` sets, those that
-    fit best."""
+    grid pose; at most ``max_hypotheses`` of the ``found`` sets: the largest,
+    then those that fit best."""
     quad, mask, compat, dt = inp.quad, inp.mask, inp.compat, inp.dt
     K, Y = mask.shape
     sets: list[np.ndarray] = []
-    inits: list[tuple[float, float, float]] = []
+    inits: list[tuple] = []
     state = {"bound": tol.min_matches, "truncated": False, "nodes": 0}
+    weak = np.zeros(K, dtype=bool) if inp.vertical is None else inp.vertical
+    degree = compat.sum(axis=1)
+
+    # Levels: image lines. Lines with a non-vertical candidate first (their
+    # unary constraint fixes the yaw, so the pose gets pinned early), then
+    # by number of candidates. Candidates of a line: most connected first,
+    # so that the first dive tends to follow the true match.
+    lines = np.unique(inp.line)
+    has_strong = np.array([(~weak[inp.line == j]).any() for j in lines])
+    n_cand = np.array([(inp.line == j).sum() for j in lines])
+    lines = lines[np.lexsort((n_cand, ~has_strong))]
+    cands = []
+    for j in lines:
+        c = np.nonzero(inp.line == j)[0]
+        cands.append(c[np.lexsort((-degree[c], weak[c]))])
+    L = len(lines)
+    level_of = np.empty(K, dtype=np.int64)
+    for lv, c in enumerate(cands):
+        level_of[c] = lv
+    order_rank = np.empty(K, dtype=np.int64)
+    order_rank[np.concatenate(cands)] = np.arange(K)
+    seg_of = np.asarray(inp.seg, dtype=np.int64)
 
     def feasible_with(R: list[int], Qsum: np.ndarray, mR: np.ndarray, cand: np.ndarray) -> np.ndarray:
         """(C,) bool: is R + {u} feasible, for each u in cand."""
         G = np.nonzero(mR)[0]
         if len(G) == 0:
             return np.zeros(len(cand), dtype=bool)
-        qc = quad[cand][:, G]  # (C, G, 6)
-        val, z = posegrid.minimise(Qsum[G][None] + qc, dt)
-        ok = mask[cand][:, G] & (val <= len(R) + 2.0) & (posegrid.evaluate(qc, z) <= tol.q_max)
+        qc = quad[np.ix_(cand, G)]  # (C, G, 6)
+        val, zx, zy = posegrid.minimise(Qsum[G] + qc, dt)
+        ok = mask[np.ix_(cand, G)] & (val <= len(R) + 2.0) & (posegrid.evaluate(qc, zx, zy) <= tol.q_max)
         if R:
-            each = posegrid.evaluate(quad[R][:, G][:, None], z[None])  # (S, C, G)
+            each = posegrid.evaluate(quad[np.ix_(R, G)][:, None], zx, zy)  # (S, C, G)
             ok &= (each <= tol.q_max).all(axis=0)
         return ok.any(axis=1)
+
+    def open_candidates(level: int, R: list[int], used: frozenset) -> np.ndarray:
+        """Candidates of the line at ``level`` not using a matched segment and
+        pairwise compatible with every member of R."""
+        c = cands[level]
+        c = c[~used[seg_of[c]]]
+        if R and c.size:
+            c = c[compat[np.ix_(R, c)].all(axis=0)]
+        return c
+
+    def maximal(R: list[int], Qsum, mR, used, skipped: list[int]) -> bool:
+        """No skipped line can take a candidate consistent with all of R."""
+        extra = [open_candidates(lv, R, used) for lv in skipped]
+        extra = np.concatenate(extra) if extra else np.zeros(0, dtype=np.int64)
+        return not (extra.size and feasible_with(R, Qsum, mR, extra).any())
 
     def emit(R: list[int]) -> None:
         res = final_check(inp, np.array(sorted(R)), tol)
@@ -99,82 +145,45 @@ def search(inp: TreeInput, tol: Tolerances):
         if len(sets) >= tol.max_sets:
             state["truncated"] = True
 
-    nbr = [int.from_bytes(row.tobytes(), "little") for row in np.packbits(compat, axis=1, bitorder="little")]
-    degree = compat.sum(axis=1)
-
-    def color_bound(P: np.ndarray) -> int:
-        """Colours of a greedy colouring of P: a clique in P has at most that many."""
-        classes: list[int] = []
-        for v in P[np.argsort(-degree[P], kind="stable")]:
-            v = int(v)
-            for i, cls in enumerate(classes):
-                if not cls & nbr[v]:
-                    classes[i] = cls | (1 << v)
-                    break
-            else:
-                classes.append(1 << v)
-        return len(classes)
-
-    def child(R, Qsum, mR, v, P, X):
-        """State of R + {v}: its quadratic, mask, and the candidates of P and X
-        compatible with v that keep the set feasible."""
-        R2 = R + [v]
-        Q2 = Qsum + quad[v]
-        m2 = mR & mask[v]
-        P2 = P[compat[v, P]]
-        X2 = X[compat[v, X]]
-        both = np.concatenate([P2, X2])
-        if both.size:
-            ok = feasible_with(R2, Q2, m2, both)
-            P2, X2 = P2[ok[: P2.size]], X2[ok[P2.size :]]
-        return R2, Q2, m2, P2, X2
-
-    def rec(R: list[int], Qsum: np.ndarray, mR: np.ndarray, P: np.ndarray, X: np.ndarray) -> None:
+    def rec(level: int, R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int]) -> None:
         if state["truncated"]:
             return
         state["nodes"] += 1
-        if P.size == 0:
-            if X.size == 0 and len(R) >= state["bound"]:
+        if state["nodes"] > tol.max_nodes:
+            state["truncated"] = True
+            return
+        if len(R) + (L - level) < state["bound"]:
+            return
+        if level == L:
+            if maximal(R, Qsum, mR, used, skipped):
                 emit(R)
             return
-        if len(R) + P.size < state["bound"] or len(R) + color_bound(P) < state["bound"]:
+        # Look ahead: the open candidates of all lines still to come, kept if
+        # consistent with R. Lines with none cannot be matched any more.
+        ahead = np.nonzero((level_of >= level) & ~used[seg_of])[0]
+        if R and ahead.size:
+            ahead = ahead[compat[np.ix_(R, ahead)].all(axis=0)]
+        if ahead.size:
+            ahead = ahead[feasible_with(R, Qsum, mR, ahead)]
+        reachable = np.unique(level_of[ahead]).size
+        if len(R) + reachable < state["bound"]:
             return
-        PX = np.concatenate([P, X])
-        pivot = PX[int(np.argmax(compat[np.ix_(PX, P)].sum(axis=1)))]
-        branch = P[~compat[pivot, P]]
-        # Most connected first: the true match is a large clique, finding it
-        # early raises the bound and cuts the rest of the search.
-        branch = branch[np.argsort(-compat[np.ix_(branch, P)].sum(axis=1), kind="stable")]
-        for v in branch:
+        c = ahead[level_of[ahead] == level]
+        c = c[np.argsort(order_rank[c])]
+        for v in c:
             v = int(v)
-            R2, Q2, m2, P2, X2 = child(R, Qsum, mR, v, P, X)
-            if len(R2) < tol.min_matches or _visible_at_best(inp, R2, Q2, m2):
-                rec(R2, Q2, m2, P2, X2)
-            P = P[P != v]
-            X = np.append(X, v)
-            if len(R) + P.size < state["bound"] or state["truncated"]:
-                return
-
-    def greedy(v: int) -> None:
-        """Dive from v, always adding the candidate with most neighbours: a
-        large consistent set found this way raises the bound before the
-        exhaustive search starts."""
-        R, Q, m = [], np.zeros((Y, 6)), np.ones(Y, dtype=bool)
-        P, X = np.arange(K), np.zeros(0, dtype=np.int64)
-        while P.size:
-            R2, Q2, m2, P2, _ = child(R, Q, m, v, P, X)
+            R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
             if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2):
-                P = P[P != v]
-            else:
-                R, Q, m, P = R2, Q2, m2, P2
-            if P.size:
-                v = int(P[np.argmax(compat[np.ix_(P, P)].sum(axis=1))])
-        if len(R) >= state["bound"]:
-            emit(R)
+                continue
+            used2 = used.copy()
+            used2[seg_of[v]] = True
+            rec(level + 1, R2, Q2, m2, used2, skipped)
+            if state["truncated"]:
+                return
+        if len(R) + reachable - (1 if c.size else 0) >= state["bound"]:
+            rec(level + 1, R, Qsum, mR, used, skipped + [level])  # the line left unmatched
 
-    for seed in np.argsort(-degree, kind="stable")[:_GREEDY_SEEDS]:
-        greedy(int(seed))
-    rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.arange(K), np.zeros(0, dtype=np.int64))
+    rec(0, [], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [])
     if sets:
         top = max(len(s) for s in sets)
         keep = [i for i, s in enumerate(sets) if len(s) >= top - tol.match_slack]
@@ -182,7 +191,7 @@ def search(inp: TreeInput, tol: Tolerances):
     sets, inits = _drop_dominated(sets, inits)
     state["found"] = len(sets)
     if len(sets) > tol.max_hypotheses:
-        best = np.argsort([fit for *_, fit in inits], kind="stable")[: tol.max_hypotheses]
+        best = np.lexsort(([fit for *_, fit in inits], [-len(s) for s in sets]))[: tol.max_hypotheses]
         sets, inits = [sets[i] for i in best], [inits[i] for i in best]
     return sets, [p[:3] for p in inits], state["truncated"], state["nodes"], state["found"]
 
@@ -193,7 +202,7 @@ def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndar
     G = np.nonzero(mR)[0]
     if len(G) == 0:
         return False
-    val, z = posegrid.minimise(Qsum[G], inp.dt)
+    val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
     g = int(np.argmin(val))
     q = Qsum[G[g]]
     # Only judge once the strips alone pin the position: smallest eigenvalue
@@ -202,7 +211,8 @@ def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndar
     lam_min = 0.5 * (tr - np.sqrt(max(tr * tr - 4 * det, 0.0)))
     if lam_min < 1.0 / _PINNED_M**2:
         return True
-    return bool(_seen(inp, np.asarray(R), inp.centre[:2] + z[g], inp.forward[G[g]]).all())
+    cam = inp.centre[:2] + np.array([zx[g], zy[g]])
+    return bool(_seen(inp, np.asarray(R), cam, inp.forward[G[g]]).all())
 
 
 def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
@@ -218,8 +228,8 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
     while len(members) >= tol.min_matches:
         q = inp.quad[members]  # (S, Y, 6)
         allm = inp.mask[members].all(axis=0)
-        val, z = posegrid.minimise(q.sum(axis=0), inp.dt)
-        each = posegrid.evaluate(q, z[None])  # (S, Y)
+        val, zx, zy = posegrid.minimise(q.sum(axis=0), inp.dt)
+        each = posegrid.evaluate(q, zx, zy)  # (S, Y)
         good = allm & (val <= len(members) + 1.0) & (each <= tol.q_max).all(axis=0)
         if not good.any():
             if allm.any():
@@ -231,7 +241,7 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
             members = np.delete(members, worst)
             continue
         g = int(np.argmin(np.where(good, val, np.inf)))
-        cam = ce[:2] + z[g]
+        cam = ce[:2] + np.array([zx[g], zy[g]])
         seen = _seen(inp, members, cam, inp.forward[g])
         if seen.all():
             return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
@@ -242,19 +252,24 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
 def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndarray) -> np.ndarray:
     """(S,) bool: the member's segment has a sample point in front of the
     camera at ``cam`` (2,) and, with walls, with a clear sight line."""
-    segs = inp.segments[members]  # (S, 2, 3)
-    t = np.linspace(0.02, 0.98, 7)
-    pts = segs[:, None, 0] + t[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])  # (S, 7, 3)
+    if inp.samples is not None:
+        pts = inp.samples[members]  # (S, n, 3)
+    else:
+        segs = inp.segments[members]  # (S, 2, 3)
+        pts = segs[:, None, 0] + _SAMPLES[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])
     C = np.array([cam[0], cam[1], inp.centre[2]])
-    front = (pts - C) @ forward > 0.05
+    front = ((pts - C) @ forward > 0.05).ravel()
     flat = pts[..., :2].reshape(-1, 2)
     clear = np.zeros(len(flat), dtype=bool)
     # Seen from the point or from any of four points around it: the grid pose
     # is a few centimetres off, and a sight line through a doorway far away
     # can swing onto a jamb over that distance.
     for off in _CAMERA_JITTER:
-        clear |= sight_clear(cam + off, flat, inp.walls, _OCCLUSION_END_M)
-    return (front & clear.reshape(front.shape)).any(axis=1)
+        todo = np.nonzero(front & ~clear)[0]
+        if len(todo) == 0:
+            break
+        clear[todo] = sight_clear(cam + off, flat[todo], inp.walls, _OCCLUSION_END_M)
+    return (front & clear).reshape(len(members), -1).any(axis=1)
 
 
 def _drop_dominated(sets, inits):

@@ -73,14 +73,18 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
     ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,), model segment
     end points ``seg_a, seg_b`` (T, 3) world, unit rays of the image line end
     points ``ray_a, ray_b`` (T, 3) camera frame. With ``robust_scale`` (T,)
-    (radians), residuals are weighted by Cauchy's ``1 / (1 + (r / scale)^2)``
-    (iteratively reweighted), so that one wrong match does not drag the pose
-    of the others away. Returns poses (H, 3)."""
+    (radians), residuals are weighted by Tukey's biweight (zero beyond twice
+    the scale; iteratively reweighted), so that a wrong match does not drag
+    the pose of the others away. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
     for _ in range(iterations):
         r0, J = _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=True)
-        w = np.ones_like(r0) if robust_scale is None else 1.0 / (1.0 + (r0 / robust_scale[:, None]) ** 2)
+        if robust_scale is None:
+            w = np.ones_like(r0)
+        else:  # Tukey's biweight: residuals beyond twice the scale get no say
+            u = np.clip(np.abs(r0) / (2.0 * robust_scale[:, None]), 0.0, 1.0)
+            w = (1.0 - u * u) ** 2 + 1e-6
         JtJ = np.einsum("tsi,ts,tsj->tij", J, w, J)
         Jtr = np.einsum("tsi,ts,ts->ti", J, w, r0)
         A = np.zeros((H, 3, 3))

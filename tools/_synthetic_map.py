@@ -155,6 +155,19 @@ def make_flat_map(cell: float | None = 1.0) -> LineMap:
     return assemble_map(segments, kinds, regions, lists, walls, meta)
 
 
+def make_small_flat() -> LineMap:
+    """Two rooms joined by a door (a 6 x 5 m room with a pillar and a 4 x 4 m
+    one), one region per room: a map for tests, built in a second or two."""
+    rooms = [box(0.0, 0.0, 6.0, 5.0), box(6.1, 0.5, 10.1, 4.5)]
+    free = unary_union(rooms + [box(6.0, 1.8, 6.1, 2.7)]).difference(box(2.4, 2.2, 2.8, 2.6))
+    walls = box(-0.15, -0.15, 10.25, 5.15).difference(free)
+    segments, kinds = flat_segments(free)
+    regions = [r.difference(box(2.4, 2.2, 2.8, 2.6)).buffer(-ROBOT_RADIUS, join_style="mitre") for r in rooms]
+    lists = _visible_lists(regions, segments, walls, spacing=0.5, samples=8)
+    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": "tools/_synthetic_map.py"}
+    return assemble_map(segments, kinds, regions, lists, walls, meta)
+
+
 def make_box_map(width: float = 6.0, depth: float = 5.0) -> LineMap:
     """One empty rectangular room, one region: the smallest useful map (fast)."""
     free = box(0.0, 0.0, width, depth)
@@ -183,4 +196,4 @@ def cached_flat_map(path=None) -> LineMap:
     return load_map(path)
 
 
-__all__ = ["cached_flat_map", "flat_geometry", "flat_segments", "make_box_map", "make_flat_map"]
+__all__ = ["cached_flat_map", "flat_geometry", "flat_segments", "make_box_map", "make_flat_map", "make_small_flat"]

@@ -1,0 +1,233 @@
+"""Reproduce the paper's figures 5 and 6 and a table per PEQ.
+
+    python tools/bench_paper.py                 # 100 poses per PEQ, baseline on 20
+    python tools/bench_paper.py --quick         # 20 poses, baseline on 5
+
+For each PEQ (method.md section 9): ``--poses`` simulated frames (seeded),
+each localised by our matcher and, on the first ``--baseline-poses`` of
+them, by the classic interpretation tree with a pose at every node
+(tools/simulate.py). Reported per PEQ: hypotheses after stage 1 (median,
+max; and the number of consistent sets found before the cap), correct match
+ranked first (%), accepted (%), E of the correct hypothesis against the
+best false one (medians), pose error (median), latency (median, p95) of
+ours and of the baseline, wall clock per frame with the lines given.
+
+Figures (PNG): ``paper_fig5.png``, hypotheses per sample for each PEQ (the
+paper's figure 5); ``paper_fig6.png``, mean and standard deviation of the
+five smallest E per PEQ with the acceptance threshold (the paper's figure 6),
+and E of the correct hypothesis against the best false one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import matcher  # noqa: E402
+from simulate import PEQ, baseline_localize, make_frame, paper_camera, pose_error  # noqa: E402
+
+
+def is_correct(matches, truth_pairs, min_matches: int = 3) -> bool:
+    s = {tuple(m) for m in matches}
+    return len(s) >= min_matches and s <= truth_pairs
+
+
+def run_peq(linemap, camera, peq, args, rng):
+    rows = []
+    for i in range(args.poses):
+        fr = make_frame(linemap, camera, rng, peq, args.noise_px, args.noise_deg, clutter=args.clutter)
+        truth = {tuple(m) for m in fr.true_matches()}
+        times = []
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            res = matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw)
+            times.append((time.perf_counter() - t0) * 1e3)
+        ranked = [(E, mm) for E, mm, _ in res.ranked]
+        first_ok = bool(ranked) and is_correct(ranked[0][1], truth)
+        e_true = next((E for E, mm in ranked if is_correct(mm, truth) and math.isfinite(E)), None)
+        e_false = next((E for E, mm in ranked if not {tuple(m) for m in mm} <= truth and math.isfinite(E)), None)
+        finite = sorted(E for E, _ in ranked if math.isfinite(E))
+        row = {
+            "peq": peq,
+            "n_true": len(truth),
+            "n_lines": len(fr.lines),
+            "hypotheses": res.hypotheses,
+            "ok": bool(res),
+            "correct": bool(res) and is_correct(res.matches, truth),
+            "first_correct": first_ok,
+            "e_true": e_true,
+            "e_false": e_false,
+            "e_smallest": finite[:5],
+            "ms": float(np.median(times)),
+            "reason": res.reason,
+        }
+        if res:
+            row["pos_err"], row["yaw_err"] = pose_error(res.pose, fr.pose)
+        if i < args.baseline_poses:
+            t0 = time.perf_counter()
+            pose, bm, nodes, timed_out = baseline_localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw,
+                                                           time_limit_s=args.baseline_limit)
+            row["base_ms"] = (time.perf_counter() - t0) * 1e3
+            row["base_timeout"] = timed_out
+            row["base_correct"] = pose is not None and is_correct(bm, truth)
+            row["base_nodes"] = nodes
+        rows.append(row)
+    return rows
+
+
+def summarise(rows):
+    a = lambda k: np.array([r[k] for r in rows if r.get(k) is not None], dtype=float)  # noqa: E731
+    out = {
+        "n": len(rows),
+        "hyp_med": float(np.median(a("hypotheses"))),
+        "hyp_max": int(a("hypotheses").max()),
+        "first_correct_pct": 100.0 * a("first_correct").mean(),
+        "correct_pct": 100.0 * a("correct").mean(),
+        "accepted_pct": 100.0 * a("ok").mean(),
+        "e_true_med": float(np.median(a("e_true"))) if len(a("e_true")) else None,
+        "e_false_med": float(np.median(a("e_false"))) if len(a("e_false")) else None,
+        "pos_err_med_cm": 100.0 * float(np.median(a("pos_err"))) if len(a("pos_err")) else None,
+        "yaw_err_med_deg": float(np.median(a("yaw_err"))) if len(a("yaw_err")) else None,
+        "ms_med": float(np.median(a("ms"))),
+        "ms_p95": float(np.percentile(a("ms"), 95)),
+    }
+    if len(a("base_ms")):
+        out.update(
+            base_n=int(len(a("base_ms"))),
+            base_ms_med=float(np.median(a("base_ms"))),
+            base_ms_p95=float(np.percentile(a("base_ms"), 95)),
+            base_timeouts=int(a("base_timeout").sum()),
+            base_correct_pct=100.0 * a("base_correct").mean(),
+        )
+        ours = np.array([r["ms"] for r in rows if "base_ms" in r])
+        out["speedup_med"] = float(np.median(a("base_ms")) / max(np.median(ours), 1e-9))
+    return out
+
+
+def table(summary: dict) -> str:
+    head = ("| PEQ | hyp. med / max | correct first | accepted | E correct / best false (med) | "
+            "pose err (med) | ours ms med / p95 | baseline ms med / p95 (n, timeouts) | speed-up |")
+    lines = [head, "|" + "---|" * 9]
+    for peq, s in summary.items():
+        et = "-" if s["e_true_med"] is None else f"{s['e_true_med']:.2g}"
+        ef = "-" if s["e_false_med"] is None else f"{s['e_false_med']:.2g}"
+        pe = "-" if s["pos_err_med_cm"] is None else f"{s['pos_err_med_cm']:.1f} cm, {s['yaw_err_med_deg']:.2f} deg"
+        base = "-"
+        sp = "-"
+        if "base_ms_med" in s:
+            base = f"{s['base_ms_med']:.0f} / {s['base_ms_p95']:.0f} ({s['base_n']}, {s['base_timeouts']})"
+            sp = f"{s['speedup_med']:.0f}x"
+        lines.append(
+            f"| {peq} | {s['hyp_med']:.0f} / {s['hyp_max']} | {s['first_correct_pct']:.0f}% | {s['accepted_pct']:.0f}% | "
+            f"{et} / {ef} | {pe} | {s['ms_med']:.1f} / {s['ms_p95']:.1f} | {base} | {sp} |"
+        )
+    return "\n".join(lines)
+
+
+def plot(all_rows, summary, out_dir: Path, e_accept: float):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    peqs = sorted(all_rows)
+    fig, axes = plt.subplots(len(peqs), 1, figsize=(7, 1.6 * len(peqs) + 0.6), sharex=True, sharey=True)
+    axes = np.atleast_1d(axes)
+    for ax, peq in zip(axes, peqs):
+        h = [r["hypotheses"] for r in all_rows[peq]]
+        ax.bar(np.arange(1, len(h) + 1), h, width=0.8, color="tab:blue")
+        ax.axhline(25, color="tab:red", lw=0.8, ls="--")
+        ax.set_ylabel(f"PEQ={peq}")
+        ax.set_ylim(0, 27)
+    axes[0].set_title("Figure 5: number of hypotheses after stage 1 (dashed: 25)")
+    axes[-1].set_xlabel("sample number")
+    fig.tight_layout()
+    fig.savefig(out_dir / "paper_fig5.png", dpi=110)
+    plt.close(fig)
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.8))
+    for k in range(5):
+        means, stds = [], []
+        for peq in peqs:
+            vals = [r["e_smallest"][k] for r in all_rows[peq] if len(r["e_smallest"]) > k]
+            means.append(np.mean(vals) if vals else np.nan)
+            stds.append(np.std(vals) if vals else np.nan)
+        ax1.errorbar(np.array(peqs) + 0.08 * (k - 2), means, yerr=stds, fmt="o-", ms=3, capsize=2,
+                     label=f"{k + 1}{'st' if k == 0 else 'nd' if k == 1 else 'rd' if k == 2 else 'th'} smallest E")
+    ax1.axhline(e_accept, color="tab:red", ls="--", lw=0.8, label=f"threshold {e_accept:g}")
+    ax1.set_yscale("log")
+    ax1.set_xlabel("PEQ")
+    ax1.set_ylabel("E")
+    ax1.set_title("Figure 6: mean and std of the 5 smallest E")
+    ax1.legend(fontsize=7)
+    for peq in peqs:
+        t = [r["e_true"] for r in all_rows[peq] if r["e_true"] is not None]
+        f = [r["e_false"] for r in all_rows[peq] if r["e_false"] is not None]
+        ax2.scatter(np.full(len(t), peq) - 0.12, t, s=6, color="tab:green", label="correct" if peq == peqs[0] else None)
+        ax2.scatter(np.full(len(f), peq) + 0.12, f, s=6, color="tab:orange",
+                    label="best false" if peq == peqs[0] else None)
+    ax2.axhline(e_accept, color="tab:red", ls="--", lw=0.8)
+    ax2.set_yscale("log")
+    ax2.set_xlabel("PEQ")
+    ax2.set_title("E of the correct hypothesis vs the best false one")
+    ax2.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out_dir / "paper_fig6.png", dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description="Reproduce the paper's figures 5 and 6 (see module docstring).")
+    ap.add_argument("--map", help=".lmap map (default: the synthetic flat of tools/_synthetic_map.py)")
+    ap.add_argument("--poses", type=int, default=100, help="frames per PEQ")
+    ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ))
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--noise-px", type=float, default=1.0, help="uniform noise bound on line offset and end points")
+    ap.add_argument("--noise-deg", type=float, default=1.0, help="uniform noise bound on line orientation")
+    ap.add_argument("--clutter", type=int, default=3, help="random lines added per frame")
+    ap.add_argument("--height", type=float, default=1.2, help="camera height, metres")
+    ap.add_argument("--pitch", type=float, default=0.0, help="camera pitch, degrees (down positive)")
+    ap.add_argument("--repeat", type=int, default=3, help="timing: median of this many runs per frame")
+    ap.add_argument("--baseline-poses", type=int, default=20, help="frames per PEQ also run by the baseline")
+    ap.add_argument("--baseline-limit", type=float, default=2.0, help="baseline time limit per frame, seconds")
+    ap.add_argument("--quick", action="store_true", help="20 poses, baseline on 5, 1 timing run")
+    ap.add_argument("--out", default="docs/images", help="directory for the PNG figures")
+    ap.add_argument("--json", help="also write all per-frame rows and the summary to this file")
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.poses, args.baseline_poses, args.repeat = 20, 5, 1
+    from _synthetic_map import cached_flat_map
+
+    linemap = matcher.load_map(args.map) if args.map else cached_flat_map()
+    camera = paper_camera(args.height, args.pitch)
+    matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
+    all_rows, summary = {}, {}
+    for peq in args.peq:
+        rng = np.random.default_rng([args.seed, peq])
+        all_rows[peq] = run_peq(linemap, camera, peq, args, rng)
+        summary[peq] = summarise(all_rows[peq])
+        print(f"PEQ {peq}: {json.dumps({k: round(v, 4) if isinstance(v, float) else v for k, v in summary[peq].items()})}",
+              file=sys.stderr)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    plot(all_rows, summary, out, matcher.Tolerances().e_accept)
+    print(f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
+          f"{args.noise_deg} deg; {args.clutter} clutter lines; {args.poses} poses per PEQ; seed {args.seed}; "
+          f"{platform.python_version()} on {platform.machine()}")
+    print(table(summary))
+    if args.json:
+        Path(args.json).write_text(json.dumps({"summary": summary, "rows": all_rows}, default=float, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
