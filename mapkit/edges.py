@@ -64,8 +64,9 @@ def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np
     verticals: dict[tuple[int, int], list[list[float]]] = {}
     for k, fp in enumerate(footprints):
         z0, z1 = levels[k], levels[k + 1]
-        for x, y in _corners(fp):
-            key = (round(x / MERGE), round(y / MERGE))
+        # Two rings touching at a vertex both report it: one vertical per point.
+        keys = {(round(x / MERGE), round(y / MERGE)) for x, y in _corners(fp)}
+        for key in sorted(keys):
             runs = verticals.setdefault(key, [])
             if runs and abs(runs[-1][1] - z0) < MERGE:
                 runs[-1][1] = z1  # continues the run of the band below

@@ -115,3 +115,13 @@ def test_empty_scene_has_no_edges():
 def test_ceiling_edges_at_wall_height(height):
     segs, kinds, _ = kinds_of(room_scene(height=height))
     assert np.allclose(segs[kinds == K.CEILING][:, :, 2], height)
+
+
+def test_vertex_shared_by_two_wall_pieces_gives_one_vertical():
+    # Two wall blocks touching at one corner (a common result of cleaning real plans).
+    walls = MultiPolygon([box(0, 0, 1, 0.2), box(1, 0.2, 2, 0.4)])
+    scene = Scene(walls=walls, openings=[], free_space=MultiPolygon([box(0, 1, 2, 2)]), wall_height=2.5)
+    segs, kinds = extract_edges(scene)
+    v = segs[kinds == K.VERTICAL]
+    at_shared = [s for s in v if np.allclose(s[0, :2], [1, 0.2])]
+    assert len(at_shared) == 1
