@@ -91,13 +91,13 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
         "camera": camera.to_dict(),
         "wall_height": float(scene.wall_height),
         "scene": _jsonable(scene.info),
-        "stats": {"counts": counts, "regions": _jsonable(part.stats)},
+        # No timings here: the same plan and options give the same bytes.
+        "stats": _rounded({"counts": counts, "regions": {k: v for k, v in part.stats.items() if not k.startswith("time")}}),
     }
     linemap = assemble_map(segments, kinds, polygons, lists, scene.walls, meta)
     report.seconds["assemble"] = time.perf_counter() - t
     report.counts = counts
     report.warnings = list(scene.info.get("warnings", []))
-    linemap.meta["stats"]["seconds"] = {k: round(v, 4) for k, v in report.seconds.items()}
     return linemap, report
 
 
@@ -148,6 +148,16 @@ def _drop_unseen(segments, kinds, lists):
 def _jsonable(obj):
     """A JSON-safe copy (numpy scalars, tuples, paths and the like made plain)."""
     return json.loads(json.dumps(obj, default=lambda v: v.item() if hasattr(v, "item") else str(v)))
+
+
+def _rounded(obj, digits: int = 6):
+    """JSON-safe copy with floats rounded: summation-order noise must not change the file."""
+    if isinstance(obj, dict):
+        return {k: _rounded(v, digits) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_rounded(v, digits) for v in obj]
+    obj = _jsonable(obj)
+    return round(obj, digits) if isinstance(obj, float) else obj
 
 
 def kind_counts(m: LineMap) -> dict[str, int]:
