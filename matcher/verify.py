@@ -22,7 +22,11 @@ from matcher.constraints import rotations
 
 #: Gauss-Newton iterations: from the grid start (within half a yaw step and a
 #: few centimetres) the fit converges in 3 to 4.
-_ITERATIONS = 5
+_ITERATIONS = 6
+#: With robust weights, this many plain iterations come first: the stage-1
+#: start may be tens of centimetres off along a weakly fixed direction, and
+#: weighting residuals from there would throw out true matches.
+_PLAIN_FIRST = 2
 
 
 def _cross(a, b):
@@ -78,9 +82,9 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
     the pose of the others away. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
-    for _ in range(iterations):
+    for it in range(iterations):
         r0, J = _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=True)
-        if robust_scale is None:
+        if robust_scale is None or it < _PLAIN_FIRST:
             w = np.ones_like(r0)
         else:  # Tukey's biweight: residuals beyond twice the scale get no say
             u = np.clip(np.abs(r0) / (2.0 * robust_scale[:, None]), 0.0, 1.0)

@@ -1,0 +1,210 @@
+"""Stage 2: pose, fit and score of every hypothesis, and their ranking
+(method.md section 8).
+
+For each hypothesis, all at once where the arrays allow:
+
+1. a robust least-squares pose (:func:`matcher.verify.refine`) from the
+   stage-1 grid pose (that grid start is the yaw search and linear solve);
+2. each match's model segment: the piece of its collinear group that the
+   image line overlaps most at that pose;
+3. matches that do not fit at the pose (line off its projected segment by
+   more than the noise, sticking out beyond its end points, or the segment
+   hidden by a wall) are dropped, and the pose refitted;
+4. for the contenders (most fitting matches, within one), the lines of
+   other visible segments that fit at the pose are added and the pose
+   refitted: a hypothesis that lost a true line to a clutter line in
+   stage 1 gets it back;
+5. the paper's score E. Hypotheses are ranked by number of matches, then E.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from matcher import verify
+from matcher.constraints import wrap
+from matcher.occlusion import sight_clear
+from matcher.overlap import distance_and_overlap
+
+#: Stage 2's visibility test ignores wall crossings this close to the
+#: segment, metres (the segment lies on a wall face; the pose is refined):
+#: it tells the near and far faces of a door jamb apart.
+_VISIBLE_END_M = 0.02
+#: A refined pose may leave the prior bounds by this much (metres, degrees)
+#: before the hypothesis is dropped: noise on a pose at the border.
+_PRIOR_SLACK_M = 0.05
+_PRIOR_SLACK_DEG = 2.0
+
+
+@dataclass
+class Ranked:
+    """Verified hypotheses. Per match t: ``hyp`` (T,), ``local`` (T,) index
+    into the candidate segments, ``line`` (T,) image line. Per hypothesis:
+    ``poses`` (H, 3) ``(x, y, yaw)``, ``score`` (H,) E (inf when dropped),
+    ``order`` (H,) best first; ``why`` the reason when none is left."""
+
+    hyp: np.ndarray
+    local: np.ndarray
+    line: np.ndarray
+    poses: np.ndarray
+    score: np.ndarray
+    order: np.ndarray
+    why: str
+
+
+def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls) -> Ranked:
+    """Stage 2 on stage 1's ``hyps`` (class ids in ``hyps.segment``); ``segs``
+    (N, 2, 3) candidate segments, ``label`` (N,) their collinear group,
+    ``reps`` (G, 2, 3) the groups' spans; ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``."""
+    xe, ye, yaw_e, dt, dyaw = prior
+    n_h = len(hyps.sets)
+    members = np.concatenate(hyps.sets)
+    hyp = np.repeat(np.arange(n_h), [len(x) for x in hyps.sets])
+    cls = hyps.segment[members]
+    line_ids = hyps.line[members]
+    rays = unit_rays(camera, img.lines[line_ids])
+    lengths = np.linalg.norm(img.lines[line_ids, 1] - img.lines[line_ids, 0], axis=1)
+    scale = fit_bound_px(lengths, tol) / camera.fx
+    poses = verify.refine(hyps.init, hyp, reps[cls, 0], reps[cls, 1], rays[:, 0], rays[:, 1],
+                          camera.pitch, camera.height_m, robust_scale=scale)
+    local = resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
+    inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol) & visible(poses[hyp], segs[local], walls)
+    n_in = np.bincount(hyp, inl, minlength=n_h)
+    keep = inl & (n_in[hyp] >= tol.min_matches)
+    hyp, line_ids, local = hyp[keep], line_ids[keep], local[keep]
+    alive = n_in >= tol.min_matches
+    if alive.any():
+        poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
+        alive &= _inside(poses, prior)
+    if alive.any():
+        # Contenders get the lines they are missing back, then a last refit.
+        top = int(n_in[alive].max())
+        contenders = np.nonzero(alive & (n_in >= top - 1))[0]
+        new_hyp, new_local, new_line = [hyp[~np.isin(hyp, contenders)]], [local[~np.isin(hyp, contenders)]], \
+            [line_ids[~np.isin(hyp, contenders)]]
+        for h in contenders:
+            sel = hyp == h
+            lo, li = extend(camera, img, segs, poses[h], local[sel], line_ids[sel], tol, walls)
+            new_hyp.append(np.full(len(lo), h))
+            new_local.append(lo)
+            new_line.append(li)
+        hyp, local, line_ids = (np.concatenate(a).astype(np.int64) for a in (new_hyp, new_local, new_line))
+        order_t = np.argsort(hyp, kind="stable")
+        hyp, local, line_ids = hyp[order_t], local[order_t], line_ids[order_t]
+        poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
+        alive &= _inside(poses, prior)
+    n_fin = np.bincount(hyp, minlength=n_h)
+    E = np.full(n_h, np.inf)
+    if len(hyp):
+        E = verify.score_e(poses, hyp, img.normals[line_ids], segs[local, 0], segs[local, 1], camera.pitch,
+                           camera.height_m)
+    # Ranked by E among the hypotheses that explain the most lines: a
+    # hypothesis trimmed down to a few lines fits them well but explains less.
+    best_n = int(n_fin[alive].max()) if alive.any() else 0
+    E = np.where(alive & (n_fin >= max(best_n, tol.min_matches)) & np.isfinite(E), E, np.inf)
+    order = np.lexsort((E, -n_fin * alive))
+    why = ""
+    if not np.isfinite(E).any():
+        why = ("no hypothesis kept its pose inside the prior bounds" if (n_in >= tol.min_matches).any()
+               else f"no hypothesis kept {tol.min_matches} matches that fit at its pose")
+    return Ranked(hyp, local, line_ids, poses, E, order, why)
+
+
+def _refit(camera, img, segs, poses, hyp, local, line_ids):
+    if len(hyp) == 0:
+        return poses
+    r = unit_rays(camera, img.lines[line_ids])
+    return verify.refine(poses, hyp, segs[local, 0], segs[local, 1], r[:, 0], r[:, 1], camera.pitch,
+                         camera.height_m, iterations=3)
+
+
+def _inside(poses, prior) -> np.ndarray:
+    """(H,) bool: poses (H, 3) within the prior bounds (plus noise slack)."""
+    xe, ye, yaw_e, dt, dyaw = prior
+    ok = np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) <= dt + _PRIOR_SLACK_M
+    return ok & (np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + math.radians(_PRIOR_SLACK_DEG))
+
+
+def unit_rays(camera, lines):
+    """(T, 2, 3) unit camera-frame rays of the end points of lines (T, 2, 2)."""
+    r = camera.pixel_rays(lines)
+    return r / np.linalg.norm(r, axis=-1, keepdims=True)
+
+
+def resolve_pieces(camera, poses, label, cls, segs, lines):
+    """(T,) local segment of each match: the member of its collinear group
+    whose projection overlaps the image line most, at the match's pose
+    (T, 3)."""
+    order = np.argsort(label, kind="stable")
+    sizes = np.bincount(label)
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    n = sizes[cls]
+    t = np.repeat(np.arange(len(cls)), n)
+    k = np.arange(len(t)) - np.repeat(np.cumsum(n) - n, n)
+    cand = order[starts[cls][t] + k]
+    _, ov = distance_and_overlap(camera, poses[t], segs[cand], lines[t])
+    # Best overlap per match: sort by (match, -overlap) and take the first of each run.
+    o = np.lexsort((-ov, t))
+    first = np.concatenate([[True], t[o][1:] != t[o][:-1]])
+    return cand[o][first]
+
+
+def fits(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
+    """(T,) bool: the image line lies within its noise bound (plus 2 px for
+    the pose) of the projected segment, and inside its extent: occlusion and
+    the image border only ever shorten the image of a segment, so a line
+    sticking out beyond a projected end point by more than the end-point
+    noise shows another segment."""
+    lines = img.lines[line_ids]
+    L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
+    dist, ov = distance_and_overlap(camera, poses, segments, lines)
+    return (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
+
+
+def visible(poses, segments, walls) -> np.ndarray:
+    """(T,) bool: some point of each segment (T, 2, 3) is in plain sight from
+    the camera at poses (T, 3), walls as occluders. At a refined pose (a
+    centimetre off) a sight line that cuts a wall 2 cm or more from the
+    segment is blocked: it tells the near and far faces of a door jamb apart."""
+    if walls is None:
+        return np.ones(len(poses), dtype=bool)
+    t = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
+    pts = segments[:, None, 0, :2] + t[None, :, None] * (segments[:, None, 1, :2] - segments[:, None, 0, :2])
+    cams = np.repeat(poses[:, :2], len(t), axis=0)
+    clear = sight_clear(cams, pts.reshape(-1, 2), walls, _VISIBLE_END_M)
+    return clear.reshape(len(poses), -1).any(axis=1)
+
+
+def fit_bound_px(length, tol):
+    """Largest distance, pixels, of a true line's end points from the
+    projected segment: offset and rotation noise over half its length,
+    plus 2 px for the pose's own error."""
+    return tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length + 2.0
+
+
+def extend(camera, img, segs, pose, local, line_ids, tol, walls):
+    """Add (segment, line) pairs that fit at ``pose`` (3,) among the
+    unmatched usable lines and segments (see :func:`fits`; the segment
+    visible too), closest first, each segment and line once."""
+    free_lines = np.setdiff1d(np.nonzero(img.usable)[0], line_ids)
+    free_segs = np.setdiff1d(np.arange(len(segs)), local)
+    if len(free_lines) == 0 or len(free_segs) == 0:
+        return local, line_ids
+    li, si = np.repeat(free_lines, len(free_segs)), np.tile(free_segs, len(free_lines))
+    lines = img.lines[li]
+    L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
+    dist, ov = distance_and_overlap(camera, np.repeat(pose[None], len(li), 0), segs[si], lines)
+    ok = (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
+    if ok.any():
+        sel = np.nonzero(ok)[0]
+        ok[sel] = visible(np.repeat(pose[None], len(sel), 0), segs[si[sel]], walls)
+    add_s, add_l = [], []
+    for k in np.argsort(np.where(ok, dist, np.inf))[: int(ok.sum())]:
+        if si[k] in add_s or li[k] in add_l:
+            continue
+        add_s.append(int(si[k]))
+        add_l.append(int(li[k]))
+    return np.concatenate([local, add_s]).astype(np.int64), np.concatenate([line_ids, add_l]).astype(np.int64)
