@@ -140,3 +140,8 @@ OVERLAY_GRID = 1e-5
 #: slightly smaller walls would let through; brute-force checks use twice
 #: ``OCCLUSION_SHRINK``, and this leaves a margin over them.
 VIS_BUILD_SHRINK = 3e-3
+
+#: Deepest quadtree level of the region partition: 2**11 = 2048 smallest
+#: cells across the plan. Larger plans get smallest cells wider than
+#: ``VIR_MIN_CELL`` (lists a little longer) instead of unbounded memory.
+VIR_MAX_DEPTH = 11

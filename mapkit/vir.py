@@ -32,7 +32,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from mapkit.assemble import polygon_parts
-from mapkit.tolerances import OVERLAY_GRID, VIR_EPS_SLACK, VIR_MERGE_GROWTH, VIR_MIN_CELL
+from mapkit.tolerances import OVERLAY_GRID, VIR_EPS_SLACK, VIR_MAX_DEPTH, VIR_MERGE_GROWTH, VIR_MIN_CELL
 from mapkit.visibility import Occluders, polygonal, segment_regions
 
 # Round joins of the eps buffer: this many segments per quarter circle; the
@@ -123,12 +123,13 @@ def build_regions(
     stats["time_quadtree_s"] = t3 - t2
     stats["quadtree_leaves"] = int(len(leaves.level))
     stats["quadtree_depth"] = int(leaves.depth)
+    stats["smallest_cell_m"] = float(leaves.size / 2.0**leaves.depth)
 
     groups, bits = merge_leaves(leaves, merge_growth)
     t4 = time.perf_counter()
     stats["time_merge_s"] = t4 - t3
 
-    polygons, lists, ordering = region_geometry(leaves, groups, bits, free_space, len(segs))
+    polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
     t5 = time.perf_counter()
     stats["time_geometry_s"] = t5 - t4
     stats["time_total_s"] = t5 - t0
@@ -178,11 +179,6 @@ class Leaves:
     size: float
     depth: int
 
-    def boxes(self) -> np.ndarray:
-        s = self.size / 2.0**self.level
-        x, y = self.origin[0] + self.ix * s, self.origin[1] + self.iy * s
-        return shapely.box(x, y, x + s, y + s)
-
 
 def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
     """Subdivide until each cell's list is decided (see the module docstring).
@@ -198,6 +194,9 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     x0, y0, x1, y1 = free_space.bounds
     span = max(x1 - x0, y1 - y0, min_cell)
     depth = max(0, int(math.ceil(math.log2(span / min_cell) - 1e-9)))
+    if depth > VIR_MAX_DEPTH:  # huge plan: wider smallest cells, bounded memory
+        depth = VIR_MAX_DEPTH
+        min_cell = span / 2.0**depth
     size = min_cell * 2.0**depth
     origin = np.array([(x0 + x1 - size) / 2.0, (y0 + y1 - size) / 2.0])
     free = free_space
@@ -265,20 +264,35 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 # Step 4: merge leaves into regions
 
 
-def leaf_raster(leaves: Leaves) -> np.ndarray:
-    """(G, G) int64 label image at the finest cell size, ``G = 2**depth``:
-    the leaf covering each fine cell, -1 where none (off the free space)."""
-    g = 2**leaves.depth
-    lab = np.full((g, g), -1, dtype=np.int64)
+@dataclass
+class Raster:
+    """Leaf labels on the finest grid, cropped to the leaves' extent.
+
+    ``labels`` (H, W) int32: the leaf covering fine cell ``(oy + row, ox + col)``
+    (in finest-level cell indices), -1 where none (off the free space)."""
+
+    labels: np.ndarray
+    ox: int
+    oy: int
+
+
+def leaf_raster(leaves: Leaves) -> Raster:
+    """Paint every leaf on the finest grid (see :class:`Raster`)."""
+    w = 2 ** (leaves.depth - leaves.level)
+    if len(w) == 0:
+        return Raster(np.full((0, 0), -1, dtype=np.int32), 0, 0)
+    x0, y0 = leaves.ix * w, leaves.iy * w
+    ox, oy = int(x0.min()), int(y0.min())
+    lab = np.full((int((y0 + w).max()) - oy, int((x0 + w).max()) - ox), -1, dtype=np.int32)
     for lev in np.unique(leaves.level):
         k = np.nonzero(leaves.level == lev)[0]
-        w = 2 ** (leaves.depth - int(lev))
-        off = np.arange(w)
+        side = 2 ** (leaves.depth - int(lev))
+        off = np.arange(side)
         # Every fine cell of every leaf of this level, by broadcasting.
-        ys = (leaves.iy[k] * w)[:, None, None] + off[None, :, None]
-        xs = (leaves.ix[k] * w)[:, None, None] + off[None, None, :]
+        ys = (y0[k] - oy)[:, None, None] + off[None, :, None]
+        xs = (x0[k] - ox)[:, None, None] + off[None, None, :]
         lab[ys, xs] = k[:, None, None]
-    return lab
+    return Raster(lab, ox, oy)
 
 
 def adjacent_pairs(labels: np.ndarray) -> np.ndarray:
@@ -304,8 +318,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     ``merge_growth`` times the starting sum.
     """
     m = len(leaves.level)
-    labels = leaf_raster(leaves)
-    pairs = adjacent_pairs(labels)
+    pairs = adjacent_pairs(leaf_raster(leaves).labels)
     _, list_id = np.unique(leaves.bits, axis=0, return_inverse=True)
     list_id = list_id.ravel()
     same = pairs[list_id[pairs[:, 0]] == list_id[pairs[:, 1]]]
@@ -382,31 +395,46 @@ def _morton(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return spread(x) | (spread(y) << np.uint64(1))
 
 
-def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int):
-    """Outlines (union of each region's cells, cut to the free space), lists,
-    and the Morton order used. Regions left empty by the cut are dropped.
-
-    The union runs on the finest grid: every fine cell of a region becomes a
-    square, and squares of one grid meet edge to edge, so GEOS's coverage
-    union (linear time: shared edges cancel) applies; collinear grid
-    vertices are dropped afterwards."""
-    n_groups = len(bits)
-    labels = leaf_raster(leaves)
-    fy, fx = np.nonzero(labels >= 0)
-    g_of_cell = group[labels[fy, fx]]
-    key = _morton(fx, fy)
-    first_key = np.full(n_groups, np.iinfo(np.uint64).max, dtype=np.uint64)
-    np.minimum.at(first_key, g_of_cell, key)
-    order = np.argsort(first_key, kind="stable")
-    # Grid lines computed once: neighbouring squares must share their corner
-    # coordinates bit for bit, or the coverage union sees overlaps.
+def leaf_squares(leaves: Leaves) -> np.ndarray:
+    """(M,) shapely squares of the leaves, each ring holding every finest-grid
+    point along its sides, all taken from one array of grid lines: squares
+    that touch then share their boundary vertices bit for bit, which is what
+    GEOS's coverage union (linear time: shared edges cancel) needs."""
     lines = np.arange(2**leaves.depth + 1) * (leaves.size / 2.0**leaves.depth)
     gx, gy = leaves.origin[0] + lines, leaves.origin[1] + lines
-    cells = shapely.box(gx[fx], gy[fy], gx[fx + 1], gy[fy + 1])
-    by_group = np.argsort(g_of_cell, kind="stable")
-    bounds = np.searchsorted(g_of_cell[by_group], np.arange(n_groups + 1))
+    out = np.empty(len(leaves.level), dtype=object)
+    for lev in np.unique(leaves.level):
+        k = np.nonzero(leaves.level == lev)[0]
+        w = 2 ** (leaves.depth - int(lev))
+        t = np.arange(w)
+        x0, y0 = (leaves.ix[k] * w)[:, None], (leaves.iy[k] * w)[:, None]
+        # Counter-clockwise: bottom, right, top, left side, then close.
+        xi = np.concatenate([x0 + t, np.broadcast_to(x0 + w, (len(k), w)), x0 + w - t, np.broadcast_to(x0, (len(k), w)), x0], 1)
+        yi = np.concatenate([np.broadcast_to(y0, (len(k), w)), y0 + t, np.broadcast_to(y0 + w, (len(k), w)), y0 + w - t, y0], 1)
+        out[k] = shapely.polygons(np.stack([gx[xi], gy[yi]], axis=-1))
+    return out
+
+
+def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int):
+    """Outlines (union of each region's leaf squares, cut to the free space),
+    lists, and the Morton order used. Regions left empty by the cut are dropped.
+
+    Squares are unioned with GEOS's coverage union (see :func:`leaf_squares`),
+    collinear grid vertices are dropped, then the free space, clipped to the
+    region's bounding box, cuts the result. Regions are numbered by the
+    Morton key of their first leaf (an aligned quadtree cell's lowest key is
+    its lower-left finest cell)."""
+    n_groups = len(bits)
+    scale = 2 ** (leaves.depth - leaves.level)
+    key = _morton(leaves.ix * scale, leaves.iy * scale)
+    first_key = np.full(n_groups, np.iinfo(np.uint64).max, dtype=np.uint64)
+    np.minimum.at(first_key, group, key)
+    order = np.argsort(first_key, kind="stable")
+    squares = leaf_squares(leaves)
+    by_group = np.argsort(group, kind="stable")
+    bounds = np.searchsorted(group[by_group], np.arange(n_groups + 1))
     merged = np.array(
-        [shapely.coverage_union_all(cells[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None]
+        [shapely.coverage_union_all(squares[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None]
     )[:-1]
     merged = shapely.simplify(merged, 0.0)
     # Each region meets the free space only near itself: clip that first, so

@@ -216,3 +216,15 @@ def test_property_holds_in_random_rooms_with_pillars(seed):
     part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS)
     oracle = VisibilityOracle(scene.segments, scene.walls, CAMERA.height_m, CAMERA.elevation_range(), 10.0, 0.3)
     _assert_property(part, oracle, random_points(scene.free_space, 25, rng))
+
+
+def test_a_huge_plan_caps_the_quadtree_depth():
+    """A 600 m corridor: smallest cells widen rather than memory exploding."""
+    free = box(0, 0, 600, 3)
+    seg = np.array([[[5.0, 3.2, 0.0], [5.0, 3.2, 2.5]], [[300.0, -0.2, 0.0], [303.0, -0.2, 0.0]]])
+    part = build_regions(seg, box(0, 3, 600, 3.4), free, CAMERA)
+    assert part.stats["quadtree_depth"] == 11
+    assert part.stats["smallest_cell_m"] == pytest.approx(600 / 2048)
+    assert sum(p.area for p in part.polygons) == pytest.approx(1800.0)
+    q = [r for r, g in enumerate(part.polygons) if g.intersects(Point(5.0, 1.5))]
+    assert all(0 in part.lists[r] for r in q)
