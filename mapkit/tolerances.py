@@ -145,3 +145,9 @@ VIS_BUILD_SHRINK = 3e-3
 #: cells across the plan. Larger plans get smallest cells wider than
 #: ``VIR_MIN_CELL`` (lists a little longer) instead of unbounded memory.
 VIR_MAX_DEPTH = 11
+
+#: A segment is treated as exactly vertical by the visibility code (one
+#: sight test at its xy point) only if its end points' xy differ by less
+#: than this; steeper-than-``AXIS_DEG`` but slanted segments are sampled
+#: like any other, so a millimetre of slant never hides a grazing view.
+VIS_VERTICAL_XY = 1e-6

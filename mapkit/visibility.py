@@ -29,11 +29,11 @@ from shapely.geometry import Polygon
 from mapkit.assemble import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
-    MERGE,
     OCCLUSION_SHRINK,
     OVERLAY_GRID,
     VIS_BUILD_SHRINK,
     VIS_RAY_OFFSET_DEG,
+    VIS_VERTICAL_XY,
 )
 
 # Vertices this close to the line through their neighbours are dropped, metres.
@@ -342,7 +342,7 @@ def segment_regions(
     n = len(segs)
     e_min, e_max = elevation
     L = float(min_visible_length)
-    vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= MERGE
+    vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
 
     # ---- samples: xy keys shared between segments (floor and ceiling edges)
     keys: dict[tuple[float, float], int] = {}

@@ -200,7 +200,8 @@ def _assert_property(part, oracle, points):
 @settings(max_examples=6, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**31 - 1))
 def test_property_holds_in_random_rooms_with_pillars(seed):
-    """A random room with random free-standing pillars and wall stubs."""
+    """A random room with random free-standing pillars, segments a little off
+    the wall faces."""
     rng = np.random.default_rng(seed)
     w, d = rng.uniform(3.0, 9.0, 2)
     blocks = []
@@ -213,8 +214,11 @@ def test_property_holds_in_random_rooms_with_pillars(seed):
     scene = scene_from_walls(walls, interior, [])
     if scene.free_space.is_empty:
         return
-    part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS)
-    oracle = VisibilityOracle(scene.segments, scene.walls, CAMERA.height_m, CAMERA.elevation_range(), 10.0, 0.3)
+    # End points off the wall faces by up to 0.5 mm, as imported drawings
+    # leave them: verticals slant slightly, sight lines graze corners.
+    segs = scene.segments + rng.uniform(-5e-4, 5e-4, scene.segments.shape) * [1, 1, 0]
+    part = build_regions(segs, scene.walls, scene.free_space, CAMERA, eps=EPS)
+    oracle = VisibilityOracle(segs, scene.walls, CAMERA.height_m, CAMERA.elevation_range(), 10.0, 0.3)
     _assert_property(part, oracle, random_points(scene.free_space, 25, rng))
 
 
