@@ -7,25 +7,11 @@ from pathlib import Path
 
 import ezdxf
 import pytest
-
-from mapkit.cli import main
+from cli_helpers import assert_one_line_error, run
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_one_line_error(code, out, err, *needles):
-    assert code == 2, (code, out, err)
-    lines = [ln for ln in err.splitlines() if not ln.startswith("mapkit: warning:")]
-    assert len(lines) == 1 and lines[0].startswith("mapkit: error: "), err
-    assert "Traceback" not in err
-    for n in needles:
-        assert n.lower() in lines[0].lower(), lines[0]
 
 
 def assert_nothing_written(folder: Path):

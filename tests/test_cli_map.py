@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from cli_helpers import assert_one_line_error, run
 from shapely.geometry import box
 
 from mapkit.assemble import assemble_map
@@ -34,11 +35,6 @@ def map_path(tmp_path_factory):
     save_map(path, m)
     return path
 
-
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def test_info_json(map_path, capsys):
@@ -82,21 +78,15 @@ def test_export_geojson(map_path, tmp_path, capsys):
     assert ring[0] == ring[-1]
 
 
-def _one_line_error(code, out, err, *needles):
-    assert code == 2 and out == ""
-    assert err.startswith("mapkit: error: ") and err.count("\n") == 1, err
-    for n in needles:
-        assert n in err, err
-
 
 def test_missing_map(tmp_path, capsys):
-    _one_line_error(*run(capsys, "info", tmp_path / "nope.lmap"), "no such file")
+    assert_one_line_error(*run(capsys, "info", tmp_path / "nope.lmap"), "no such file")
 
 
 def test_not_a_map(tmp_path, capsys):
     bad = tmp_path / "bad.lmap"
     bad.write_text("hello")
-    _one_line_error(*run(capsys, "info", bad), "not a .lmap map")
+    assert_one_line_error(*run(capsys, "info", bad), "not a .lmap map")
 
 
 def test_corrupt_map(map_path, tmp_path, capsys):
@@ -104,26 +94,26 @@ def test_corrupt_map(map_path, tmp_path, capsys):
     data[-5] ^= 0x55
     bad = tmp_path / "corrupt.lmap"
     bad.write_bytes(bytes(data))
-    _one_line_error(*run(capsys, "query", bad, "--at", "1,1"), "checksum")
+    assert_one_line_error(*run(capsys, "query", bad, "--at", "1,1"), "checksum")
 
 
 def test_truncated_map(map_path, tmp_path, capsys):
     bad = tmp_path / "cut.lmap"
     bad.write_bytes(map_path.read_bytes()[:100])
-    _one_line_error(*run(capsys, "info", bad, "--json"), "truncated")
+    assert_one_line_error(*run(capsys, "info", bad, "--json"), "truncated")
 
 
 @pytest.mark.parametrize("at", ["1", "a,b", "1,2,3", "nan,1"])
 def test_bad_at(map_path, capsys, at):
-    _one_line_error(*run(capsys, "query", map_path, "--at", at), "--at")
+    assert_one_line_error(*run(capsys, "query", map_path, "--at", at), "--at")
 
 
 def test_negative_radius(map_path, capsys):
-    _one_line_error(*run(capsys, "query", map_path, "--at", "1,1", "--radius", "-1"), "--radius")
+    assert_one_line_error(*run(capsys, "query", map_path, "--at", "1,1", "--radius", "-1"), "--radius")
 
 
 def test_export_into_missing_folder_writes_nothing(map_path, tmp_path, capsys):
-    _one_line_error(*run(capsys, "export", map_path, "--geojson", tmp_path / "no" / "x.geojson"), "does not exist")
+    assert_one_line_error(*run(capsys, "export", map_path, "--geojson", tmp_path / "no" / "x.geojson"), "does not exist")
     assert not (tmp_path / "no").exists()
 
 

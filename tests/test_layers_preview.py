@@ -6,27 +6,13 @@ import json
 from pathlib import Path
 
 import pytest
-
-from mapkit.cli import main
+from cli_helpers import assert_one_line_error, run
 
 DATA = Path(__file__).resolve().parent / "data"
 CASES = DATA / "dxf"
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 
-def run(capsys, *argv):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_one_line_error(code, out, err, *needles):
-    assert code == 2, (code, out, err)
-    lines = [ln for ln in err.splitlines() if not ln.startswith("mapkit: warning:")]
-    assert len(lines) == 1 and lines[0].startswith("mapkit: error: "), err
-    assert "Traceback" not in err and out == ""
-    for n in needles:
-        assert n.lower() in lines[0].lower(), lines[0]
 
 
 # ---- layers --------------------------------------------------------------------

@@ -1,0 +1,23 @@
+"""Helpers for CLI tests: run ``mapkit`` in-process and check its error contract."""
+
+from __future__ import annotations
+
+from mapkit.cli import main
+
+
+def run(capsys, *argv):
+    """Run ``mapkit ARGV`` (any path-like arguments allowed); return (code, stdout, stderr)."""
+    capsys.readouterr()
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_error(code, out, err, *needles):
+    """Exit 2, nothing on stdout, one 'mapkit: error:' line (warnings aside) naming each needle."""
+    assert code == 2, (code, out, err)
+    lines = [ln for ln in err.splitlines() if not ln.startswith("mapkit: warning:")]
+    assert len(lines) == 1 and lines[0].startswith("mapkit: error: "), err
+    assert "Traceback" not in err and out == ""
+    for n in needles:
+        assert n.lower() in lines[0].lower(), lines[0]
