@@ -22,6 +22,7 @@ the starting point of stage 2.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -251,6 +252,7 @@ def generate(
     of the tree's final test, or None; ``samples`` (N, n, 3) points of each
     candidate tested for visibility (spread over the pieces of a collinear
     group, see :func:`collinear_classes`). ``debug``, if a dict, receives the intermediate arrays (for tools)."""
+    t_start = time.perf_counter()
     xe, ye, yaw_e = prior
     step = math.radians(tol.yaw_step_deg)
     h = camera.height_m
@@ -343,6 +345,7 @@ def generate(
         return empty
 
     # ---- pairwise compatibility ----------------------------------------
+    t_pairs = time.perf_counter()
     iu, ju = np.triu_indices(K, 1)
     distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
     iu, ju = iu[distinct], ju[distinct]
@@ -370,10 +373,14 @@ def generate(
                      uh=uh, ih=ih)
 
     # ---- interpretation tree -------------------------------------------
+    t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
                     None if samples is None else samples[seg_k], line_k, seg_k)
     sets, init, truncated, nodes, found = search(inp, tol)
     counts["tree_nodes"] = int(nodes)
     counts["sets_found"] = int(found)
+    counts["ms_correspondences"] = round((t_pairs - t_start) * 1e3, 3)
+    counts["ms_pairs"] = round((t_tree - t_pairs) * 1e3, 3)
+    counts["ms_tree"] = round((time.perf_counter() - t_tree) * 1e3, 3)
     return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
                       truncated, counts)

@@ -80,6 +80,7 @@ def search(inp: TreeInput, tol: Tolerances):
     sets: list[np.ndarray] = []
     inits: list[tuple] = []
     state = {"bound": tol.min_matches, "truncated": False, "nodes": 0}
+    cache: dict = {}
     weak = np.zeros(K, dtype=bool) if inp.vertical is None else inp.vertical
     degree = compat.sum(axis=1)
 
@@ -103,17 +104,22 @@ def search(inp: TreeInput, tol: Tolerances):
     order_rank[np.concatenate(cands)] = np.arange(K)
     seg_of = np.asarray(inp.seg, dtype=np.int64)
 
-    def feasible_with(R: list[int], Qsum: np.ndarray, mR: np.ndarray, cand: np.ndarray) -> np.ndarray:
-        """(C,) bool: is R + {u} feasible, for each u in cand."""
+    def feasible_with(R: list[int], Qsum: np.ndarray, mR: np.ndarray, cand: np.ndarray, fit: bool = False):
+        """(C,) bool: is R + {u} feasible, for each u in cand; with ``fit``
+        also (C,) the best summed quadratic of R + {u} (inf if infeasible)."""
         G = np.nonzero(mR)[0]
         if len(G) == 0:
-            return np.zeros(len(cand), dtype=bool)
+            no = np.zeros(len(cand), dtype=bool)
+            return (no, np.full(len(cand), np.inf)) if fit else no
         qc = quad[np.ix_(cand, G)]  # (C, G, 6)
         val, zx, zy = posegrid.minimise(Qsum[G] + qc, dt)
         ok = mask[np.ix_(cand, G)] & (val <= len(R) + 2.0) & (posegrid.evaluate(qc, zx, zy) <= tol.q_max)
         if R:
             each = posegrid.evaluate(quad[np.ix_(R, G)][:, None], zx, zy)  # (S, C, G)
             ok &= (each <= tol.q_max).all(axis=0)
+        if fit:
+            best = np.where(ok, val, np.inf).min(axis=1)
+            return np.isfinite(best), best
         return ok.any(axis=1)
 
     def open_candidates(level: int, R: list[int], used: frozenset) -> np.ndarray:
@@ -132,7 +138,7 @@ def search(inp: TreeInput, tol: Tolerances):
         return not (extra.size and feasible_with(R, Qsum, mR, extra).any())
 
     def emit(R: list[int]) -> None:
-        res = final_check(inp, np.array(sorted(R)), tol)
+        res = final_check(inp, np.array(sorted(R)), tol, cache)
         if res is None or len(res[0]) < state["bound"]:
             return
         new_bound = max(state["bound"], len(res[0]) - tol.match_slack)
@@ -163,17 +169,23 @@ def search(inp: TreeInput, tol: Tolerances):
         ahead = np.nonzero((level_of >= level) & ~used[seg_of])[0]
         if R and ahead.size:
             ahead = ahead[compat[np.ix_(R, ahead)].all(axis=0)]
+        fit = np.zeros(0)
         if ahead.size:
-            ahead = ahead[feasible_with(R, Qsum, mR, ahead)]
+            ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
+            ahead, fit = ahead[ok], fit[ok]
         reachable = np.unique(level_of[ahead]).size
         if len(R) + reachable < state["bound"]:
             return
-        c = ahead[level_of[ahead] == level]
-        c = c[np.argsort(order_rank[c])]
+        here = level_of[ahead] == level
+        c = ahead[here]
+        # Best fitting first once the pose is pinned by a few members, else
+        # the most connected: either way the first dive tends to follow the
+        # true match, which raises the bound for the rest of the search.
+        c = c[np.lexsort((order_rank[c], fit[here]))] if len(R) >= 2 else c[np.argsort(order_rank[c])]
         for v in c:
             v = int(v)
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
-            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2):
+            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, cache):
                 continue
             used2 = used.copy()
             used2[seg_of[v]] = True
@@ -196,7 +208,7 @@ def search(inp: TreeInput, tol: Tolerances):
     return sets, [p[:3] for p in inits], state["truncated"], state["nodes"], state["found"]
 
 
-def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray) -> bool:
+def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, cache: dict | None = None) -> bool:
     """Once a set fixes the pose (three members or more): are all its
     segments in front of the camera and unhidden at its best grid pose?"""
     G = np.nonzero(mR)[0]
@@ -212,10 +224,10 @@ def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndar
     if lam_min < 1.0 / _PINNED_M**2:
         return True
     cam = inp.centre[:2] + np.array([zx[g], zy[g]])
-    return bool(_seen(inp, np.asarray(R), cam, inp.forward[G[g]]).all())
+    return bool(_seen_cached(inp, np.asarray(sorted(R)), cam, int(G[g]), cache).all())
 
 
-def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
+def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None):
     """``(members, (x, y, yaw, fit))`` for the largest subset found feasible by
     dropping the worst member, or None if it falls below ``min_matches``.
 
@@ -242,11 +254,23 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances):
             continue
         g = int(np.argmin(np.where(good, val, np.inf)))
         cam = ce[:2] + np.array([zx[g], zy[g]])
-        seen = _seen(inp, members, cam, inp.forward[g])
+        seen = _seen_cached(inp, members, cam, g, cache)
         if seen.all():
             return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
         members = members[seen]
     return None
+
+
+def _seen_cached(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, cache: dict | None) -> np.ndarray:
+    """:func:`_seen` remembered per (members, grid yaw, centimetre of
+    position): a leaf repeats the test its last node made."""
+    if cache is None:
+        return _seen(inp, members, cam, inp.forward[g])
+    key = (members.tobytes(), g, int(round(cam[0] * 100)), int(round(cam[1] * 100)))
+    hit = cache.get(key)
+    if hit is None:
+        hit = cache[key] = _seen(inp, members, cam, inp.forward[g])
+    return hit
 
 
 def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndarray) -> np.ndarray:
@@ -258,18 +282,21 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
         segs = inp.segments[members]  # (S, 2, 3)
         pts = segs[:, None, 0] + _SAMPLES[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])
     C = np.array([cam[0], cam[1], inp.centre[2]])
-    front = ((pts - C) @ forward > 0.05).ravel()
-    flat = pts[..., :2].reshape(-1, 2)
-    clear = np.zeros(len(flat), dtype=bool)
+    S, n = pts.shape[:2]
+    front = (pts - C) @ forward > 0.05  # (S, n)
+    flat = pts[..., :2]
+    seen = np.zeros(S, dtype=bool)
     # Seen from the point or from any of four points around it: the grid pose
     # is a few centimetres off, and a sight line through a doorway far away
-    # can swing onto a jamb over that distance.
+    # can swing onto a jamb over that distance. A member is done as soon as
+    # one of its points is clear.
     for off in _CAMERA_JITTER:
-        todo = np.nonzero(front & ~clear)[0]
-        if len(todo) == 0:
+        todo_s, todo_p = np.nonzero(front & ~seen[:, None])
+        if len(todo_s) == 0:
             break
-        clear[todo] = sight_clear(cam + off, flat[todo], inp.walls, _OCCLUSION_END_M)
-    return (front & clear).reshape(len(members), -1).any(axis=1)
+        clear = sight_clear(cam + off, flat[todo_s, todo_p], inp.walls, _OCCLUSION_END_M)
+        seen[todo_s[clear]] = True
+    return seen
 
 
 def _drop_dominated(sets, inits):
