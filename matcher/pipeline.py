@@ -146,32 +146,50 @@ def _doubtful(ranked, hyps, tol) -> bool:
     return kept <= max(len(x) for x in hyps.sets) - 2
 
 
-def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None, dt_margin: float = 0.0):
+#: Lost mode multiplies the tree's node and set budgets by this.
+_LOST_BUDGET = 10
+
+
+def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None,
+                    first_accepted: bool = False):
     """Lost mode (method.md section 3): one prior per region (its centre,
-    ``dt`` its radius plus ``dt_margin``, any heading) until one hypothesis is
-    accepted. Regions are tried in order of id. Returns the first accepted
-    result (``time_ms['total']`` covers all tries), or a falsy result."""
+    ``dt`` its radius, any heading, the region's own visible list).
+
+    With ``first_accepted`` the search stops at the first region that gives
+    an accepted hypothesis, in order of region id (the paper's loop).
+    Otherwise every region is tried and the accepted result that explains
+    the most lines wins, then the smallest E: a wrong room can hold a few
+    lines that fit well, the right one explains more of the image.
+    ``time_ms['total']`` covers all tries; ``time_ms['regions_tried']``
+    counts them. Returns a falsy result if no region gives one."""
     tol = tolerances or DEFAULT
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a matcher.Camera, got {type(camera).__name__}")
     t0 = time.perf_counter()
     arr = check_lines(lines, camera, tol)
     img = prepare_lines(camera, arr, tol)
-    centres, radii = linemap.region_centres(), linemap.region_radii()
+    # The robot is stopped: a larger search budget per region.
+    tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
     if linemap.n_regions == 0:
-        return LocalizeResult(False, "the map has no regions")
-    tried = 0
+        return LocalizeResult(False, "the map has no regions", time_ms={"total": 0.0, "regions_tried": 0})
+    centres, radii = linemap.region_centres(), linemap.region_radii()
+    tried, best = 0, None
     for r in range(linemap.n_regions):
         cx, cy = (float(v) for v in centres[r])
-        dt = float(radii[r]) + dt_margin
+        dt = float(radii[r])
         if not (math.isfinite(cx) and math.isfinite(cy) and dt > 0):
             continue
         tried += 1
         res = _localize(linemap, camera, img, (cx, cy, 0.0, min(dt, 100.0), math.pi), tol, t0,
-                        candidate_ids=linemap.region_list(r) if dt_margin == 0 else None)
-        if res:
-            res.time_ms["total"] = (time.perf_counter() - t0) * 1e3
-            res.time_ms["regions_tried"] = tried
-            return res
-    return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} tried)",
-                          time_ms={"total": (time.perf_counter() - t0) * 1e3, "regions_tried": tried})
+                        candidate_ids=linemap.region_list(r))
+        if res and (best is None or (len(res.matches), -res.score) > (len(best.matches), -best.score)):
+            best = res
+            if first_accepted:
+                break
+    total = (time.perf_counter() - t0) * 1e3
+    if best is None:
+        return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} tried)",
+                              time_ms={"total": total, "regions_tried": tried})
+    best.time_ms["total"] = total
+    best.time_ms["regions_tried"] = tried
+    return best

@@ -1,0 +1,139 @@
+"""The matcher command line: output forms and every user error."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+
+from matcher.cli import main  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    from _synthetic_map import make_small_flat
+    from mapkit.lmap import save_map
+    from simulate import make_frame, paper_camera
+
+    d = tmp_path_factory.mktemp("cli")
+    m = make_small_flat()
+    save_map(d / "flat.lmap", m)
+    cam = paper_camera()
+    (d / "cam.json").write_text(json.dumps(cam.to_dict()))
+    fr = make_frame(m, cam, np.random.default_rng(11), 2)
+    (d / "lines.json").write_text(json.dumps({"lines": fr.lines.reshape(-1, 4).tolist()}))
+    prior = ",".join(f"{v:.4f}" for v in fr.prior)
+    return {"dir": d, "frame": fr, "prior": prior, "dt": str(fr.dt), "dyaw": str(fr.dyaw)}
+
+
+def args(files, *extra, lines=True):
+    d = files["dir"]
+    a = ["localize", "--map", str(d / "flat.lmap"), "--camera", str(d / "cam.json"),
+         "--prior", files["prior"], "--dt", files["dt"], "--dyaw", files["dyaw"]]
+    if lines:
+        a += ["--lines", str(d / "lines.json")]
+    return a + list(extra)
+
+
+def test_human_output(files, capsys):
+    assert main(args(files)) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("pose x=") and "score E=" in out and "matches [segment, line]" in out
+
+
+def test_json_output_is_one_object(files, capsys):
+    assert main(args(files, "--json")) == 0
+    out = capsys.readouterr().out.strip()
+    d = json.loads(out)
+    assert d["ok"] is True and set(d["pose"]) == {"x", "y", "yaw_deg"}
+    x, y, yaw = files["frame"].pose
+    assert abs(d["pose"]["x"] - x) < 0.05 and abs(d["pose"]["y"] - y) < 0.05
+    assert len(out.splitlines()) == 1
+
+
+def test_not_localised_exits_1_with_reason(files, capsys):
+    a = args(files, "--json")
+    a[a.index("--prior") + 1] = "60,60,0"
+    assert main(a) == 1
+    d = json.loads(capsys.readouterr().out)
+    assert d["ok"] is False and "farther than" in d["reason"]
+
+
+def test_image_input(files, capsys, tmp_path):
+    img = np.zeros((480, 640), np.uint8)
+    for (u1, v1), (u2, v2) in files["frame"].lines:
+        cv2.line(img, (int(round(u1)), int(round(v1))), (int(round(u2)), int(round(v2))), 255, 2)
+    p = tmp_path / "frame.png"
+    cv2.imwrite(str(p), img)
+    a = args(files, "--json", lines=False) + ["--image", str(p)]
+    code = main(a)
+    d = json.loads(capsys.readouterr().out)
+    assert code in (0, 1) and "hypotheses" in d
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("--map", "missing.lmap"), "map file missing.lmap not found; build one with 'mapkit build'"),
+        (("--camera", "missing.json"), "camera file missing.json not found"),
+        (("--lines", "missing.json"), "lines file missing.json not found"),
+        (("--prior", "1,2"), "--prior must be X,Y,YAW_DEG"),
+        (("--dt", "-1"), r"dt must be in (0, 100] metres"),
+        (("--dyaw", "500"), r"dyaw must be in (0, 180] degrees"),
+    ],
+)
+def test_user_errors_one_line(files, capsys, change, message):
+    a = args(files)
+    a[a.index(change[0]) + 1] = change[1]
+    assert main(a) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("matcher: error: ") and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_files(files, capsys, tmp_path):
+    bad_cam = tmp_path / "cam.json"
+    bad_cam.write_text(json.dumps({"width": 640, "height": 480}))
+    a = args(files)
+    a[a.index("--camera") + 1] = str(bad_cam)
+    assert main(a) == 2
+    assert "camera description lacks fx" in capsys.readouterr().err
+    bad_lines = tmp_path / "lines.json"
+    bad_lines.write_text('{"lines": [[1, 2, 3]]}')
+    a = args(files)
+    a[a.index("--lines") + 1] = str(bad_lines)
+    assert main(a) == 2
+    assert "Expected shape (M, 2, 2) or (M, 4)" in capsys.readouterr().err
+    bad_lines.write_text("not json")
+    assert main(a) == 2
+    assert "is not valid JSON" in capsys.readouterr().err
+    bad_map = tmp_path / "bad.lmap"
+    bad_map.write_bytes(b"garbage")
+    a = args(files)
+    a[a.index("--map") + 1] = str(bad_map)
+    assert main(a) == 2
+    assert "not a .lmap map" in capsys.readouterr().err
+
+
+def test_missing_option_and_both_sources(files, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["localize", "--map", "x"])
+    assert e.value.code == 2
+    assert capsys.readouterr().err.startswith("matcher: error: ")
+    with pytest.raises(SystemExit):
+        main(args(files, "--image", "x.png"))
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_python_dash_m(files):
+    out = subprocess.run([sys.executable, "-m", "matcher", *args(files, "--json")], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["ok"] is True
+    assert out.stderr == ""

@@ -1,0 +1,98 @@
+"""Line detection with LSD on images drawn by the test."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import matcher
+from matcher.camera import Camera
+from matcher.lines import merge_collinear
+
+
+def _angle(line):
+    d = line[1] - line[0]
+    return np.degrees(np.arctan2(d[1], d[0])) % 180.0
+
+
+def _match(found, a, b, tol_px=3.0):
+    """The found line close to the segment a-b (both end points, either order)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    for ln in found:
+        if (np.linalg.norm(ln[0] - a) < tol_px and np.linalg.norm(ln[1] - b) < tol_px) or (
+            np.linalg.norm(ln[0] - b) < tol_px and np.linalg.norm(ln[1] - a) < tol_px
+        ):
+            return ln
+    return None
+
+
+def test_lsd_finds_drawn_lines_as_single_lines():
+    img = np.full((480, 640), 40, np.uint8)
+    drawn = [((100, 60), (100, 420)), ((150, 400), (560, 330)), ((300, 100), (520, 110))]
+    for a, b in drawn:
+        cv2.line(img, a, b, 220, 2)
+    found = matcher.detect_lines(img)
+    assert found.shape[1:] == (2, 2)
+    # Each stroke gives one line (its two LSD edges merged), end points within 3 px.
+    for a, b in drawn:
+        assert _match(found, a, b) is not None, (a, b, found.round(1).tolist())
+    assert len(found) == len(drawn)
+
+
+def test_colour_image_and_float_image():
+    img = np.zeros((480, 640, 3), np.uint8)
+    cv2.line(img, (50, 50), (50, 400), (0, 200, 255), 2)
+    assert _match(matcher.detect_lines(img), (50, 50), (50, 400)) is not None
+    f = img[..., 1].astype(np.float32) / 255.0
+    assert _match(matcher.detect_lines(f), (50, 50), (50, 400)) is not None
+
+
+def test_minimum_length_drops_short_lines():
+    img = np.zeros((480, 640), np.uint8)
+    cv2.line(img, (100, 100), (108, 100), 255, 2)  # 8 px
+    cv2.line(img, (100, 300), (400, 300), 255, 2)
+    found = matcher.detect_lines(img, min_length=15)
+    assert len(found) == 1 and _match(found, (100, 300), (400, 300)) is not None
+
+
+def test_collinear_fragments_merge():
+    frags = np.array([[[0, 0], [100, 1]], [[105, 1.1], [200, 2]], [[0, 50], [100, 50]]], float)
+    merged = merge_collinear(frags)
+    assert len(merged) == 2
+    long = max(merged, key=lambda ln: np.linalg.norm(ln[1] - ln[0]))
+    assert np.linalg.norm(long[1] - long[0]) == pytest.approx(200.0, abs=0.5)
+
+
+def test_distortion_is_removed_from_end_points():
+    """A straight world line drawn through a distorted camera comes out
+    straight after undistortion of the detected end points."""
+    cam = Camera(640, 480, 500.0, 500.0, 320.0, 240.0, 1.2, 0.0, (-0.2, 0.03, 0.0, 0.0))
+    # Ideal pixels of a line, distorted for drawing.
+    ideal = np.array([[120.0, 100.0], [520.0, 140.0]])
+    t = np.linspace(0, 1, 200)[:, None]
+    pts = ideal[0] + t * (ideal[1] - ideal[0])
+    norm = (pts - [cam.cx, cam.cy]) / cam.fx
+    obj = np.concatenate([norm, np.ones((len(norm), 1))], 1)
+    dist, _ = cv2.projectPoints(obj, np.zeros(3), np.zeros(3), cam.K, np.array(cam.distortion))
+    dist = dist.reshape(-1, 2)
+    img = np.zeros((480, 640), np.uint8)
+    cv2.polylines(img, [np.round(dist).astype(np.int32)], False, 255, 2)
+    found = matcher.detect_lines(img, cam, min_length=100)
+    assert len(found)
+    best = max(found, key=lambda ln: np.linalg.norm(ln[1] - ln[0]))
+    # The undistorted line lies on the ideal one (within 2 px at both ends).
+    d = ideal[1] - ideal[0]
+    nrm = np.array([-d[1], d[0]]) / np.linalg.norm(d)
+    assert np.abs((best - ideal[0]) @ nrm).max() < 2.0
+
+
+def test_camera_size_must_match_image():
+    cam = Camera(320, 240, 300.0, 300.0, 160.0, 120.0, 1.2, 0.0)
+    with pytest.raises(ValueError, match="image is 640x480 but the camera is 320x240"):
+        matcher.detect_lines(np.zeros((480, 640), np.uint8), cam)
+
+
+def test_bad_image_shape():
+    with pytest.raises(ValueError, match=r"Expected shape \(H, W\)"):
+        matcher.detect_lines(np.zeros((4, 5, 6, 7)))

@@ -1,0 +1,124 @@
+"""Recovery of the pose from simulated frames, at every PEQ of the paper.
+
+Frames from tools/simulate.py on the two-room test map of
+tools/_synthetic_map.py: 640x480 camera, f = 900, 1.2 m high; 1 px / 1 deg
+uniform noise on the lines, 3 clutter lines, priors drawn within each PEQ.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+
+import matcher  # noqa: E402
+from _synthetic_map import make_small_flat  # noqa: E402
+from simulate import PEQ, make_frame, paper_camera, pose_error  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def small_map():
+    return make_small_flat()
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return paper_camera()
+
+
+def _correct(res, frame) -> bool:
+    truth = {tuple(m) for m in frame.true_matches()}
+    return bool(res) and len(res.matches) >= 3 and {tuple(m) for m in res.matches} <= truth
+
+
+@pytest.mark.parametrize("peq", sorted(PEQ))
+def test_recovery_at_every_peq(small_map, cam, peq):
+    rng = np.random.default_rng([7, peq])
+    n, good, errs = 6, 0, []
+    for _ in range(n):
+        fr = make_frame(small_map, cam, rng, peq)
+        res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+        if _correct(res, fr):
+            good += 1
+            errs.append(pose_error(res.pose, fr.pose))
+        assert res.hypotheses <= 25
+    assert good >= n - 1, f"PEQ {peq}: {good} of {n} frames matched correctly"
+    pos, yaw = np.median(np.array(errs), axis=0)
+    assert pos < 0.03 and yaw < 0.3
+
+
+def test_result_shape_and_json(small_map, cam):
+    fr = make_frame(small_map, cam, np.random.default_rng(11), 2)
+    res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+    assert res and res.ok and res.reason == ""
+    d = res.to_dict()
+    assert set(d) == {"ok", "pose", "score", "runner_up_score", "hypotheses", "matches", "time_ms"}
+    assert set(d["pose"]) == {"x", "y", "yaw_deg"}
+    assert d["score"] <= matcher.Tolerances().e_accept
+    assert all(isinstance(a, int) and isinstance(b, int) for a, b in d["matches"])
+    assert {"select", "generate", "verify", "total"} <= set(d["time_ms"])
+    # Segment ids are map ids, line indices index the input.
+    for s, j in d["matches"]:
+        assert 0 <= s < small_map.n_segments and 0 <= j < len(fr.lines)
+    import json
+
+    json.dumps(d)
+
+
+def test_exact_lines_give_exact_pose(small_map, cam):
+    """Noise-free lines: the pose comes out to well under a millimetre."""
+    rng = np.random.default_rng(5)
+    fr = make_frame(small_map, cam, rng, 3, noise_px=0.0, noise_deg=0.0, end_px=0.0, clutter=0)
+    res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+    pos, yaw = pose_error(res.pose, fr.pose)
+    assert pos < 1e-3 and yaw < 0.01
+    assert res.score < 1e-8
+
+
+def test_pitched_camera(small_map):
+    cam = paper_camera(height_m=1.0, pitch_deg=12.0)
+    rng = np.random.default_rng(21)
+    good = 0
+    for _ in range(5):
+        fr = make_frame(small_map, cam, rng, 3)
+        good += _correct(matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw), fr)
+    assert good >= 4
+
+
+def test_global_localisation_when_lost(small_map, cam):
+    """No prior: every region is tried with its centre, its radius and any
+    heading (seconds, not milliseconds: the robot is stopped)."""
+    fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
+    res = matcher.localize_global(small_map, cam, fr.lines)
+    assert res, res.reason
+    pos, yaw = pose_error(res.pose, fr.pose)
+    assert pos < 0.05 and yaw < 0.5
+    assert res.time_ms["regions_tried"] == small_map.n_regions
+
+
+def test_clutter_only_is_not_accepted(small_map, cam):
+    """Random lines and no model: a falsy result with a reason, never a pose."""
+    from simulate import clutter_lines
+
+    rng = np.random.default_rng(8)
+    for _ in range(5):
+        lines = clutter_lines(rng, 8, cam)
+        res = matcher.localize(small_map, cam, lines, (3.0, 2.5, 0.0), 1.0, 50.0)
+        if res:  # a chance fit must at least be a sensible one
+            assert res.score <= matcher.Tolerances().e_accept
+        else:
+            assert res.reason
+
+
+def test_runner_up_and_ranking(small_map, cam):
+    fr = make_frame(small_map, cam, np.random.default_rng(12), 5)
+    res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+    scores = [e for e, _, _ in res.ranked if math.isfinite(e)]
+    assert res.score is not None
+    if res.runner_up_score is not None:
+        assert res.runner_up_score >= scores[0]
