@@ -16,6 +16,8 @@ with ``n`` the image line's plane normal, ``v`` the segment's direction and
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from matcher.constraints import rotations
@@ -37,37 +39,45 @@ def _cross(a, b):
     )
 
 
+def _to_cam(c, s, cp, sp, d):
+    """R (P - C) for offsets d (T, 3) and yaw cosines/sines c, s (T,): rows
+    r, d, f of method.md section 2, written out (no (T, 3, 3) array)."""
+    x, y, z = d[:, 0], d[:, 1], d[:, 2]
+    return np.stack([s * x - c * y, -sp * (c * x + s * y) - cp * z, cp * (c * x + s * y) - sp * z], axis=1)
+
+
+def _to_cam_dyaw(c, s, cp, sp, d):
+    """d/dyaw of :func:`_to_cam`."""
+    x, y = d[:, 0], d[:, 1]
+    h = -s * x + c * y  # d/dyaw of (c x + s y)
+    return np.stack([c * x + s * y, -sp * h, cp * h], axis=1)
+
+
 def _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
     """(T, 2) image-side residuals, and with ``jacobian`` their derivatives
     (T, 2, 3) in (x, y, yaw); params (H, 3), hyp (T,) hypothesis of each match."""
     p = params[hyp]
-    psi = p[:, 2]
-    c, s = np.cos(psi), np.sin(psi)
-    cp, sp = np.cos(pitch), np.sin(pitch)
-    z = np.zeros_like(c)
-    R = np.stack([np.stack([s, -c, z], 1), np.stack([-sp * c, -sp * s, z - cp], 1), np.stack([cp * c, cp * s, z - sp], 1)], 1)
+    c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
+    cp, sp = math.cos(pitch), math.sin(pitch)
     C = np.stack([p[:, 0], p[:, 1], np.full(len(p), height)], axis=1)
     da, db = seg_a - C, seg_b - C
-    qa = np.einsum("tij,tj->ti", R, da)
-    qb = np.einsum("tij,tj->ti", R, db)
+    qa, qb = _to_cam(c, s, cp, sp, da), _to_cam(c, s, cp, sp, db)
     m = _cross(qa, qb)
-    nm = np.linalg.norm(m, axis=1, keepdims=True)
+    nm = np.sqrt((m * m).sum(axis=1))[:, None]
     mh = m / nm
-    r = np.stack([np.einsum("ti,ti->t", mh, ray_a), np.einsum("ti,ti->t", mh, ray_b)], axis=1)
+    r = np.stack([(mh * ray_a).sum(axis=1), (mh * ray_b).sum(axis=1)], axis=1)
     if not jacobian:
         return r
-    # d q / d x = -R e_x, d q / d y = -R e_y (same for both end points); d q / d yaw = R' (P - C).
-    Rp = np.stack([np.stack([c, s, z], 1), np.stack([sp * s, -sp * c, z], 1), np.stack([-cp * s, cp * c, z], 1)], 1)
     J = np.empty(r.shape + (3,))
-    for k in range(3):
-        if k < 2:
-            dqa = dqb = -R[:, :, k]
-            dm = _cross(dqa, qb) + _cross(qa, dqb)
-        else:
-            dm = _cross(np.einsum("tij,tj->ti", Rp, da), qb) + _cross(qa, np.einsum("tij,tj->ti", Rp, db))
-        dmh = (dm - mh * np.einsum("ti,ti->t", mh, dm)[:, None]) / nm
-        J[:, 0, k] = np.einsum("ti,ti->t", dmh, ray_a)
-        J[:, 1, k] = np.einsum("ti,ti->t", dmh, ray_b)
+    # d q / d x = -R e_x and d q / d y = -R e_y, the same for both end points.
+    ex = np.stack([s, -sp * c, cp * c], axis=1)
+    ey = np.stack([-c, -sp * s, cp * s], axis=1)
+    dms = [_cross(-ex, qb) + _cross(qa, -ex), _cross(-ey, qb) + _cross(qa, -ey),
+           _cross(_to_cam_dyaw(c, s, cp, sp, da), qb) + _cross(qa, _to_cam_dyaw(c, s, cp, sp, db))]
+    for k, dm in enumerate(dms):
+        dmh = (dm - mh * (mh * dm).sum(axis=1)[:, None]) / nm
+        J[:, 0, k] = (dmh * ray_a).sum(axis=1)
+        J[:, 1, k] = (dmh * ray_b).sum(axis=1)
     return r, J
 
 
