@@ -151,7 +151,12 @@ def search(inp: TreeInput, tol: Tolerances):
         if len(sets) >= tol.max_sets:
             state["truncated"] = True
 
-    def rec(level: int, R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int]) -> None:
+    def rec(level: int, R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int], pool: np.ndarray,
+            fit: np.ndarray | None) -> None:
+        """``pool``: candidates of the lines from ``level`` on. With ``fit``
+        None, R just grew and the pool is filtered against it (consistency
+        only shrinks as R grows, so the parent's pool is enough); otherwise
+        it is the parent's filtered pool and ``fit`` their best fits."""
         if state["truncated"]:
             return
         state["nodes"] += 1
@@ -166,13 +171,15 @@ def search(inp: TreeInput, tol: Tolerances):
             return
         # Look ahead: the open candidates of all lines still to come, kept if
         # consistent with R. Lines with none cannot be matched any more.
-        ahead = np.nonzero((level_of >= level) & ~used[seg_of])[0]
-        if R and ahead.size:
-            ahead = ahead[compat[np.ix_(R, ahead)].all(axis=0)]
-        fit = np.zeros(0)
-        if ahead.size:
-            ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
-            ahead, fit = ahead[ok], fit[ok]
+        ahead = pool
+        if fit is None:
+            ahead = ahead[~used[seg_of[ahead]]]
+            if R and ahead.size:
+                ahead = ahead[compat[R[-1], ahead]]
+            fit = np.zeros(0)
+            if ahead.size:
+                ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
+                ahead, fit = ahead[ok], fit[ok]
         reachable = np.unique(level_of[ahead]).size
         if len(R) + reachable < state["bound"]:
             return
@@ -182,6 +189,7 @@ def search(inp: TreeInput, tol: Tolerances):
         # the most connected: either way the first dive tends to follow the
         # true match, which raises the bound for the rest of the search.
         c = c[np.lexsort((order_rank[c], fit[here]))] if len(R) >= 2 else c[np.argsort(order_rank[c])]
+        rest = ahead[~here]
         for v in c:
             v = int(v)
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
@@ -189,13 +197,15 @@ def search(inp: TreeInput, tol: Tolerances):
                 continue
             used2 = used.copy()
             used2[seg_of[v]] = True
-            rec(level + 1, R2, Q2, m2, used2, skipped)
+            rec(level + 1, R2, Q2, m2, used2, skipped, rest, None)
             if state["truncated"]:
                 return
         if len(R) + reachable - (1 if c.size else 0) >= state["bound"]:
-            rec(level + 1, R, Qsum, mR, used, skipped + [level])  # the line left unmatched
+            # The line left unmatched: R is unchanged, so is its filtered pool.
+            rec(level + 1, R, Qsum, mR, used, skipped + [level], rest, fit[~here])
 
-    rec(0, [], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [])
+    rec(0, [], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
+        np.arange(K), None)
     if sets:
         top = max(len(s) for s in sets)
         keep = [i for i, s in enumerate(sets) if len(s) >= top - tol.match_slack]
@@ -285,17 +295,22 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
     S, n = pts.shape[:2]
     front = (pts - C) @ forward > 0.05  # (S, n)
     flat = pts[..., :2]
-    seen = np.zeros(S, dtype=bool)
     # Seen from the point or from any of four points around it: the grid pose
     # is a few centimetres off, and a sight line through a doorway far away
-    # can swing onto a jamb over that distance. A member is done as soon as
-    # one of its points is clear.
-    for off in _CAMERA_JITTER:
-        todo_s, todo_p = np.nonzero(front & ~seen[:, None])
-        if len(todo_s) == 0:
-            break
-        clear = sight_clear(cam + off, flat[todo_s, todo_p], inp.walls, _OCCLUSION_END_M)
-        seen[todo_s[clear]] = True
+    # can swing onto a jamb over that distance. First from the point itself,
+    # then, for members not yet seen, from the four others in one batch.
+    todo_s, todo_p = np.nonzero(front)
+    seen = np.zeros(S, dtype=bool)
+    if len(todo_s) == 0:
+        return seen
+    seen[todo_s[sight_clear(cam, flat[todo_s, todo_p], inp.walls, _OCCLUSION_END_M)]] = True
+    todo_s, todo_p = np.nonzero(front & ~seen[:, None])
+    if len(todo_s):
+        J = len(_CAMERA_JITTER) - 1
+        cams = (cam + _CAMERA_JITTER[1:])[np.tile(np.arange(J), len(todo_s))]
+        pts = np.repeat(flat[todo_s, todo_p], J, axis=0)
+        clear = sight_clear(cams, pts, inp.walls, _OCCLUSION_END_M)
+        seen[np.repeat(todo_s, J)[clear]] = True
     return seen
 
 
