@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 import shapely
+import shapely.affinity
 from shapely.geometry import Point, box
 
 from mapkit.lmap import SegmentKind
@@ -125,15 +126,19 @@ def _sight_clear(q, p, occluders):
     return not shapely.LineString([q, p]).intersects(occluders)
 
 
-@pytest.mark.parametrize("case", ["apartment", "wall_across_square"])
+@pytest.mark.parametrize("case", ["apartment", "rotated_apartment", "wall_across_square"])
 def test_visibility_polygon_matches_sight_lines(case):
     """Membership in the polygon agrees with a direct sight-line test at random
     points, except within 2 mm of the outline (the shrink tolerances)."""
     rng = np.random.default_rng(11)
-    if case == "apartment":
+    if case in ("apartment", "rotated_apartment"):
         walls = apartment().walls
         sources = apartment().segments[::7, 0, :2]
         radius = 10.0
+        if case == "rotated_apartment":  # no wall parallel to an axis
+            walls = shapely.affinity.rotate(walls, 23.0, origin=(0, 0))
+            c, s = math.cos(math.radians(23.0)), math.sin(math.radians(23.0))
+            sources = sources @ np.array([[c, s], [-s, c]])
     else:
         # A long wall crosses the sides of the range square: the outline must
         # follow the wall to the square's side, not cut across to the next ray.
