@@ -125,7 +125,8 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     runner = float(E[order[1]]) if n_h > 1 and np.isfinite(E[order[1]]) else None
     times["verify"] = (time.perf_counter() - t2) * 1e3
     times["total"] = (time.perf_counter() - t0) * 1e3
-    common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=times, ranked=ranked)
+    common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=times, ranked=ranked,
+                  sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=dict(hyps.counts))
     if not E[best] <= tol.e_accept:
         why = ranked_h.why if not np.isfinite(E[best]) else (
             f"best score E={E[best]:.3g} is above the acceptance threshold {tol.e_accept:g}")

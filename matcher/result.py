@@ -25,6 +25,10 @@ class LocalizeResult:
     #: Diagnostics for tools and tests (not part of the JSON contract):
     #: every hypothesis's score and matches, in ranked order.
     ranked: list[tuple[float, list[list[int]], tuple[float, float, float]]] = field(default_factory=list, repr=False)
+    #: Consistent sets stage 1 found before its cap of hypotheses, and its
+    #: counters (correspondences, pairs, tree nodes, ...).
+    sets_found: int = 0
+    stage1: dict = field(default_factory=dict, repr=False)
 
     def __bool__(self) -> bool:
         return bool(self.ok)
