@@ -151,9 +151,11 @@ def search(inp: TreeInput, tol: Tolerances):
         if len(sets) >= tol.max_sets:
             state["truncated"] = True
 
-    def rec(level: int, R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int], pool: np.ndarray,
+    strong_level = np.array([(~weak[c]).any() for c in cands], dtype=bool)
+
+    def rec(R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int], pool: np.ndarray,
             fit: np.ndarray | None) -> None:
-        """``pool``: candidates of the lines from ``level`` on. With ``fit``
+        """``pool``: candidates of the lines not yet decided. With ``fit``
         None, R just grew and the pool is filtered against it (consistency
         only shrinks as R grows, so the parent's pool is enough); otherwise
         it is the parent's filtered pool and ``fit`` their best fits."""
@@ -163,13 +165,7 @@ def search(inp: TreeInput, tol: Tolerances):
         if state["nodes"] > tol.max_nodes:
             state["truncated"] = True
             return
-        if len(R) + (L - level) < state["bound"]:
-            return
-        if level == L:
-            if maximal(R, Qsum, mR, used, skipped):
-                emit(R)
-            return
-        # Look ahead: the open candidates of all lines still to come, kept if
+        # Look ahead: the open candidates of all lines still to decide, kept if
         # consistent with R. Lines with none cannot be matched any more.
         ahead = pool
         if fit is None:
@@ -180,9 +176,18 @@ def search(inp: TreeInput, tol: Tolerances):
             if ahead.size:
                 ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
                 ahead, fit = ahead[ok], fit[ok]
-        reachable = np.unique(level_of[ahead]).size
+        counts = np.bincount(level_of[ahead], minlength=L)
+        reachable = int((counts > 0).sum())
         if len(R) + reachable < state["bound"]:
             return
+        if reachable == 0:
+            if maximal(R, Qsum, mR, used, skipped):
+                emit(R)
+            return
+        # Fail first: decide next the line with the fewest candidates left
+        # (lines with a non-vertical candidate first among equals).
+        key = np.where(counts > 0, counts * 2 - strong_level, np.iinfo(np.int64).max)
+        level = int(np.argmin(key))
         here = level_of[ahead] == level
         c = ahead[here]
         # Best fitting first once the pose is pinned by a few members, else
@@ -197,14 +202,14 @@ def search(inp: TreeInput, tol: Tolerances):
                 continue
             used2 = used.copy()
             used2[seg_of[v]] = True
-            rec(level + 1, R2, Q2, m2, used2, skipped, rest, None)
+            rec(R2, Q2, m2, used2, skipped, rest, None)
             if state["truncated"]:
                 return
-        if len(R) + reachable - (1 if c.size else 0) >= state["bound"]:
+        if len(R) + reachable - 1 >= state["bound"]:
             # The line left unmatched: R is unchanged, so is its filtered pool.
-            rec(level + 1, R, Qsum, mR, used, skipped + [level], rest, fit[~here])
+            rec(R, Qsum, mR, used, skipped + [level], rest, fit[~here])
 
-    rec(0, [], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
+    rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
         np.arange(K), None)
     if sets:
         top = max(len(s) for s in sets)
