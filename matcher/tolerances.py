@@ -55,11 +55,11 @@ class Tolerances:
     #: Stage 1 stops enumerating after this many consistent sets (a guard
     #: against pathological scenes; the result says so when it is hit).
     max_sets: int = 400
-    #: ...or after this many tree nodes: a time budget (about 0.1 ms each)
+    #: ...or after this many tree nodes: a time budget (0.1 to 0.2 ms each)
     #: for scenes where the lines leave the pose nearly undetermined, such
     #: as a row of door jambs along one wall; the sets found by then (the
-    #: greedy dives run first) are kept.
-    max_nodes: int = 1500
+    #: first dives follow the best-fitting candidates) are kept.
+    max_nodes: int = 600
     #: Stage 1 hands at most this many hypotheses to stage 2: the largest
     #: sets, then those that fit best at their grid pose (mean normalised
     #: residual). The paper saw
