@@ -116,4 +116,29 @@ def two_rooms(thickness=0.2) -> SyntheticScene:
     return scene_from_walls(walls, interior, [door])
 
 
-__all__ = ["SyntheticScene", "apartment", "l_room", "scene_from_walls", "single_room", "two_rooms"]
+def open_hall(seed: int = 0) -> SyntheticScene:
+    """A 52 x 22 m open plan (the scale of the Barcelona pavilion, denser):
+    16 cruciform columns and 30 free-standing wall pieces 1-6 m long at
+    seeded random places; about 1400 segments."""
+    rng = np.random.default_rng(seed)
+    width, depth = 52.0, 22.0
+    interior = box(0, 0, width, depth)
+    blocks = []
+    for i in range(4):
+        for j in range(4):
+            cx, cy = 8 + i * 12, 4 + j * 4.7
+            blocks += [
+                box(cx - 0.15, cy - 0.02, cx + 0.15, cy + 0.02),
+                box(cx - 0.02, cy - 0.15, cx + 0.02, cy + 0.15),
+                box(cx - 0.08, cy - 0.08, cx + 0.08, cy + 0.08),
+            ]
+    for _ in range(30):
+        cx, cy = rng.uniform([2, 2], [width - 2, depth - 2])
+        half = rng.uniform(1, 6) / 2
+        vertical = rng.random() < 0.5
+        blocks.append(box(cx - 0.1, cy - half, cx + 0.1, cy + half) if vertical else box(cx - half, cy - 0.1, cx + half, cy + 0.1))
+    walls = shapely.union_all([interior.buffer(0.3, join_style="mitre").difference(interior), *blocks])
+    return scene_from_walls(walls, interior, [])
+
+
+__all__ = ["SyntheticScene", "apartment", "l_room", "open_hall", "scene_from_walls", "single_room", "two_rooms"]

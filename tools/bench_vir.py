@@ -10,6 +10,7 @@ brute-force reference in tests/visibility_oracle.py.
 
     python tools/bench_vir.py
     python tools/bench_vir.py maps/flat.dxf --check 200
+    python tools/bench_vir.py hall --check 100
     python tools/bench_vir.py tests/data/barcelona-pavilion.dxf --walls Walls --walls Columns --windows Crystal
 """
 
@@ -28,12 +29,14 @@ STEPS = ["time_visibility_polygons_s", "time_segment_regions_s", "time_grow_s", 
 
 
 def load_case(path: str | None, opts):
-    """(name, segments, kinds, walls, free_space, camera dict)."""
-    if path is None:
-        from mapkit.vir_synthetic import apartment
+    """(name, segments, kinds, walls, free_space, camera dict); ``path`` None
+    is the synthetic apartment, "hall" the synthetic open hall."""
+    if path in (None, "hall"):
+        from mapkit import vir_synthetic
 
-        sc = apartment()
-        return "synthetic apartment", sc.segments, sc.kinds, sc.walls, sc.free_space, opts.camera
+        sc = vir_synthetic.apartment() if path is None else vir_synthetic.open_hall()
+        name = "synthetic apartment" if path is None else "synthetic open hall"
+        return name, sc.segments, sc.kinds, sc.walls, sc.free_space, opts.camera
     from mapkit.edges import extract_edges
     from mapkit.importers import load_scene
 
@@ -75,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     from mapkit.vir import build_regions
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("plans", nargs="*", help="DXF plans or meshes (default: the synthetic apartment only)")
+    ap.add_argument("plans", nargs="*", help="DXF plans or meshes, or 'hall' for the synthetic open hall (the synthetic apartment always runs)")
     ap.add_argument("--walls", action="append", default=[], help="wall layer globs, as for mapkit build")
     ap.add_argument("--windows", action="append", default=[], help="window layer globs")
     ap.add_argument("--repeat", type=int, default=3, help="runs per case; the best is shown")
