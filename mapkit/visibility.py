@@ -391,6 +391,12 @@ def segment_regions(
     vp = shapely.simplify(raw, _COLLINEAR, preserve_topology=False)
     bad = ~shapely.is_valid(vp)
     vp[bad] = raw[bad]
+    # A point inside a (shrunk) wall is seen from nowhere: every sight line
+    # from outside crosses the solid. The sweep, which skips edges facing
+    # away, would instead see through that wall.
+    if len(xy):
+        buried = shapely.contains_xy(occ.geometry, xy[:, 0], xy[:, 1])
+        vp[buried] = Polygon()
     t_vis = time.perf_counter()
 
     regions = np.array([Polygon()] * n, dtype=object)

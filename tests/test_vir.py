@@ -225,7 +225,7 @@ def test_property_holds_in_random_rooms_with_pillars(seed):
 def test_a_huge_plan_caps_the_quadtree_depth():
     """A 600 m corridor: smallest cells widen rather than memory exploding."""
     free = box(0, 0, 600, 3)
-    seg = np.array([[[5.0, 3.2, 0.0], [5.0, 3.2, 2.5]], [[300.0, -0.2, 0.0], [303.0, -0.2, 0.0]]])
+    seg = np.array([[[5.0, 3.0, 0.0], [5.0, 3.0, 2.5]], [[300.0, 0.0, 0.0], [303.0, 0.0, 0.0]]])
     part = build_regions(seg, box(0, 3, 600, 3.4), free, CAMERA)
     assert part.stats["quadtree_depth"] == 11
     assert part.stats["smallest_cell_m"] == pytest.approx(600 / 2048)

@@ -295,3 +295,14 @@ def test_segment_regions_hold_every_visible_segment(make):
         extra.append(len(listed) - len(vis))
     assert np.mean(extra) < 0.25 * len(scene.segments)  # a superset, not everything
     assert res.stats["visibility_polygons"] > 0 and res.stats["sample_pairs"] > 0
+
+
+def test_a_segment_buried_in_a_wall_is_seen_from_nowhere():
+    """5 mm inside a wall solid: every sight line crosses the solid."""
+    scene = single_room(6.0, 4.0)
+    buried = np.array([[[1.0, -0.005, 0.0], [3.0, -0.005, 0.0]], [[2.0, -0.1, 0.0], [2.0, -0.1, 2.5]]])
+    occ = Occluders.from_geometry(scene.walls)
+    res = segment_regions(buried, occ, CAMERA.height_m, (E_MIN, E_MAX), max_range=RANGE, min_visible_length=MIN_LEN)
+    assert all(g.is_empty for g in res.regions)
+    oracle = VisibilityOracle(buried, scene.walls, CAMERA.height_m, (E_MIN, E_MAX), RANGE, MIN_LEN)
+    assert len(oracle.visible((3.0, 2.0))) == 0
