@@ -70,6 +70,8 @@ class Occluders:
         if occluders is None or occluders.is_empty:
             geom = shapely.MultiPolygon()
         else:
+            if not occluders.is_valid:  # drawings self-intersect; shrinking needs a valid area
+                occluders = shapely.MultiPolygon(polygon_parts(shapely.make_valid(occluders)))
             geom = shapely.buffer(occluders, -shrink, join_style="mitre")
             geom = shapely.orient_polygons(geom, exterior_cw=False)
         segs = []

@@ -306,3 +306,12 @@ def test_a_segment_buried_in_a_wall_is_seen_from_nowhere():
     assert all(g.is_empty for g in res.regions)
     oracle = VisibilityOracle(buried, scene.walls, CAMERA.height_m, (E_MIN, E_MAX), RANGE, MIN_LEN)
     assert len(oracle.visible((3.0, 2.0))) == 0
+
+
+def test_self_intersecting_walls_are_repaired_not_dropped():
+    bowtie = shapely.Polygon([(0, 0), (2, 2), (2, 0), (0, 2)])  # invalid: crosses itself
+    assert not bowtie.is_valid
+    occ = Occluders.from_geometry(bowtie)
+    assert len(occ.edges) == 6 and occ.geometry.area == pytest.approx(2.0, rel=0.03)  # two triangles, shrunk
+    poly = shapely.Polygon(visibility_polygon(np.array([-1.0, 1.0]), occ, 5.0))
+    assert not poly.contains(Point(3.0, 1.0))  # behind the bow tie's waist
