@@ -33,7 +33,13 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from mapkit.assemble import polygon_parts
-from mapkit.tolerances import OVERLAY_GRID, VIR_EPS_SLACK, VIR_MAX_DEPTH, VIR_MERGE_GROWTH, VIR_MIN_CELL
+from mapkit.tolerances import (
+    OVERLAY_GRID,
+    VIR_EPS_SLACK,
+    VIR_MAX_DEPTH,
+    VIR_MERGE_GROWTH,
+    VIR_MIN_CELL,
+)
 from mapkit.visibility import Occluders, polygonal, segment_regions
 
 # Round joins of the eps buffer: this many segments per quarter circle; the
@@ -99,7 +105,7 @@ def build_regions(
     if free_space is None or free_space.is_empty:
         raise ValueError("free_space is empty: no place for the camera")
 
-    stats: dict = {"segments": int(len(segs))}
+    stats: dict = {"segments": len(segs)}
     t0 = time.perf_counter()
     occ = Occluders.from_geometry(occluders)
     sr = segment_regions(
@@ -122,7 +128,7 @@ def build_regions(
     leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress)
     t3 = time.perf_counter()
     stats["time_quadtree_s"] = t3 - t2
-    stats["quadtree_leaves"] = int(len(leaves.level))
+    stats["quadtree_leaves"] = len(leaves.level)
     stats["quadtree_depth"] = int(leaves.depth)
     stats["smallest_cell_m"] = float(leaves.size / 2.0**leaves.depth)
 
@@ -194,7 +200,7 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     n = len(grown)
     x0, y0, x1, y1 = free_space.bounds
     span = max(x1 - x0, y1 - y0, min_cell)
-    depth = max(0, int(math.ceil(math.log2(span / min_cell) - 1e-9)))
+    depth = max(0, math.ceil(math.log2(span / min_cell) - 1e-9))
     if depth > VIR_MAX_DEPTH:  # huge plan: wider smallest cells, bounded memory
         depth = VIR_MAX_DEPTH
         min_cell = span / 2.0**depth

@@ -29,7 +29,6 @@ from shapely.geometry import Polygon
 from mapkit.assemble import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
-    OCCLUSION_SHRINK,
     OVERLAY_GRID,
     VIS_BUILD_SHRINK,
     VIS_RAY_OFFSET_DEG,
@@ -63,7 +62,7 @@ class Occluders:
     geometry: object
 
     @classmethod
-    def from_geometry(cls, occluders, shrink: float = VIS_BUILD_SHRINK) -> "Occluders":
+    def from_geometry(cls, occluders, shrink: float = VIS_BUILD_SHRINK) -> Occluders:
         """Shrink ``occluders`` (shapely (Multi)Polygon) by ``shrink`` metres and
         collect their edges; walls thinner than ``2 * shrink`` vanish (they are
         drawing noise at that scale)."""
@@ -231,7 +230,10 @@ def vertical_distance_band(z0, z1, need, h, e_min, e_max, max_range) -> tuple[np
     The extent is concave in ``d``: a ternary search finds its maximum, then
     bisections find where it crosses ``need`` on either side."""
     z0, z1, need = (np.asarray(v, dtype=float) for v in (z0, z1, need))
-    f = lambda d: vertical_extent(d, z0, z1, h, e_min, e_max, max_range) - need  # noqa: E731
+
+    def f(d):
+        return vertical_extent(d, z0, z1, h, e_min, e_max, max_range) - need
+
     lo, hi = np.zeros_like(z0), np.full_like(z0, max_range)
     for _ in range(80):  # ternary search: interval shrinks by 2/3 per step
         m1, m2 = lo + (hi - lo) / 3, hi - (hi - lo) / 3
@@ -305,7 +307,7 @@ class SegmentRegions:
 def sample_segment(seg: np.ndarray, spacing: float) -> np.ndarray:
     """(n, 3) points along ``seg`` (2, 3), end points included, spaced <= ``spacing``."""
     length = float(np.linalg.norm(seg[1] - seg[0]))
-    n = max(1, int(math.ceil(length / spacing - 1e-9)))
+    n = max(1, math.ceil(length / spacing - 1e-9))
     t = np.linspace(0.0, 1.0, n + 1)
     return seg[0] + t[:, None] * (seg[1] - seg[0])
 
@@ -434,7 +436,7 @@ def segment_regions(
     stats = {
         "segments": n,
         "vertical_segments": int(vertical.sum()),
-        "visibility_polygons": int(len(xy)),
+        "visibility_polygons": len(xy),
         "sample_pairs": int(n_pairs),
         "time_sampling_s": t_sample - t0,
         "time_visibility_polygons_s": t_vis - t_sample,

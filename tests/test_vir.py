@@ -9,13 +9,13 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, box
+from visibility_oracle import VisibilityOracle, random_points
 
 from mapkit.assemble import assemble_map
 from mapkit.lmap import load_map, save_map
 from mapkit.vir import build_regions
 from mapkit.vir_synthetic import apartment, scene_from_walls, single_room
 from matcher.camera import Camera
-from visibility_oracle import VisibilityOracle, random_points
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)
 EPS = 0.05
@@ -38,7 +38,7 @@ def samples(flat):
 
 
 def test_every_visible_segment_is_listed_by_every_region_within_eps(flat, samples):
-    scene, part = flat
+    _, part = flat
     polys = np.array(part.polygons + [None])[:-1]
     tree = shapely.STRtree(polys)
     checked = 0

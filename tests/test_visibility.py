@@ -10,6 +10,7 @@ import pytest
 import shapely
 import shapely.affinity
 from shapely.geometry import Point, box
+from visibility_oracle import VisibilityOracle, random_points
 
 from mapkit.lmap import SegmentKind
 from mapkit.tolerances import OCCLUSION_SHRINK
@@ -25,7 +26,6 @@ from mapkit.visibility import (
     visibility_polygon,
 )
 from matcher.camera import Camera
-from visibility_oracle import VisibilityOracle, random_points
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)  # +-27.7 deg vertically
 E_MIN, E_MAX = CAMERA.elevation_range()

@@ -47,7 +47,7 @@ class VisibilityOracle:
         pts, owner, spacing, counts = [], [], [], []
         for i, (a, b) in enumerate(segs):
             length = float(np.linalg.norm(b - a))
-            k = max(1, int(math.ceil(length / step)))
+            k = max(1, math.ceil(length / step))
             t = np.linspace(0.0, 1.0, k + 1)
             pts.append(a + t[:, None] * (b - a))
             owner.append(np.full(k + 1, i))
