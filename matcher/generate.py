@@ -182,6 +182,29 @@ def vertical_extent_bound(camera: Camera, lines: np.ndarray, segments: np.ndarra
     return np.minimum(down, up).min(axis=1)
 
 
+def horizon_side_ok(camera: Camera, lines: np.ndarray, segments: np.ndarray, tol: Tolerances) -> np.ndarray:
+    """(N, M) bool: a horizontal segment at height z images on one side of
+    the horizon only, above it if z > h and below if z < h (its points in
+    front of the camera all have elevation of the sign of z - h). An image
+    line wholly above the horizon (by more than its noise) cannot show a
+    segment wholly below the camera, and the other way round. Segments
+    that are not horizontal pass."""
+    rays = camera.pixel_rays(lines)  # (M, 2, 3)
+    p = camera.pitch
+    z = -math.cos(p) * rays[..., 1] - math.sin(p) * rays[..., 2]
+    elev = np.arcsin(z / np.linalg.norm(rays, axis=-1))
+    slack = (tol.line_px + tol.line_end_px) / min(camera.fx, camera.fy) + math.radians(tol.line_deg) * 0.05
+    above = elev.min(axis=1) > slack  # (M,)
+    below = elev.max(axis=1) < -slack
+    h = camera.height_m
+    zlo, zhi = segments[:, :, 2].min(axis=1), segments[:, :, 2].max(axis=1)
+    flat = (zhi - zlo) < 0.05
+    seg_above = flat & (zlo > h + tol.model_m)  # (N,)
+    seg_below = flat & (zhi < h - tol.model_m)
+    bad = (above[None, :] & seg_below[:, None]) | (below[None, :] & seg_above[:, None])
+    return ~bad
+
+
 def collinear_classes(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float = 0.01):
     """Group segments (N, 2, 3) lying on one 3D line (pieces of a wall split by
     a door, say): image lines cannot tell them apart, so stage 1 works on one
@@ -274,6 +297,7 @@ def generate(
     ih = np.nonzero(~vert_seg)[0]
     uh, _ = unary_constraint(camera, img.normals, img.eps, segments[ih], prior, dt, dyaw, tol.model_m)
     uh &= usable[None, :]
+    uh &= horizon_side_ok(camera, img.lines, segments[ih], tol)
     hi_, hj = np.nonzero(uh)
     hi_ = ih[hi_]
     iv = np.nonzero(vert_seg)[0]
