@@ -2,6 +2,7 @@
 
     python tools/bench_paper.py                 # 100 poses per PEQ, baseline on 20
     python tools/bench_paper.py --quick         # 20 poses, baseline on 5
+    python tools/bench_paper.py --synthetic     # on the synthetic flat instead of maps/flat.lmap
 
 For each PEQ (method.md section 9): ``--poses`` simulated frames (seeded),
 each localised by our matcher and, on the first ``--baseline-poses`` of
@@ -236,7 +237,8 @@ def plot(all_rows, summary, out_dir: Path, e_accept: float):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Reproduce the paper's figures 5 and 6 (see module docstring).")
-    ap.add_argument("--map", help=".lmap map (default: the synthetic flat of tools/_synthetic_map.py)")
+    ap.add_argument("--map", help=".lmap map (default: maps/flat.lmap if present, else the synthetic flat)")
+    ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of tools/_synthetic_map.py")
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ")
     ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ))
     ap.add_argument("--seed", type=int, default=0)
@@ -256,7 +258,14 @@ def main(argv=None) -> int:
         args.poses, args.baseline_poses, args.repeat = 20, 5, 1
     from _synthetic_map import cached_flat_map
 
-    linemap = matcher.load_map(args.map) if args.map else cached_flat_map()
+    default_map = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
+    if args.synthetic:
+        linemap, map_name = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)"
+    elif args.map or default_map.exists():
+        map_name = args.map or "maps/flat.lmap"
+        linemap = matcher.load_map(args.map or default_map)
+    else:
+        linemap, map_name = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)"
     camera = paper_camera(args.height, args.pitch)
     matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
     all_rows, summary = {}, {}
@@ -269,6 +278,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     plot(all_rows, summary, out, matcher.Tolerances().e_accept)
+    print(f"map {map_name}: {linemap.n_segments} segments, {linemap.n_regions} regions")
     print(f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
           f"{args.noise_deg} deg; {args.clutter} clutter lines; {args.poses} poses per PEQ; seed {args.seed}; "
           f"{platform.python_version()} on {platform.machine()}")
