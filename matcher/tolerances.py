@@ -37,20 +37,22 @@ class Tolerances:
     #: A hypothesis needs this many correspondences: three independent line
     #: correspondences are the fewest that fix a 3-DOF pose.
     min_matches: int = 3
-    #: Relative minimum number of matches: hypotheses with fewer than the
-    #: largest consistent set minus this are dropped (a subset of the true
-    #: match that lost one line to noise is still kept; a handful of lines
-    #: that happen to agree is not).
+    #: Relative minimum number of matches: sets with fewer than the largest
+    #: consistent set minus this are dropped. 0 keeps stage 1 small; when
+    #: stage 2 finds the largest sets padded with wrong matches it searches
+    #: again with 1 (pipeline._doubtful).
     match_slack: int = 0
     #: Consistency of a set of correspondences at the least-squares point of
     #: its strips: each correspondence's normalised residual (residual over
-    #: tolerance) squared must stay below this. 4 = twice the tolerance, since
-    #: the least-squares point is not the true pose.
+    #: tolerance) squared must stay below this. 1.5 = 1.22 times the
+    #: tolerance: the least-squares point is not the true pose, but the
+    #: tolerances already bound the noise (true matches sit below 0.3).
     q_max: float = 1.5
-    #: Acceptance threshold on the paper's score E of the best hypothesis.
-    #: E of a correct match with 1 px / 1 deg noise stays below about 2e-4 on
-    #: the simulated flat, false ones are above 1e-2 (docs/matcher.md); 2e-3
-    #: is the paper's value and sits between the two.
+    #: Acceptance threshold on the paper's score E of the best hypothesis:
+    #: the paper's value. E of a correct match with 1 px / 1 deg noise is
+    #: about 1e-4 on the simulated flats (docs/matcher.md); hypotheses that
+    #: survive stage 2 wrongly are aliases that fit as well, so E alone does
+    #: not reject them (see the benchmark).
     e_accept: float = 2e-3
     #: Stage 1 stops enumerating after this many consistent sets (a guard
     #: against pathological scenes; the result says so when it is hit).
