@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+from mapkit.tolerances import VIR_MERGE_GROWTH
+
 
 @dataclass
 class BuildOptions:
@@ -63,6 +65,9 @@ class BuildOptions:
     min_visible_length: float = 0.3
     #: Region lists hold everything visible from within this distance.
     eps: float = 0.05
+    #: Neighbouring regions merge (lists united) while the mean list length
+    #: grows by at most this fraction: 0 keeps lists tightest, more regions.
+    merge_growth: float = VIR_MERGE_GROWTH
 
     def to_meta(self) -> dict:
         """JSON-able record of every option (stored in the map)."""

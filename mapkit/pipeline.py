@@ -70,6 +70,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
         max_range=options.max_range,
         min_visible_length=options.min_visible_length,
         eps=options.eps,
+        merge_growth=options.merge_growth,
         progress=progress,
     )
     report.seconds["regions"] = time.perf_counter() - t
@@ -117,6 +118,8 @@ def _check_options(o: BuildOptions) -> None:
         raise MapkitError(f"--door-height must be in (0, wall height {o.wall_height}], got {o.door_height}")
     if not 0 <= o.window_sill < o.window_head <= o.wall_height:
         raise MapkitError("window sill and head must satisfy 0 <= sill < head <= wall height")
+    if not 0 <= o.merge_growth <= 10:
+        raise MapkitError(f"--merge-growth is a fraction in [0, 10], got {o.merge_growth}")
     if o.robot_radius < 0 or o.min_edge_length < 0:
         raise MapkitError("--robot-radius and --min-edge-length must be >= 0")
     if o.eps > 0.5:

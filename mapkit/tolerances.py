@@ -12,9 +12,11 @@ MERGE = 1e-3
 #: Dangling wall endpoints closer than this are joined (gaps in real drawings).
 SNAP_GAP = 0.02
 
-#: Occluders are shrunk by this before sight-line tests, so that a sight line
-#: grazing a wall face, or ending on the face it belongs to, is not blocked
-#: by float noise. Brute-force checks shrink by twice this.
+#: Occluders are shrunk by this in the definition of "visible", so that a
+#: sight line grazing a wall face, or ending on the face it belongs to, is
+#: not blocked by float noise. The region builder itself shrinks by the
+#: larger ``VIS_BUILD_SHRINK`` (lists stay supersets); brute-force checks
+#: shrink by twice this.
 OCCLUSION_SHRINK = 1e-3
 
 #: Two edges are collinear (and merge) if their directions differ by less

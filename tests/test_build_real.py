@@ -37,13 +37,11 @@ def barcelona(tmp_path_factory):
 
 
 def test_committed_example_map_is_up_to_date(tmp_path):
-    fresh = load_map(build(tmp_path, ROOT / "maps" / "flat.dxf"))
-    committed = load_map(ROOT / "maps" / "flat.lmap")
-    np.testing.assert_allclose(fresh.segments, committed.segments, atol=1e-9)
-    np.testing.assert_array_equal(fresh.kinds, committed.kinds)
-    np.testing.assert_array_equal(fresh.list_offsets, committed.list_offsets)
-    np.testing.assert_array_equal(fresh.list_indices, committed.list_indices)
-    assert fresh.meta["source"]["sha256"] == committed.meta["source"]["sha256"]
+    # Builds are reproducible, so the committed map must be exactly what the
+    # current code makes of the committed plan (rebuild it when this fails:
+    # mapkit build maps/flat.dxf -o maps/flat.lmap).
+    fresh = build(tmp_path, ROOT / "maps" / "flat.dxf")
+    assert fresh.read_bytes() == (ROOT / "maps" / "flat.lmap").read_bytes()
 
 
 def test_example_map_contents(capsys):

@@ -75,6 +75,7 @@ def test_output_must_be_lmap(tmp_path, capsys):
     "opts, needle",
     [
         (["--eps", "0"], "--eps"),
+        (["--merge-growth", "-0.5"], "--merge-growth"),
         (["--max-range", "-1"], "--max-range"),
         (["--wall-height", "0"], "--wall-height"),
         (["--door-height", "9"], "--door-height"),

@@ -29,6 +29,7 @@ def add_arguments(p) -> None:
     g.add_argument("--max-range", type=float, default=d.max_range, metavar="M", help=f"farthest visible distance (default {d.max_range})")
     g.add_argument("--min-visible-length", type=float, default=d.min_visible_length, metavar="M", help=f"shortest contiguous visible piece that counts (default {d.min_visible_length})")
     g.add_argument("--eps", type=float, default=d.eps, metavar="M", help=f"region lists cover everything visible within this distance (default {d.eps})")
+    g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
@@ -60,6 +61,7 @@ def options_from_args(args):
     o.max_range = args.max_range
     o.min_visible_length = args.min_visible_length
     o.eps = args.eps
+    o.merge_growth = args.merge_growth
     return o
 
 
