@@ -400,6 +400,8 @@ def generate(
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
                     None if samples is None else samples[seg_k], line_k, seg_k)
+    if debug is not None:
+        debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)
     counts["tree_nodes"] = int(nodes)
     counts["sets_found"] = int(found)
