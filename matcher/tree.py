@@ -33,7 +33,12 @@ from matcher.tolerances import Tolerances
 _OCCLUSION_END_M = 0.05
 #: Points of a segment tested for visibility (fractions of its length).
 _SAMPLES = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
-_CAMERA_JITTER = np.array([[0.0, 0.0], [0.06, 0.0], [-0.06, 0.0], [0.0, 0.06], [0.0, -0.06]])
+#: A segment counts as seen if it is seen from the set's best point or from
+#: one of these four around it, metres: that point is a few centimetres off,
+#: and a sight line through a doorway swings onto a jamb over that distance.
+#: Too small a radius loses true sets behind door jambs; too large only
+#: keeps a few more false ones for stage 2.
+_CAMERA_JITTER = np.array([[0.0, 0.0], [0.15, 0.0], [-0.15, 0.0], [0.0, 0.15], [0.0, -0.15]])
 #: Visibility is checked inside the tree only once the set's strips fix the
 #: position to within this (1-sigma of the strips, metres); before that the
 #: best point of the set may be far from the truth and the test would prune
@@ -89,13 +94,20 @@ def search(inp: TreeInput, tol: Tolerances):
     # by number of candidates. Candidates of a line: most connected first,
     # so that the first dive tends to follow the true match.
     lines = np.unique(inp.line)
+    # Support of a correspondence: how many other lines have a candidate
+    # compatible with it. The true ones see every other true line.
+    line_idx = np.searchsorted(lines, inp.line)
+    touch = np.zeros((K, len(lines)), dtype=bool)
+    ki, kj = np.nonzero(compat)
+    touch[ki, line_idx[kj]] = True
+    support = touch.sum(axis=1)
     has_strong = np.array([(~weak[inp.line == j]).any() for j in lines])
     n_cand = np.array([(inp.line == j).sum() for j in lines])
     lines = lines[np.lexsort((n_cand, ~has_strong))]
     cands = []
     for j in lines:
         c = np.nonzero(inp.line == j)[0]
-        cands.append(c[np.lexsort((-degree[c], weak[c]))])
+        cands.append(c[np.lexsort((-degree[c], -support[c], weak[c]))])
     L = len(lines)
     level_of = np.empty(K, dtype=np.int64)
     for lv, c in enumerate(cands):
@@ -300,10 +312,9 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
     S, n = pts.shape[:2]
     front = (pts - C) @ forward > 0.05  # (S, n)
     flat = pts[..., :2]
-    # Seen from the point or from any of four points around it: the grid pose
-    # is a few centimetres off, and a sight line through a doorway far away
-    # can swing onto a jamb over that distance. First from the point itself,
-    # then, for members not yet seen, from the four others in one batch.
+    # Seen from the point or from any of four points around it
+    # (_CAMERA_JITTER): first from the point itself, then, for members not
+    # yet seen, from the four others in one batch.
     todo_s, todo_p = np.nonzero(front)
     seen = np.zeros(S, dtype=bool)
     if len(todo_s) == 0:
