@@ -139,7 +139,9 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
 
 def _doubtful(ranked, hyps, tol) -> bool:
     """Nothing accepted, or the best hypothesis kept fewer matches than the
-    stage-1 sets had by two or more."""
+    stage-1 sets had by two or more (and stage 1 was not cut short)."""
+    if hyps.truncated:  # a second search would run out of budget too
+        return False
     best = int(ranked.order[0])
     if not ranked.score[best] <= tol.e_accept:
         return True
