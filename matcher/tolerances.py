@@ -61,7 +61,7 @@ class Tolerances:
     #: for scenes where the lines leave the pose nearly undetermined, such
     #: as a row of door jambs along one wall; the sets found by then (the
     #: first dives follow the best-fitting candidates) are kept.
-    max_nodes: int = 600
+    max_nodes: int = 1500
     #: Stage 1 hands at most this many hypotheses to stage 2: the largest
     #: sets, then those that fit best at their grid pose (mean normalised
     #: residual). The paper saw
