@@ -47,13 +47,23 @@ def plane_noise(camera: Camera, lines: np.ndarray, px: float, deg: float) -> np.
     line and that of the line moved by the noise bounds (``px`` offset, ``deg``
     rotation about its midpoint). Any residual ``n . X`` of a unit vector X
     lying in the true plane is then at most this (plus second order)."""
+    return plane_noises(camera, lines, px, deg)[0]
+
+
+def plane_noises(camera: Camera, lines: np.ndarray, px: float, deg: float):
+    """``(eps, eps_rot, eps_off)``, each (M,): :func:`plane_noise` for both
+    bounds, for the rotation alone and for the offset alone, from one batch
+    of perturbed lines."""
+    M = len(lines)
     n = camera.interpretation_normals(lines)
-    pert = _perturbed_lines(lines, px, deg)
-    worst = np.zeros(len(lines))
-    for p in pert:
-        n2 = camera.interpretation_normals(p)
-        worst = np.maximum(worst, np.linalg.norm(np.cross(n, n2), axis=1))
-    return np.arcsin(np.clip(worst, 0.0, 1.0)) * 1.05 + 1e-4
+    pert = np.concatenate([_perturbed_lines(lines, px, deg), _perturbed_lines(lines, 0.0, deg)[::3],
+                           _perturbed_lines(lines, px, 0.0)[:2]])  # (4 + 2 + 2, M, 2, 2)
+    n2 = camera.interpretation_normals(pert.reshape(-1, 2, 2)).reshape(8, M, 3)
+    c = np.cross(n[None], n2)
+    s = np.sqrt((c * c).sum(axis=-1))  # (8, M) sines of the turns
+    ang = np.arcsin(np.clip(np.stack([s[:4].max(axis=0), s[4:6].max(axis=0), s[6:].max(axis=0)]), 0.0, 1.0))
+    eps = ang * 1.05 + 1e-4
+    return eps[0], eps[1], eps[2]
 
 
 def vertical_residual(camera: Camera, normals: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ import numpy as np
 
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
-from matcher.constraints import bearing_noise, plane_noise, vertical_bearing, vertical_candidates, wrap
+from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
 from matcher.generate import ImageLines, class_samples, collinear_classes, generate, in_field_of_view
 from matcher.occlusion import wall_edges
 from matcher.rank import verify_hypotheses
@@ -24,13 +24,11 @@ def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLi
     and their bearings."""
     und = lines
     normals = camera.interpretation_normals(und)
-    eps = plane_noise(camera, und, tol.line_px, tol.line_deg)
+    eps, eps_rot, eps_off = plane_noises(camera, und, tol.line_px, tol.line_deg)
     vert = vertical_candidates(camera, normals, eps)
     alpha = vertical_bearing(camera, und)
     alpha_eps = bearing_noise(camera, und, tol.line_px, tol.line_deg)
     usable = np.linalg.norm(und[:, 1] - und[:, 0], axis=1) >= tol.min_line_px
-    eps_rot = plane_noise(camera, und, 0.0, tol.line_deg)
-    eps_off = plane_noise(camera, und, tol.line_px, 0.0)
     mid = camera.pixel_rays(0.5 * (und[:, 0] + und[:, 1]))
     mid /= np.linalg.norm(mid, axis=1, keepdims=True)
     return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid)

@@ -32,52 +32,52 @@ _PLAIN_FIRST = 2
 
 
 def _cross(a, b):
-    """Row-wise cross product of (T, 3) arrays (np.cross is slow on small arrays)."""
-    return np.stack(
-        [a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2], a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]],
-        axis=1,
-    )
+    """Cross product of vectors given as 3-tuples of (T,) arrays."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def _to_cam(c, s, cp, sp, d):
-    """R (P - C) for offsets d (T, 3) and yaw cosines/sines c, s (T,): rows
-    r, d, f of method.md section 2, written out (no (T, 3, 3) array)."""
-    x, y, z = d[:, 0], d[:, 1], d[:, 2]
-    return np.stack([s * x - c * y, -sp * (c * x + s * y) - cp * z, cp * (c * x + s * y) - sp * z], axis=1)
-
-
-def _to_cam_dyaw(c, s, cp, sp, d):
-    """d/dyaw of :func:`_to_cam`."""
-    x, y = d[:, 0], d[:, 1]
-    h = -s * x + c * y  # d/dyaw of (c x + s y)
-    return np.stack([c * x + s * y, -sp * h, cp * h], axis=1)
+def _dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
     """(T, 2) image-side residuals, and with ``jacobian`` their derivatives
-    (T, 2, 3) in (x, y, yaw); params (H, 3), hyp (T,) hypothesis of each match."""
+    (T, 2, 3) in (x, y, yaw); params (H, 3), hyp (T,) hypothesis of each match.
+
+    Written on components (3-tuples of (T,) arrays): the arrays are short and
+    numpy's per-call cost dominates, so no (T, 3, 3) rotations or stacks."""
     p = params[hyp]
     c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
     cp, sp = math.cos(pitch), math.sin(pitch)
-    C = np.stack([p[:, 0], p[:, 1], np.full(len(p), height)], axis=1)
-    da, db = seg_a - C, seg_b - C
-    qa, qb = _to_cam(c, s, cp, sp, da), _to_cam(c, s, cp, sp, db)
+    ax, ay, az = seg_a[:, 0] - p[:, 0], seg_a[:, 1] - p[:, 1], seg_a[:, 2] - height
+    bx, by, bz = seg_b[:, 0] - p[:, 0], seg_b[:, 1] - p[:, 1], seg_b[:, 2] - height
+    # R (P - C) with rows r, d, f of method.md section 2.
+    ha, hb = c * ax + s * ay, c * bx + s * by
+    qa = (s * ax - c * ay, -sp * ha - cp * az, cp * ha - sp * az)
+    qb = (s * bx - c * by, -sp * hb - cp * bz, cp * hb - sp * bz)
     m = _cross(qa, qb)
-    nm = np.sqrt((m * m).sum(axis=1))[:, None]
-    mh = m / nm
-    r = np.stack([(mh * ray_a).sum(axis=1), (mh * ray_b).sum(axis=1)], axis=1)
+    nm = np.sqrt(_dot(m, m))
+    mh = (m[0] / nm, m[1] / nm, m[2] / nm)
+    ra = (ray_a[:, 0], ray_a[:, 1], ray_a[:, 2])
+    rb = (ray_b[:, 0], ray_b[:, 1], ray_b[:, 2])
+    r = np.stack([_dot(mh, ra), _dot(mh, rb)], axis=1)
     if not jacobian:
         return r
+    # d q / d x = -R e_x, d q / d y = -R e_y for both end points, so
+    # d (qa x qb) = e x (qa - qb) with e = R e_x (or R e_y); d q / d yaw = R' (P - C).
+    dq = (qa[0] - qb[0], qa[1] - qb[1], qa[2] - qb[2])
+    ex = (s, -sp * c, cp * c)
+    ey = (-c, -sp * s, cp * s)
+    ga, gb = -s * ax + c * ay, -s * bx + c * by  # d/dyaw of ha, hb
+    dqa = (ha, -sp * ga, cp * ga)
+    dqb = (hb, -sp * gb, cp * gb)
+    dyaw = tuple(u + v for u, v in zip(_cross(dqa, qb), _cross(qa, dqb)))
     J = np.empty(r.shape + (3,))
-    # d q / d x = -R e_x and d q / d y = -R e_y, the same for both end points.
-    ex = np.stack([s, -sp * c, cp * c], axis=1)
-    ey = np.stack([-c, -sp * s, cp * s], axis=1)
-    dms = [_cross(-ex, qb) + _cross(qa, -ex), _cross(-ey, qb) + _cross(qa, -ey),
-           _cross(_to_cam_dyaw(c, s, cp, sp, da), qb) + _cross(qa, _to_cam_dyaw(c, s, cp, sp, db))]
-    for k, dm in enumerate(dms):
-        dmh = (dm - mh * (mh * dm).sum(axis=1)[:, None]) / nm
-        J[:, 0, k] = (dmh * ray_a).sum(axis=1)
-        J[:, 1, k] = (dmh * ray_b).sum(axis=1)
+    for k, dm in enumerate((_cross(ex, dq), _cross(ey, dq), dyaw)):
+        t = _dot(mh, dm)
+        dmh = ((dm[0] - mh[0] * t) / nm, (dm[1] - mh[1] * t) / nm, (dm[2] - mh[2] * t) / nm)
+        J[:, 0, k] = _dot(dmh, ra)
+        J[:, 1, k] = _dot(dmh, rb)
     return r, J
 
 
