@@ -56,7 +56,9 @@ class Tolerances:
     e_accept: float = 2e-3
     #: Stage 1 stops enumerating after this many consistent sets (a guard
     #: against pathological scenes; the result says so when it is hit).
-    max_sets: int = 400
+    #: Leaves are tested for visibility only at the end, so sets that will
+    #: fail it count too.
+    max_sets: int = 1500
     #: ...or after this many tree nodes: a time budget (0.1 to 0.2 ms each)
     #: for scenes where the lines leave the pose nearly undetermined, such
     #: as a row of door jambs along one wall; the sets found by then (the

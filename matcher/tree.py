@@ -75,8 +75,9 @@ class TreeInput:
     seg: np.ndarray | None = None
 
 
-def search(inp: TreeInput, tol: Tolerances):
-    """Maximal consistent sets. Returns ``(sets, inits, truncated, nodes,
+def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
+    """Maximal consistent sets (leaves tested for visibility as found if
+    ``eager``, else afterwards). Returns ``(sets, inits, truncated, nodes,
     found)``: sets as sorted index arrays, ``inits`` (x, y, yaw) their best
     grid pose; at most ``max_hypotheses`` of the ``found`` sets: the largest,
     then those that fit best."""
@@ -150,7 +151,10 @@ def search(inp: TreeInput, tol: Tolerances):
         return not (extra.size and feasible_with(R, Qsum, mR, extra).any())
 
     def emit(R: list[int]) -> None:
-        res = final_check(inp, np.array(sorted(R)), tol, cache)
+        # Geometry only here; visibility, the dearer test, runs at the end on
+        # the sets that could become hypotheses (inner nodes already tested
+        # it once the pose was pinned).
+        res = final_check(inp, np.array(sorted(R)), tol, cache, visibility=eager)
         if res is None or len(res[0]) < state["bound"]:
             return
         new_bound = max(state["bound"], len(res[0]) - tol.match_slack)
@@ -223,16 +227,43 @@ def search(inp: TreeInput, tol: Tolerances):
 
     rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
         np.arange(K), None)
-    if sets:
-        top = max(len(s) for s in sets)
-        keep = [i for i, s in enumerate(sets) if len(s) >= top - tol.match_slack]
-        sets, inits = [sets[i] for i in keep], [inits[i] for i in keep]
     sets, inits = _drop_dominated(sets, inits)
     state["found"] = len(sets)
-    if len(sets) > tol.max_hypotheses:
-        best = np.lexsort(([fit for *_, fit in inits], [-len(s) for s in sets]))[: tol.max_hypotheses]
-        sets, inits = [sets[i] for i in best], [inits[i] for i in best]
+    found_any = bool(sets)
+    sets, inits = _visible_best(inp, sets, inits, tol, cache)
+    if found_any and not sets and not eager:
+        # Every set failed the visibility test: the sets that raised the bound
+        # may have hidden smaller valid ones. Search again, testing each leaf.
+        again = search(inp, tol, eager=True)
+        return again[0], again[1], again[2], state["nodes"] + again[3], again[4]
     return sets, [p[:3] for p in inits], state["truncated"], state["nodes"], state["found"]
+
+
+def _visible_best(inp: TreeInput, sets, inits, tol: Tolerances, cache):
+    """The hypotheses: sets passing the visibility test (a set failing it
+    loses its unseen members and queues again), largest first, then best
+    fitting, at most ``max_hypotheses``, all at least as large as the
+    largest passing set minus ``match_slack``."""
+    import heapq
+
+    heap = [(-len(s), p[3], i, s) for i, (s, p) in enumerate(zip(sets, inits))]
+    heapq.heapify(heap)
+    out, out_init, seen_keys, n = [], [], set(), len(heap)
+    while heap and len(out) < tol.max_hypotheses:
+        neg, _, _, m = heapq.heappop(heap)
+        if out and -neg < len(out[0]) - tol.match_slack:
+            break
+        res = final_check(inp, m, tol, cache)
+        if res is None or res[0].tobytes() in seen_keys:
+            continue
+        if len(res[0]) == len(m):
+            seen_keys.add(m.tobytes())
+            out.append(m)
+            out_init.append(res[1])
+        else:  # repaired: back in the queue at its new size
+            n += 1
+            heapq.heappush(heap, (-len(res[0]), res[1][3], n, res[0]))
+    return _drop_dominated(out, out_init)
 
 
 def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, cache: dict | None = None) -> bool:
@@ -254,15 +285,17 @@ def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndar
     return bool(_seen_cached(inp, np.asarray(sorted(R)), cam, int(G[g]), cache).all())
 
 
-def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None):
+def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None,
+                visibility: bool = True):
     """``(members, (x, y, yaw, fit))`` for the largest subset found feasible by
     dropping the worst member, or None if it falls below ``min_matches``.
 
     Feasible at a grid yaw: every member's yaw mask holds, the summed strip
     quadratic's minimum is <= |S| + 1, every member's own term there is <=
     ``q_max``, and at that best point every segment has a part in front of
-    the camera and, with walls, a part not hidden by a wall. ``fit`` is the
-    summed quadratic's minimum per member."""
+    the camera and, with walls, a part not hidden by a wall (unless
+    ``visibility`` is False). ``fit`` is the summed quadratic's minimum per
+    member."""
     ce, yaws = inp.centre, inp.yaws
     while len(members) >= tol.min_matches:
         q = inp.quad[members]  # (S, Y, 6)
@@ -281,6 +314,8 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dic
             continue
         g = int(np.argmin(np.where(good, val, np.inf)))
         cam = ce[:2] + np.array([zx[g], zy[g]])
+        if not visibility:
+            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
         seen = _seen_cached(inp, members, cam, g, cache)
         if seen.all():
             return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
