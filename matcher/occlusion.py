@@ -43,6 +43,15 @@ def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -
         return np.ones(len(points), dtype=bool)
     ea, eb = walls
     cam = np.broadcast_to(np.asarray(cam, dtype=float), points.shape)
+    if len(points) == 0:
+        return np.ones(0, dtype=bool)
+    # Only edges whose bounding box meets that of all the sight lines.
+    lo = np.minimum(points.min(axis=0), cam.min(axis=0))
+    hi = np.maximum(points.max(axis=0), cam.max(axis=0))
+    near = (np.maximum(ea, eb) >= lo).all(axis=1) & (np.minimum(ea, eb) <= hi).all(axis=1)
+    if not near.any():
+        return np.ones(len(points), dtype=bool)
+    ea, eb = ea[near], eb[near]
     r = points - cam
     s = eb - ea
     den = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]

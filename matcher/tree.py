@@ -150,11 +150,19 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         extra = np.concatenate(extra) if extra else np.zeros(0, dtype=np.int64)
         return not (extra.size and feasible_with(R, Qsum, mR, extra).any())
 
-    def emit(R: list[int]) -> None:
-        # Geometry only here; visibility, the dearer test, runs at the end on
-        # the sets that could become hypotheses (inner nodes already tested
-        # it once the pose was pinned).
-        res = final_check(inp, np.array(sorted(R)), tol, cache, visibility=eager)
+    def emit(R: list[int], Qsum, mR) -> None:
+        if eager:
+            res = final_check(inp, np.array(sorted(R)), tol, cache)
+        else:
+            # Every addition kept the set feasible at some grid yaw, so the
+            # geometry holds; visibility, the dearer test, runs at the end on
+            # the sets that could become hypotheses (inner nodes tested it
+            # once the pose was pinned). Here only the best grid pose.
+            G = np.nonzero(mR)[0]
+            val, zx, zy = posegrid.minimise(Qsum[G], dt)
+            g = int(np.argmin(val))
+            res = (np.array(sorted(R)), (float(inp.centre[0] + zx[g]), float(inp.centre[1] + zy[g]),
+                                          float(inp.yaws[G[g]]), float(val[g]) / len(R)))
         if res is None or len(res[0]) < state["bound"]:
             return
         new_bound = max(state["bound"], len(res[0]) - tol.match_slack)
@@ -198,7 +206,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             return
         if reachable == 0:
             if maximal(R, Qsum, mR, used, skipped):
-                emit(R)
+                emit(R, Qsum, mR)
             return
         # Fail first: decide next the line with the fewest candidates left
         # (lines with a non-vertical candidate first among equals).
@@ -227,7 +235,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
 
     rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
         np.arange(K), None)
-    sets, inits = _drop_dominated(sets, inits)
+    sets, inits = _drop_duplicates(sets, inits)
     state["found"] = len(sets)
     found_any = bool(sets)
     sets, inits = _visible_best(inp, sets, inits, tol, cache)
@@ -363,6 +371,18 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
         clear = sight_clear(cams, pts, inp.walls, _OCCLUSION_END_M)
         seen[np.repeat(todo_s, J)[clear]] = True
     return seen
+
+
+def _drop_duplicates(sets, inits):
+    """Remove repeated sets (a repaired leaf can equal another leaf)."""
+    kept, kept_init, keys = [], [], set()
+    for s, p in zip(sets, inits):
+        k = s.tobytes()
+        if k not in keys:
+            keys.add(k)
+            kept.append(s)
+            kept_init.append(p)
+    return kept, kept_init
 
 
 def _drop_dominated(sets, inits):
