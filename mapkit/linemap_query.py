@@ -95,9 +95,9 @@ class RegionLookup:
         reg = self.edge_region[edges]
         # Even-odd crossing test of a ray towards +x.
         straddle = (a[:, 1] > y) != (b[:, 1] > y)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore"):  # horizontal edges never straddle
             t = (y - a[:, 1]) / (b[:, 1] - a[:, 1])
-        xcross = a[:, 0] + t * (b[:, 0] - a[:, 0])
+            xcross = a[:, 0] + t * (b[:, 0] - a[:, 0])
         crossings = np.bincount(reg, weights=(straddle & (xcross > x)).astype(float), minlength=self.m.n_regions)
         inside = (crossings[cand] % 2) == 1
         # Distance from the centre to each edge.

@@ -139,8 +139,6 @@ def test_flat_dxf_round_trip_matches_the_plan_edges(tmp_path):
     the floor slab's border shows across doorways in the outer walls (the
     plan's edge model has no floor), and pieces as long as min_edge_length
     (0.2 m) may fall either side of the cut."""
-    if not FLAT.exists():
-        pytest.skip("maps/flat.dxf not built")
     options = BuildOptions()
     plan = load_scene(FLAT, options)
     plan_seg, plan_kind = extract_edges(plan, options)
@@ -160,10 +158,39 @@ def test_flat_dxf_round_trip_matches_the_plan_edges(tmp_path):
     assert at_threshold.all(), extra[~at_threshold][:5]
 
 
+def test_flat_dxf_round_trip_gives_the_same_lists(tmp_path):
+    """The maps built from the plan and from its extruded model list the same
+    segments at random points (segments matched by their end points within
+    1 cm). Merging is off: greedy merging reacts to centimetre differences."""
+    from mapkit.pipeline import build_map
+
+    options = BuildOptions(merge_growth=0.0)
+    plan_map, _ = build_map(FLAT, options)
+    model = tmp_path / "flat.glb"
+    model.write_bytes(scene_to_mesh(load_scene(FLAT, options)).export(file_type="glb"))
+    mesh_map, _ = build_map(model, options)
+    a, b = plan_map.segments, mesh_map.segments
+    dist = np.minimum(
+        np.abs(a[:, None] - b[None]).max(axis=(2, 3)), np.abs(a[:, None] - b[None, :, ::-1]).max(axis=(2, 3))
+    )
+    to_mesh = np.where(dist.min(axis=1) < 0.01, dist.argmin(axis=1), -1)
+    rng = np.random.default_rng(3)
+    similarity = []
+    while len(similarity) < 200:
+        x, y = rng.uniform(0, 11), rng.uniform(-0.6, 8.5)
+        if not (len(plan_map.regions_at(x, y)) and len(mesh_map.regions_at(x, y))):
+            continue
+        seen_plan = {int(to_mesh[i]) if to_mesh[i] >= 0 else -1 - int(i) for i in plan_map.candidate_segments(x, y, 0)}
+        seen_mesh = set(mesh_map.candidate_segments(x, y, 0).tolist())
+        similarity.append(len(seen_plan & seen_mesh) / len(seen_plan | seen_mesh))
+    similarity = np.array(similarity)
+    assert np.median(similarity) == 1.0
+    assert similarity.mean() > 0.97 and similarity.min() > 0.85
+
+
 # ---- the command ----------------------------------------------------------------
 
 
-@pytest.mark.skipif(not FLAT.exists(), reason="maps/flat.dxf not built")
 @pytest.mark.parametrize("suffix", [".glb", ".obj", ".ply", ".stl"])
 def test_cli_writes_each_format(tmp_path, capsys, suffix):
     out = tmp_path / f"flat{suffix}"
