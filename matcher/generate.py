@@ -111,8 +111,9 @@ def in_field_of_view(segments: np.ndarray, camera: Camera, prior, dt: float, dya
 
 
 #: Bearing step of the sight rays cast from vertical edges, radians (the
-#: visible stretch of a ray changes little within a degree).
-_SIGHT_STEP = math.radians(1.0)
+#: visible stretch of a ray changes little over two degrees, and the test
+#: takes the longest of three neighbouring bins).
+_SIGHT_STEP = math.radians(2.0)
 #: Rays start this far from the edge, which stands on the walls it belongs to.
 _SIGHT_SKIP_M = 0.05
 
