@@ -275,7 +275,8 @@ def generate(
     ``walls``: wall edges ``(a (E, 2), b (E, 2))`` for the visibility check
     of the tree's final test, or None; ``samples`` (N, n, 3) points of each
     candidate tested for visibility (spread over the pieces of a collinear
-    group, see :func:`collinear_classes`). ``debug``, if a dict, receives the intermediate arrays (for tools)."""
+    group, see :func:`collinear_classes`). ``debug``, if a dict, receives
+    the intermediate arrays (for tools)."""
     t_start = time.perf_counter()
     xe, ye, yaw_e = prior
     step = math.radians(tol.yaw_step_deg)
@@ -291,7 +292,6 @@ def generate(
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
     tpar = np.einsum("nk,nk->n", ce - segments[:, 0], v)
     near = segments[:, 0] + tpar[:, None] * v  # point of each line nearest the prior centre
-    reach = np.linalg.norm(near - ce, axis=1) + dt
     usable = img.usable
 
     # ---- correspondences ------------------------------------------------
@@ -315,50 +315,8 @@ def generate(
     if len(seg_k) < tol.min_matches:
         return empty
 
-    Wk = W[line_k]  # (K, Y, 3)
-    # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
-    mask = np.empty((len(seg_k), len(yaws)), dtype=bool)
-    dir_res = np.abs(np.einsum("kgi,ki->kg", Wk, v[seg_k]))
-    mask[~is_v] = (dir_res <= img.eps[line_k][:, None] + 0.5 * step)[~is_v]
-    if is_v.any():
-        pv = near[seg_k[is_v], :2] - ce[:2]
-        dist = np.linalg.norm(pv, axis=1)
-        beta = np.arctan2(pv[:, 1], pv[:, 0])
-        half = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1))
-        half = np.where(dist <= dt, np.pi, half) + img.alpha_eps[line_k[is_v]] + 0.5 * step
-        mask[is_v] = np.abs(wrap(yaws[None, :] - img.alpha[line_k[is_v]][:, None] - beta[:, None])) <= half[:, None]
-    # Position strips (relative to the disk centre). The point of each model
-    # line used is the one nearest the ray of the image line's midpoint (from
-    # the disk centre, at each grid yaw). The line's orientation noise turns
-    # its plane about that ray, so for a true correspondence the residual at
-    # that point moves by the turn times the lever arm: how far the true ray
-    # can pass from the point (the camera's offset in the disk, the yaw step,
-    # the offset noise), not the distance to the whole segment.
-    U = np.einsum("gki,mk->mgi", Rg, img.mid_rays)[line_k]  # (K, Y, 3) world direction of the midpoint ray
-    P0, vk = segments[seg_k, 0], v[seg_k]
-    w0 = ce - P0  # (K, 3)
-    b_ = np.einsum("kgi,ki->kg", U, vk)
-    d_ = np.einsum("kgi,ki->kg", U, w0)
-    e_ = np.einsum("ki,ki->k", vk, w0)[:, None]
-    den = np.maximum(1.0 - b_ * b_, 1e-9)
-    lam = (b_ * e_ - d_) / den
-    sp = np.where(1.0 - b_ * b_ > 1e-9, (e_ - b_ * d_) / den, e_)
-    Pstar = P0[:, None, :] + sp[..., None] * vk[:, None, :]  # (K, Y, 3)
-    D = np.linalg.norm(Pstar - ce, axis=-1) + dt
-    a = Wk[..., :2]
-    d = np.einsum("kgi,kgi->kg", Wk, Pstar) - Wk[..., 2] * h - np.einsum("kgi,i->kg", a, ce[:2])
-    e_rot = img.eps_rot[line_k][:, None]
-    e_off = img.eps_off[line_k][:, None]
-    # Between grid yaws the residual moves at d r / d yaw = (-w_y, w_x) . (P - C).
-    dr_dyaw = np.abs(-Wk[..., 1] * (Pstar[..., 0] - ce[0]) + Wk[..., 0] * (Pstar[..., 1] - ce[1]))
-    dr_dyaw += np.linalg.norm(a, axis=-1) * dt
-    t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
-    quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
-    if is_v.any() and walls is not None:
-        ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
-        mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt,
-                                      (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v], step, walls,
-                                      ext)
+    mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], yaws, ce, dt, step,
+                         tol, walls)
     val, _, _ = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
     keep = mask.any(axis=1)
@@ -371,28 +329,8 @@ def generate(
 
     # ---- pairwise compatibility ----------------------------------------
     t_pairs = time.perf_counter()
-    iu, ju = np.triu_indices(K, 1)
-    distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
-    iu, ju = iu[distinct], ju[distinct]
-    pm = mask[iu] & mask[ju]
-    p, g = np.nonzero(pm)
-    qi, qj = quad[iu[p], g], quad[ju[p], g]
-    pval, zx, zy = posegrid.minimise(qi + qj, dt)
-    ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
-    pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
-    both_v = is_v[iu] & is_v[ju]
-    if both_v.any():
-        sel = np.nonzero(both_v & pair_ok)[0]
-        if len(sel):
-            a_i, a_j = iu[sel], ju[sel]
-            tol_ab = img.alpha_eps[line_k[a_i]] + img.alpha_eps[line_k[a_j]]
-            bok = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], img.alpha[line_k[a_i]],
-                                    img.alpha[line_k[a_j]], (xe, ye), dt, tol_ab)
-            pair_ok[sel] = bok
-    compat = np.zeros((K, K), dtype=bool)
-    compat[iu[pair_ok], ju[pair_ok]] = True
-    compat |= compat.T
-    counts["compatible_pairs"] = int(pair_ok.sum())
+    compat = _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, (xe, ye), dt, tol)
+    counts["compatible_pairs"] = int(compat.sum() // 2)
     if debug is not None:
         debug.update(seg_k=seg_k, line_k=line_k, is_v=is_v, mask=mask, quad=quad, compat=compat, yaws=yaws,
                      uh=uh, ih=ih)
@@ -411,3 +349,79 @@ def generate(
     counts["ms_tree"] = round((time.perf_counter() - t_tree) * 1e3, 3)
     return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
                       truncated, counts)
+
+
+def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, dt, step, tol, walls):
+    """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of correspondences
+    ``(seg_k, line_k)`` (K,); ``Wk`` (K, Y, 3) their lines' world normals at
+    each grid yaw, ``v`` (N, 3) unit directions, ``near`` (N, 3) points of
+    the segments' lines nearest the prior centre ``ce``."""
+    h = camera.height_m
+    # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
+    mask = np.empty((len(seg_k), len(yaws)), dtype=bool)
+    dir_res = np.abs(np.einsum("kgi,ki->kg", Wk, v[seg_k]))
+    mask[~is_v] = (dir_res <= img.eps[line_k][:, None] + 0.5 * step)[~is_v]
+    if is_v.any():
+        pv = near[seg_k[is_v], :2] - ce[:2]
+        dist = np.linalg.norm(pv, axis=1)
+        beta = np.arctan2(pv[:, 1], pv[:, 0])
+        half = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1))
+        half = np.where(dist <= dt, np.pi, half) + img.alpha_eps[line_k[is_v]] + 0.5 * step
+        mask[is_v] = np.abs(wrap(yaws[None, :] - img.alpha[line_k[is_v]][:, None] - beta[:, None])) <= half[:, None]
+    # Position strips (relative to the disk centre). The point of each model
+    # line used is the one nearest the ray of the image line's midpoint (from
+    # the disk centre, at each grid yaw). The line's orientation noise turns
+    # its plane about that ray, so for a true correspondence the residual at
+    # that point moves by the turn times the lever arm: how far the true ray
+    # can pass from the point (the camera's offset in the disk, the yaw step,
+    # the offset noise), not the distance to the whole segment.
+    Rg = rotations(yaws, camera.pitch)
+    U = np.einsum("gki,mk->mgi", Rg, img.mid_rays)[line_k]  # (K, Y, 3) world direction of the midpoint ray
+    P0, vk = segments[seg_k, 0], v[seg_k]
+    w0 = ce - P0  # (K, 3)
+    b_ = np.einsum("kgi,ki->kg", U, vk)
+    d_ = np.einsum("kgi,ki->kg", U, w0)
+    e_ = np.einsum("ki,ki->k", vk, w0)[:, None]
+    den = np.maximum(1.0 - b_ * b_, 1e-9)
+    sp = np.where(1.0 - b_ * b_ > 1e-9, (e_ - b_ * d_) / den, e_)
+    Pstar = P0[:, None, :] + sp[..., None] * vk[:, None, :]  # (K, Y, 3)
+    D = np.linalg.norm(Pstar - ce, axis=-1) + dt
+    a = Wk[..., :2]
+    d = np.einsum("kgi,kgi->kg", Wk, Pstar) - Wk[..., 2] * h - np.einsum("kgi,i->kg", a, ce[:2])
+    e_rot = img.eps_rot[line_k][:, None]
+    e_off = img.eps_off[line_k][:, None]
+    # Between grid yaws the residual moves at d r / d yaw = (-w_y, w_x) . (P - C).
+    dr_dyaw = np.abs(-Wk[..., 1] * (Pstar[..., 0] - ce[0]) + Wk[..., 0] * (Pstar[..., 1] - ce[1]))
+    dr_dyaw += np.linalg.norm(a, axis=-1) * dt
+    t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
+    quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
+    if is_v.any() and walls is not None:
+        ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
+        width = (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v]
+        mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt, width,
+                                      step, walls, ext)
+    return mask, quad
+
+
+def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol) -> np.ndarray:
+    """(K, K) bool pairwise compatibility: one-to-one, a common pose of the
+    two in the prior set at one grid yaw, and the paper's binary constraint
+    for two vertical correspondences."""
+    K = len(seg_k)
+    iu, ju = np.triu_indices(K, 1)
+    distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
+    iu, ju = iu[distinct], ju[distinct]
+    p, g = np.nonzero(mask[iu] & mask[ju])
+    qi, qj = quad[iu[p], g], quad[ju[p], g]
+    pval, zx, zy = posegrid.minimise(qi + qj, dt)
+    ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
+    pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
+    sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
+    if len(sel):
+        a_i, a_j = iu[sel], ju[sel]
+        tol_ab = img.alpha_eps[line_k[a_i]] + img.alpha_eps[line_k[a_j]]
+        pair_ok[sel] = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], img.alpha[line_k[a_i]],
+                                         img.alpha[line_k[a_j]], centre, dt, tol_ab)
+    compat = np.zeros((K, K), dtype=bool)
+    compat[iu[pair_ok], ju[pair_ok]] = True
+    return compat | compat.T
