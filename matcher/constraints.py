@@ -183,7 +183,7 @@ def unary_constraint(
     for yaw in (y1, y2):
         yaw_ok = np.abs(wrap(yaw - yaw_e)) <= dyaw + dyaw_noise
         yaw_c = np.where(yaw_ok, yaw_e + np.clip(wrap(yaw - yaw_e), -dyaw, dyaw), yaw_e)
-        R = _rotations(yaw_c, camera.pitch)  # (N, M, 3, 3)
+        R = rotations(yaw_c, camera.pitch)  # (N, M, 3, 3)
         w = np.einsum("nmki,mk->nmi", R, normals)  # R^T n
         a, d = position_line(w, near[:, None, :], camera.height_m)
         na = np.linalg.norm(a, axis=-1)
@@ -196,7 +196,7 @@ def unary_constraint(
     return ok, best
 
 
-def _rotations(yaw: np.ndarray, pitch: float) -> np.ndarray:
+def rotations(yaw: np.ndarray, pitch: float) -> np.ndarray:
     """(..., 3, 3) world-to-camera rotations for an array of yaws."""
     cy, sy = np.cos(yaw), np.sin(yaw)
     cp, sp = math.cos(pitch), math.sin(pitch)
@@ -206,8 +206,6 @@ def _rotations(yaw: np.ndarray, pitch: float) -> np.ndarray:
     f = np.stack([cp * cy, cp * sy, z - sp], -1)
     return np.stack([r, d, f], -2)
 
-
-rotations = _rotations
 
 
 # --------------------------------------------------------------------------

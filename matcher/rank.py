@@ -106,6 +106,16 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls) -
     best_n = int(n_fin[alive].max()) if alive.any() else 0
     E = np.where(alive & (n_fin >= max(best_n, tol.min_matches)) & np.isfinite(E), E, np.inf)
     order = np.lexsort((E, -n_fin * alive))
+    # Hypotheses that ended with the same matches are one: only the best
+    # ranked keeps its score (so the runner-up is a different match).
+    keys = {}
+    for h in order:
+        sel = hyp == h
+        key = tuple(sorted(zip(local[sel].tolist(), line_ids[sel].tolist())))
+        if key in keys and np.isfinite(E[h]):
+            E[h] = np.inf
+        keys.setdefault(key, h)
+    order = np.lexsort((E, -n_fin * (alive & np.isfinite(E))))
     why = ""
     if not np.isfinite(E).any():
         why = ("no hypothesis kept its pose inside the prior bounds" if (n_in >= tol.min_matches).any()
