@@ -62,11 +62,8 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         return LocalizeResult(False, reason, hypotheses=hyps, time_ms=times)
 
     # ---- selection: regions met by the disk, field of view ---------------
-    # The region query divides by zero on horizontal ring edges (harmless, the
-    # result is right); keep its warnings off the robot's console.
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ids = linemap.candidate_segments(xe, ye, dt) if candidate_ids is None else candidate_ids
-        near = len(linemap.regions_near(xe, ye, dt)) if len(ids) == 0 else 1
+    ids = linemap.candidate_segments(xe, ye, dt) if candidate_ids is None else candidate_ids
+    near = len(linemap.regions_near(xe, ye, dt)) if len(ids) == 0 else 1
     if len(ids) == 0:
         if near == 0:
             return fail(f"the prior ({xe:.2f}, {ye:.2f}) is farther than dt={dt:g} m from every region of the map; "

@@ -122,3 +122,25 @@ def test_runner_up_and_ranking(small_map, cam):
     assert res.score is not None
     if res.runner_up_score is not None:
         assert res.runner_up_score >= scores[0]
+
+
+@pytest.fixture(scope="module")
+def built_map():
+    """The map the builder made of maps/flat.dxf (jambs, lintels, windows, real regions)."""
+    return matcher.load_map(Path(__file__).resolve().parents[1] / "maps" / "flat.lmap")
+
+
+@pytest.mark.parametrize("peq", sorted(PEQ))
+def test_recovery_on_the_built_example_map(built_map, cam, peq):
+    rng = np.random.default_rng([21, peq])
+    n, good, errs = 10, 0, []
+    for _ in range(n):
+        fr = make_frame(built_map, cam, rng, peq)
+        res = matcher.localize(built_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+        if _correct(res, fr):
+            good += 1
+            errs.append(pose_error(res.pose, fr.pose))
+    # The benchmark (docs/matcher.md) finds 91-99 % correct on this map; 8 of 10 here.
+    assert good >= n - 2, f"PEQ {peq}: {good} of {n} frames matched correctly"
+    pos, yaw = np.median(np.array(errs), axis=0)
+    assert pos < 0.03 and yaw < 0.3
