@@ -44,13 +44,17 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     a ``reason`` when no hypothesis is accepted. Bad input (shapes, NaN,
     ranges) raises ValueError."""
     tol = tolerances or DEFAULT
+    t0 = time.perf_counter()
+    img = _checked_lines(camera, lines, tol)
+    px = check_prior(prior, dt, dyaw)
+    return _localize(linemap, camera, img, px, tol, t0)
+
+
+def _checked_lines(camera, lines, tol):
+    """Validate the camera and the lines (ValueError), then prepare the lines."""
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a matcher.Camera, got {type(camera).__name__}")
-    t0 = time.perf_counter()
-    arr = check_lines(lines, camera, tol)
-    px = check_prior(prior, dt, dyaw)
-    img = prepare_lines(camera, arr, tol)
-    return _localize(linemap, camera, img, px, tol, t0)
+    return prepare_lines(camera, check_lines(lines, camera, tol), tol)
 
 
 def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
@@ -161,11 +165,8 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     ``time_ms['total']`` covers all tries; ``time_ms['regions_tried']``
     counts them. Returns a falsy result if no region gives one."""
     tol = tolerances or DEFAULT
-    if not isinstance(camera, Camera):
-        raise ValueError(f"camera must be a matcher.Camera, got {type(camera).__name__}")
     t0 = time.perf_counter()
-    arr = check_lines(lines, camera, tol)
-    img = prepare_lines(camera, arr, tol)
+    img = _checked_lines(camera, lines, tol)
     # The robot is stopped: a larger search budget per region.
     tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
     if linemap.n_regions == 0:

@@ -36,19 +36,26 @@ def _correct(res, frame) -> bool:
     return bool(res) and len(res.matches) >= 3 and {tuple(m) for m in res.matches} <= truth
 
 
-@pytest.mark.parametrize("peq", sorted(PEQ))
-def test_recovery_at_every_peq(small_map, cam, peq):
-    rng = np.random.default_rng([7, peq])
-    n, good, errs = 6, 0, []
+def _recover(linemap, cam, peq, seed, n):
+    """Localise n seeded simulated frames; (frames matched correctly, median
+    position error m, median yaw error deg over those)."""
+    rng = np.random.default_rng([seed, peq])
+    good, errs = 0, []
     for _ in range(n):
-        fr = make_frame(small_map, cam, rng, peq)
-        res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+        fr = make_frame(linemap, cam, rng, peq)
+        res = matcher.localize(linemap, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+        assert res.hypotheses <= 25
         if _correct(res, fr):
             good += 1
             errs.append(pose_error(res.pose, fr.pose))
-        assert res.hypotheses <= 25
-    assert good >= n - 1, f"PEQ {peq}: {good} of {n} frames matched correctly"
-    pos, yaw = np.median(np.array(errs), axis=0)
+    pos, yaw = np.median(np.array(errs), axis=0) if errs else (np.inf, np.inf)
+    return good, pos, yaw
+
+
+@pytest.mark.parametrize("peq", sorted(PEQ))
+def test_recovery_at_every_peq(small_map, cam, peq):
+    good, pos, yaw = _recover(small_map, cam, peq, seed=7, n=6)
+    assert good >= 5, f"PEQ {peq}: {good} of 6 frames matched correctly"
     assert pos < 0.03 and yaw < 0.3
 
 
@@ -132,15 +139,7 @@ def built_map():
 
 @pytest.mark.parametrize("peq", sorted(PEQ))
 def test_recovery_on_the_built_example_map(built_map, cam, peq):
-    rng = np.random.default_rng([21, peq])
-    n, good, errs = 10, 0, []
-    for _ in range(n):
-        fr = make_frame(built_map, cam, rng, peq)
-        res = matcher.localize(built_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
-        if _correct(res, fr):
-            good += 1
-            errs.append(pose_error(res.pose, fr.pose))
-    # The benchmark (docs/matcher.md) finds 91-99 % correct on this map; 8 of 10 here.
-    assert good >= n - 2, f"PEQ {peq}: {good} of {n} frames matched correctly"
-    pos, yaw = np.median(np.array(errs), axis=0)
+    # The benchmark (docs/matcher.md) finds 93-99 % correct on this map; 8 of 10 here.
+    good, pos, yaw = _recover(built_map, cam, peq, seed=21, n=10)
+    assert good >= 8, f"PEQ {peq}: {good} of 10 frames matched correctly"
     assert pos < 0.03 and yaw < 0.3
