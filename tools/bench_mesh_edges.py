@@ -41,7 +41,7 @@ def room_grid(n: int, subdivide: int, height: float = 2.5, thick: float = 0.2):
         return m
 
     w, d = 4.0, 3.0
-    span_x, span_y = n * w + thick, n * d + thick
+    span_x = n * w + thick
     parts = [box([0, j * d, 0], [span_x, j * d + thick, height]) for j in range(n + 1)]
     for j in range(n):
         for i in range(n + 1):
