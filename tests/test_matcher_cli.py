@@ -137,3 +137,21 @@ def test_python_dash_m(files):
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["ok"] is True
     assert out.stderr == ""
+
+
+def test_simulated_frame_files_localise_from_the_command_line(tmp_path, capsys):
+    """tools/simulate.py --out writes what `matcher localize` reads (the README's example)."""
+    import simulate
+
+    root = Path(__file__).resolve().parents[1]
+    assert simulate.main(["--peq", "2", "--seed", "4", "--out", str(tmp_path)]) == 0
+    truth = json.loads((tmp_path / "truth.json").read_text())
+    x, y, yaw = truth["prior"]
+    capsys.readouterr()
+    code = main(["localize", "--map", str(root / "maps" / "flat.lmap"), "--camera", str(tmp_path / "camera.json"),
+                 "--lines", str(tmp_path / "lines.json"), "--prior", f"{x},{y},{yaw}",
+                 "--dt", str(truth["dt"]), "--dyaw", str(truth["dyaw"]), "--json"])
+    res = json.loads(capsys.readouterr().out)
+    assert code == 0 and res["ok"]
+    assert sorted(map(tuple, res["matches"])) == sorted(map(tuple, truth["matches"]))
+    assert abs(res["pose"]["x"] - truth["pose"]["x"]) < 0.02 and abs(res["pose"]["y"] - truth["pose"]["y"]) < 0.02

@@ -313,24 +313,44 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--map", help=".lmap map (default: the synthetic flat)")
+    ap.add_argument("--map", default=str(Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"),
+                    help=".lmap map (default: maps/flat.lmap)")
     ap.add_argument("--peq", type=int, default=3, choices=sorted(PEQ))
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--noise-px", type=float, default=1.0)
     ap.add_argument("--noise-deg", type=float, default=1.0)
     ap.add_argument("--clutter", type=int, default=3)
+    ap.add_argument("--out", metavar="DIR",
+                    help="write camera.json, lines.json and truth.json there (for 'matcher localize')")
     args = ap.parse_args(argv)
     import matcher
-    from _synthetic_map import cached_flat_map
 
-    m = matcher.load_map(args.map) if args.map else cached_flat_map()
+    m = matcher.load_map(args.map)
     cam = paper_camera()
     fr = make_frame(m, cam, np.random.default_rng(args.seed), args.peq, args.noise_px, args.noise_deg,
                     clutter=args.clutter)
-    res = matcher.localize(m, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
-    print(f"pose {fr.pose}  prior {fr.prior}  {len(fr.lines)} lines")
-    print(res.to_dict())
-    print("true matches", fr.true_matches())
+    x, y, yaw = fr.prior
+    print(f"true pose {tuple(round(v, 3) for v in fr.pose)}; prior ({x:.2f}, {y:.2f}, {yaw:.1f}), "
+          f"dt {fr.dt} m, dyaw {fr.dyaw} deg; {len(fr.lines)} lines")
+    if args.out:
+        import json
+
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "camera.json").write_text(json.dumps(cam.to_dict()))
+        (out / "lines.json").write_text(json.dumps({"lines": fr.lines.reshape(-1, 4).round(2).tolist()}))
+        truth = {"pose": {"x": fr.pose[0], "y": fr.pose[1], "yaw_deg": fr.pose[2]},
+                 "prior": list(fr.prior), "dt": fr.dt, "dyaw": fr.dyaw, "matches": fr.true_matches()}
+        (out / "truth.json").write_text(json.dumps(truth))
+        print(f"wrote {out}/camera.json, lines.json, truth.json; try:")
+        import os
+
+        print(f"  matcher localize --map {os.path.relpath(args.map)} --camera {out}/camera.json "
+              f"--lines {out}/lines.json --prior {x:.3f},{y:.3f},{yaw:.2f} --dt {fr.dt:g} --dyaw {fr.dyaw:g}")
+    else:
+        res = matcher.localize(m, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+        print(res.to_dict())
+        print("true matches", fr.true_matches())
     return 0
 
 
