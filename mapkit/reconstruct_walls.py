@@ -27,6 +27,7 @@ from scipy.sparse.csgraph import connected_components
 from shapely.geometry import LineString, MultiLineString, MultiPolygon, Point, Polygon
 from shapely.ops import nearest_points, unary_union
 
+from mapkit.assemble import polygon_parts
 from mapkit.reconstruct_types import Stroke
 from mapkit.tolerances import COLUMN_MAX_AREA, MERGE, SNAP_GAP, THIN_WALL
 
@@ -232,8 +233,7 @@ def _nested(face: Polygon, comp: int, all_faces, tree) -> bool:
 
 
 def _as_multi(geom) -> MultiPolygon:
-    polys = [g for g in shapely.get_parts(geom) if isinstance(g, Polygon) and not g.is_empty]
-    return MultiPolygon(polys)
+    return MultiPolygon(polygon_parts(geom))
 
 
 def _as_multiline(geom) -> MultiLineString:

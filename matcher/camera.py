@@ -202,14 +202,17 @@ class Camera:
         return float(np.abs(np.arctan2(d[:, 1], d[:, 0])).max())
 
 
-def world2cam_rotation(yaw: float, pitch: float) -> np.ndarray:
-    """(3, 3) world-to-camera rotation, rows r, d, f of method.md section 2."""
-    cy_, sy_ = math.cos(yaw), math.sin(yaw)
+def world2cam_rotation(yaw, pitch: float) -> np.ndarray:
+    """World-to-camera rotation(s), rows r, d, f of method.md section 2.
+
+    ``yaw`` a scalar gives (3, 3); an array of yaws (...,) gives (..., 3, 3)."""
+    cy_, sy_ = np.cos(yaw), np.sin(yaw)
     cp, sp = math.cos(pitch), math.sin(pitch)
-    f = (cp * cy_, cp * sy_, -sp)
-    r = (sy_, -cy_, 0.0)
-    d = (-sp * cy_, -sp * sy_, -cp)
-    return np.array([r, d, f])
+    z = np.zeros_like(cy_)
+    r = np.stack([sy_, -cy_, z], -1)
+    d = np.stack([-sp * cy_, -sp * sy_, z - cp], -1)
+    f = np.stack([cp * cy_, cp * sy_, z - sp], -1)
+    return np.stack([r, d, f], -2)
 
 
 def check_camera(cam: Camera) -> None:

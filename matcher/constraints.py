@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from matcher.camera import Camera
+from matcher.camera import Camera, world2cam_rotation
 
 
 def wrap(a):
@@ -183,7 +183,7 @@ def unary_constraint(
     for yaw in (y1, y2):
         yaw_ok = np.abs(wrap(yaw - yaw_e)) <= dyaw + dyaw_noise
         yaw_c = np.where(yaw_ok, yaw_e + np.clip(wrap(yaw - yaw_e), -dyaw, dyaw), yaw_e)
-        R = rotations(yaw_c, camera.pitch)  # (N, M, 3, 3)
+        R = world2cam_rotation(yaw_c, camera.pitch)  # (N, M, 3, 3)
         w = np.einsum("nmki,mk->nmi", R, normals)  # R^T n
         a, d = position_line(w, near[:, None, :], camera.height_m)
         na = np.linalg.norm(a, axis=-1)
@@ -194,18 +194,6 @@ def unary_constraint(
         best = np.where(hit & ~ok, yaw, best)
         ok |= hit
     return ok, best
-
-
-def rotations(yaw: np.ndarray, pitch: float) -> np.ndarray:
-    """(..., 3, 3) world-to-camera rotations for an array of yaws."""
-    cy, sy = np.cos(yaw), np.sin(yaw)
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    z = np.zeros_like(cy)
-    r = np.stack([sy, -cy, z], -1)
-    d = np.stack([-sp * cy, -sp * sy, z - cp], -1)
-    f = np.stack([cp * cy, cp * sy, z - sp], -1)
-    return np.stack([r, d, f], -2)
-
 
 
 # --------------------------------------------------------------------------

@@ -29,7 +29,8 @@ import numpy as np
 
 from matcher import posegrid
 from matcher.camera import Camera
-from matcher.constraints import binary_constraint, rotations, unary_constraint, wrap
+from matcher.camera import world2cam_rotation
+from matcher.constraints import binary_constraint, unary_constraint, wrap
 from matcher.occlusion import ray_cast
 from matcher.tolerances import VERTICAL_AXIS_DEG, Tolerances
 from matcher.tree import TreeInput, search
@@ -283,7 +284,7 @@ def generate(
     h = camera.height_m
     ce = np.array([xe, ye, h])
     yaws = yaw_grid(yaw_e, dyaw, step)
-    Rg = rotations(yaws, camera.pitch)  # (Y, 3, 3)
+    Rg = world2cam_rotation(yaws, camera.pitch)  # (Y, 3, 3)
     W = np.einsum("gki,mk->mgi", Rg, img.normals)  # (M, Y, 3) world normals R^T n
     fwd = Rg[:, 2, :]  # (Y, 3) optical axis
 
@@ -375,7 +376,7 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     # that point moves by the turn times the lever arm: how far the true ray
     # can pass from the point (the camera's offset in the disk, the yaw step,
     # the offset noise), not the distance to the whole segment.
-    Rg = rotations(yaws, camera.pitch)
+    Rg = world2cam_rotation(yaws, camera.pitch)
     U = np.einsum("gki,mk->mgi", Rg, img.mid_rays)[line_k]  # (K, Y, 3) world direction of the midpoint ray
     P0, vk = segments[seg_k, 0], v[seg_k]
     w0 = ce - P0  # (K, 3)

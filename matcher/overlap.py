@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from matcher.camera import Camera
-from matcher.constraints import rotations
+from matcher.camera import world2cam_rotation
 
 #: Segments are cut this far in front of the optical centre before projecting, metres.
 _NEAR_M = 0.05
@@ -21,7 +21,7 @@ def project_segments(camera: Camera, poses: np.ndarray, segments: np.ndarray):
 
     Returns ``(uv (T, 2, 2) pixels, ok (T,))``: the part in front of the
     camera (``Zc >= 5 cm``); ``ok`` False where nothing is in front."""
-    R = rotations(poses[:, 2], camera.pitch)
+    R = world2cam_rotation(poses[:, 2], camera.pitch)
     C = np.stack([poses[:, 0], poses[:, 1], np.full(len(poses), camera.height_m)], axis=1)
     pc = np.einsum("tij,tej->tei", R, segments - C[:, None, :])  # (T, 2, 3)
     za, zb = pc[:, 0, 2], pc[:, 1, 2]

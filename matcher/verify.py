@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from matcher.constraints import rotations
+from matcher.camera import world2cam_rotation
 
 #: Gauss-Newton iterations: from the grid start (within half a yaw step and a
 #: few centimetres) the fit converges in 3 to 4.
@@ -116,7 +116,7 @@ def score_e(params, hyp, normals, seg_a, seg_b, pitch, height):
     """The paper's E (H,) for poses (H, 3); per match t: image plane normals
     ``normals`` (T, 3) camera frame, segment end points ``seg_a, seg_b`` (T, 3)."""
     p = params[hyp]
-    R = rotations(p[:, 2], pitch)
+    R = world2cam_rotation(p[:, 2], pitch)
     C = np.stack([p[:, 0], p[:, 1], np.full(len(p), height)], axis=1)
     v = seg_b - seg_a
     v /= np.linalg.norm(v, axis=1, keepdims=True)

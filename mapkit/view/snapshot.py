@@ -12,11 +12,10 @@ matcher result, if one is given).
 from __future__ import annotations
 
 import os
-import tempfile
-from pathlib import Path
 
 import html
 
+from mapkit.atomic import write_atomic
 from mapkit.lmap import LineMap
 from mapkit.view.palette import legend_html
 
@@ -52,14 +51,5 @@ def write_snapshot(m: LineMap, path: str | os.PathLike, plan=None, result=None, 
                    title: str = "mapkit map") -> int:
     """Write the snapshot to ``path`` atomically; returns its size in bytes."""
     text = snapshot_html(m, plan=plan, result=result, camera=camera, title=title).encode("utf-8")
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_atomic(path, text)
     return len(text)
