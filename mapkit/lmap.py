@@ -27,7 +27,7 @@ import zlib
 from dataclasses import dataclass, field
 from enum import IntEnum
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -147,6 +147,15 @@ class LineMap:
 
     def __post_init__(self) -> None:
         self._lookup = None  # built on first query: see mapkit.linemap_query
+        self._derived: dict[str, Any] = {}
+
+    def cached(self, key: str, build: Callable[[], Any]) -> Any:
+        """Data derived from this map, built by ``build()`` on the first call
+        with ``key`` and kept with the map (runtime lookups such as the
+        matcher's free-space raster). The map must not be mutated after."""
+        if key not in self._derived:
+            self._derived[key] = build()
+        return self._derived[key]
 
     # Queries live in their own module to keep the format module about bytes.
     def regions_at(self, x: float, y: float) -> np.ndarray:

@@ -185,25 +185,27 @@ def vertical_extent_bound(camera: Camera, lines: np.ndarray, segments: np.ndarra
 
 
 def horizon_side_ok(camera: Camera, lines: np.ndarray, segments: np.ndarray, tol: Tolerances) -> np.ndarray:
-    """(N, M) bool: a horizontal segment at height z images on one side of
-    the horizon only, above it if z > h and below if z < h (its points in
-    front of the camera all have elevation of the sign of z - h). An image
-    line wholly above the horizon (by more than its noise) cannot show a
-    segment wholly below the camera, and the other way round. Segments
-    that are not horizontal pass."""
+    """(N, M) bool: can segment n (N, 2, 3) show as image line m (M, 2, 2) as
+    far as heights go? Every point of a true line images a point of its
+    segment, and a point seen above the horizon (world elevation > 0) lies
+    above the camera. So a line reaching above the horizon (by more than its
+    noise) needs a segment reaching above the camera height, and a line
+    reaching below it a segment reaching below. A line crossing the horizon
+    is thus never a horizontal segment away from camera height, whatever
+    the heading: this cuts the floor and ceiling lines that a vertical image
+    line would otherwise fit when they run along the sight line."""
     rays = camera.pixel_rays(lines)  # (M, 2, 3)
     p = camera.pitch
     z = -math.cos(p) * rays[..., 1] - math.sin(p) * rays[..., 2]
     elev = np.arcsin(z / np.linalg.norm(rays, axis=-1))
     slack = (tol.line_px + tol.line_end_px) / min(camera.fx, camera.fy) + math.radians(tol.line_deg) * 0.05
-    above = elev.min(axis=1) > slack  # (M,)
-    below = elev.max(axis=1) < -slack
+    reaches_above = elev.max(axis=1) > slack  # (M,)
+    reaches_below = elev.min(axis=1) < -slack
     h = camera.height_m
     zlo, zhi = segments[:, :, 2].min(axis=1), segments[:, :, 2].max(axis=1)
-    flat = (zhi - zlo) < 0.05
-    seg_above = flat & (zlo > h + tol.model_m)  # (N,)
-    seg_below = flat & (zhi < h - tol.model_m)
-    bad = (above[None, :] & seg_below[:, None]) | (below[None, :] & seg_above[:, None])
+    seg_below = zhi < h - tol.model_m  # (N,) wholly below the camera
+    seg_above = zlo > h + tol.model_m
+    bad = (reaches_above[None, :] & seg_below[:, None]) | (reaches_below[None, :] & seg_above[:, None])
     return ~bad
 
 
@@ -270,13 +272,15 @@ def generate(
     walls: tuple[np.ndarray, np.ndarray] | None = None,
     samples: np.ndarray | None = None,
     debug: dict | None = None,
+    free=None,
 ) -> Hypotheses:
     """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
 
     ``walls``: wall edges ``(a (E, 2), b (E, 2))`` for the visibility check
     of the tree's final test, or None; ``samples`` (N, n, 3) points of each
     candidate tested for visibility (spread over the pieces of a collinear
-    group, see :func:`collinear_classes`). ``debug``, if a dict, receives
+    group, see :func:`collinear_classes`); ``free`` the map's
+    :class:`~matcher.freespace.FreeSpace`, or None to allow any position. ``debug``, if a dict, receives
     the intermediate arrays (for tools)."""
     t_start = time.perf_counter()
     xe, ye, yaw_e = prior
@@ -304,7 +308,9 @@ def generate(
     hi_ = ih[hi_]
     iv = np.nonzero(vert_seg)[0]
     jv = np.nonzero(img.vertical & usable)[0]
-    vi_, vj = (np.repeat(iv, len(jv)), np.tile(jv, len(iv)))
+    vv = horizon_side_ok(camera, img.lines[jv], segments[iv], tol)  # (Nv, Mv)
+    vi_, vj = np.nonzero(vv)
+    vi_, vj = iv[vi_], jv[vj]
     seg_k = np.concatenate([hi_, vi_]).astype(np.int64)
     line_k = np.concatenate([hj, vj]).astype(np.int64)
     is_v = np.concatenate([np.zeros(len(hi_), bool), np.ones(len(vi_), bool)])
@@ -339,7 +345,7 @@ def generate(
     # ---- interpretation tree -------------------------------------------
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
-                    None if samples is None else samples[seg_k], line_k, seg_k)
+                    None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m)
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)
@@ -385,6 +391,11 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     e_ = np.einsum("ki,ki->k", vk, w0)[:, None]
     den = np.maximum(1.0 - b_ * b_, 1e-9)
     sp = np.where(1.0 - b_ * b_ > 1e-9, (e_ - b_ * d_) / den, e_)
+    # On the segment itself: a true line's midpoint ray meets the segment,
+    # and a segment running along the ray would otherwise put the point at
+    # infinity and its lever arm with it.
+    seg_len = np.linalg.norm(segments[seg_k, 1] - P0, axis=1)[:, None]
+    sp = np.clip(sp, 0.0, seg_len)
     Pstar = P0[:, None, :] + sp[..., None] * vk[:, None, :]  # (K, Y, 3)
     D = np.linalg.norm(Pstar - ce, axis=-1) + dt
     a = Wk[..., :2]

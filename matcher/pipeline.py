@@ -10,8 +10,21 @@ import numpy as np
 
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
-from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
-from matcher.generate import ImageLines, class_samples, collinear_classes, generate, in_field_of_view
+from matcher.constraints import (
+    bearing_noise,
+    plane_noises,
+    vertical_bearing,
+    vertical_candidates,
+    wrap,
+)
+from matcher.freespace import free_space
+from matcher.generate import (
+    ImageLines,
+    class_samples,
+    collinear_classes,
+    generate,
+    in_field_of_view,
+)
 from matcher.occlusion import wall_edges
 from matcher.rank import verify_hypotheses
 from matcher.result import LocalizeResult
@@ -87,8 +100,9 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     t1 = time.perf_counter()
     label, reps = collinear_classes(segs)
     walls = wall_edges(linemap)
+    free = free_space(linemap)
     hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
-                    class_samples(segs, label))
+                    class_samples(segs, label), free=free)
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
     if n_h == 0:
@@ -97,7 +111,8 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
 
     # ---- stage 2 ---------------------------------------------------------
     t2 = time.perf_counter()
-    ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls)
+    ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
+                                 free)
     if _doubtful(ranked_h, hyps, tol) and tol.match_slack == 0:
         # The largest consistent sets held wrong matches (stage 2 threw them
         # out): the true set may be one smaller and was cut by the bound.
@@ -105,9 +120,10 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         t3 = time.perf_counter()
         tol1 = replace(tol, match_slack=1)
         hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol1, walls,
-                        class_samples(segs, label))
+                        class_samples(segs, label), free=free)
         n_h = len(hyps.sets)
-        ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls)
+        ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
+                                     free)
         times["second_search"] = (time.perf_counter() - t3) * 1e3
     E = ranked_h.score
     order = ranked_h.order

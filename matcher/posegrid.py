@@ -52,3 +52,38 @@ def evaluate(q: np.ndarray, zx: np.ndarray, zy: np.ndarray) -> np.ndarray:
         q[..., 0] * zx * zx + 2 * q[..., 1] * zx * zy + q[..., 2] * zy * zy
         - 2 * (q[..., 3] * zx + q[..., 4] * zy) + q[..., 5]
     )
+
+
+def weakest_direction(q: np.ndarray) -> tuple[float, np.ndarray]:
+    """Smallest eigenvalue and its unit eigenvector (2,) of the quadratic part
+    of ``q`` (6,): the direction in which the strips fix the position least."""
+    A = np.array([[q[0], q[1]], [q[1], q[2]]])
+    w, v = np.linalg.eigh(A)
+    return float(w[0]), v[:, 0]
+
+
+def extent_along(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: float) -> float:
+    """Length, metres, of the stretch of the line ``z + s e`` (z (2,) relative
+    to the disk centre, e (2,) unit) on which every quadratic of ``q`` (S, 6)
+    stays <= ``q_max`` and which lies in the disk of radius ``dt``: how far
+    the feasible set of a set of strips reaches in that direction. (Summed
+    quadratics understate it: N coinciding strips sum to a curvature N
+    times one strip's, yet meet all along the same band.)"""
+    alpha = q[:, 0] * e[0] ** 2 + 2 * q[:, 1] * e[0] * e[1] + q[:, 2] * e[1] ** 2
+    Az = np.stack([q[:, 0] * z[0] + q[:, 1] * z[1], q[:, 1] * z[0] + q[:, 2] * z[1]], axis=1)
+    beta = 2 * ((Az - q[:, 3:5]) @ e)
+    gamma = evaluate(q, np.full(len(q), z[0]), np.full(len(q), z[1])) - q_max
+    # Each quadratic alpha s^2 + beta s + gamma <= 0 on [lo, hi]; a flat one
+    # (alpha ~ 0: a strip along e) does not bound s.
+    lo, hi = -np.inf, np.inf
+    bounded = alpha > 1e-12
+    if bounded.any():
+        a, b, c = alpha[bounded], beta[bounded], gamma[bounded]
+        root = np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))
+        lo = float(((-b - root) / (2 * a)).max())
+        hi = float(((-b + root) / (2 * a)).min())
+    # The disk: |z + s e|^2 <= dt^2.
+    ze = float(z @ e)
+    root = np.sqrt(max(ze * ze - (float(z @ z) - dt * dt), 0.0))
+    lo, hi = max(lo, -ze - root), min(hi, -ze + root)
+    return max(hi - lo, 0.0)

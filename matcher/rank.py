@@ -55,10 +55,11 @@ class Ranked:
     why: str
 
 
-def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls) -> Ranked:
+def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, free=None) -> Ranked:
     """Stage 2 on stage 1's ``hyps`` (class ids in ``hyps.segment``); ``segs``
     (N, 2, 3) candidate segments, ``label`` (N,) their collinear group,
-    ``reps`` (G, 2, 3) the groups' spans; ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``."""
+    ``reps`` (G, 2, 3) the groups' spans; ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``;
+    ``free`` the map's :class:`~matcher.freespace.FreeSpace` or None."""
     xe, ye, yaw_e, dt, dyaw = prior
     n_h = len(hyps.sets)
     members = np.concatenate(hyps.sets)
@@ -78,7 +79,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls) -
     alive = n_in >= tol.min_matches
     if alive.any():
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
-        alive &= _inside(poses, prior)
+        alive &= _allowed(poses, prior, free, tol)
     if alive.any():
         # Contenders get the lines they are missing back, then a last refit.
         top = int(n_in[alive].max())
@@ -95,7 +96,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls) -
         order_t = np.argsort(hyp, kind="stable")
         hyp, local, line_ids = hyp[order_t], local[order_t], line_ids[order_t]
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
-        alive &= _inside(poses, prior)
+        alive &= _allowed(poses, prior, free, tol)
     n_fin = np.bincount(hyp, minlength=n_h)
     E = np.full(n_h, np.inf)
     if len(hyp):
@@ -118,7 +119,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls) -
     order = np.lexsort((E, -n_fin * (alive & np.isfinite(E))))
     why = ""
     if not np.isfinite(E).any():
-        why = ("no hypothesis kept its pose inside the prior bounds" if (n_in >= tol.min_matches).any()
+        why = ("no hypothesis kept its pose inside the prior bounds and the map's free space" if (n_in >= tol.min_matches).any()
                else f"no hypothesis kept {tol.min_matches} matches that fit at its pose")
     return Ranked(hyp, local, line_ids, poses, E, order, why)
 
@@ -131,11 +132,15 @@ def _refit(camera, img, segs, poses, hyp, local, line_ids):
                          camera.height_m, iterations=3)
 
 
-def _inside(poses, prior) -> np.ndarray:
-    """(H,) bool: poses (H, 3) within the prior bounds (plus noise slack)."""
+def _allowed(poses, prior, free, tol) -> np.ndarray:
+    """(H,) bool: poses (H, 3) within the prior bounds (plus noise slack) and,
+    with ``free``, within ``tol.free_space_m`` of the map's regions."""
     xe, ye, yaw_e, dt, dyaw = prior
     ok = np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) <= dt + _PRIOR_SLACK_M
-    return ok & (np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + math.radians(_PRIOR_SLACK_DEG))
+    ok &= np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + math.radians(_PRIOR_SLACK_DEG)
+    if free is not None:
+        ok &= free.distance(poses[:, :2]) <= tol.free_space_m
+    return ok
 
 
 def unit_rays(camera, lines):

@@ -71,6 +71,12 @@ class Tolerances:
     #: the lines leave the pose undetermined (looking along a wall), and the
     #: number of sets found is reported with the result's diagnostics.
     max_hypotheses: int = 25
+    #: How far outside the map's regions the camera may stand, metres. The
+    #: regions are the floor the robot's centre can reach (the builder's
+    #: robot radius from the walls, 0.2 m by default); a camera mounted off
+    #: the centre may be up to that offset outside them. Poses farther out
+    #: (inside a wall, behind the building) are rejected in both stages.
+    free_space_m: float = 0.1
     #: Lines shorter than this many pixels are ignored: their orientation is
     #: too uncertain to constrain anything.
     min_line_px: float = 15.0

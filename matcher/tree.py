@@ -11,10 +11,10 @@ it cannot reach the minimum number of matches, which rises to the largest
 set found minus ``match_slack``. A leaf is reported if it is maximal (no
 skipped line could join).
 
-Once three members pin the position, every matched segment must be in
-front of the camera and, when the map has walls, not hidden behind one at
-the set's best grid pose; each leaf gets that check again before it
-becomes a hypothesis.
+Once three members pin the position, the set's best grid pose must stand in
+the map's free space (near its regions), and every matched segment must be
+in front of the camera and, when the map has walls, not hidden behind one
+there; each leaf gets that check again before it becomes a hypothesis.
 """
 
 from __future__ import annotations
@@ -39,11 +39,15 @@ _SAMPLES = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
 #: Too small a radius loses true sets behind door jambs; too large only
 #: keeps a few more false ones for stage 2.
 _CAMERA_JITTER = np.array([[0.0, 0.0], [0.15, 0.0], [-0.15, 0.0], [0.0, 0.15], [0.0, -0.15]])
-#: Visibility is checked inside the tree only once the set's strips fix the
-#: position to within this (1-sigma of the strips, metres); before that the
-#: best point of the set may be far from the truth and the test would prune
-#: true sets.
-_PINNED_M = 0.05
+#: Visibility and free space are checked inside the tree only once the set
+#: fixes the position: its feasible points at the best yaw reach less than
+#: this far, metres, in any direction. Before that the best point may be far
+#: from the truth and the tests would prune true sets.
+_PINNED_M = 0.15
+#: The yaw is fixed too when the yaws at which the set is feasible span at
+#: most this many grid steps (the grid wraps for a lost robot, so a wide
+#: span is not pinned).
+_PINNED_YAW_STEPS = 4
 
 
 @dataclass
@@ -58,7 +62,9 @@ class TreeInput:
     only a bearing, so they are compatible with much and prune little);
     ``samples`` (K, n, 3) points of the matched model segments tested for
     visibility (by default 5 along ``segments``); ``line`` and ``seg`` (K,)
-    the image line and model segment (group) of each correspondence."""
+    the image line and model segment (group) of each correspondence;
+    ``free`` the map's :class:`~matcher.freespace.FreeSpace` (or None) and
+    ``free_m`` how far outside it the camera may stand."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -73,6 +79,15 @@ class TreeInput:
     samples: np.ndarray | None = None
     line: np.ndarray | None = None
     seg: np.ndarray | None = None
+    free: object | None = None
+    free_m: float = 0.0
+
+    def in_free_space(self, xy: np.ndarray) -> np.ndarray:
+        """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
+        the map's regions (:mod:`matcher.freespace`); all True without a map."""
+        if self.free is None:
+            return np.ones(np.shape(xy)[:-1], dtype=bool)
+        return self.free.distance(xy) <= self.free_m
 
 
 def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
@@ -222,7 +237,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         for v in c:
             v = int(v)
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
-            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, cache):
+            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache):
                 continue
             used2 = used.copy()
             used2[seg_of[v]] = True
@@ -274,23 +289,45 @@ def _visible_best(inp: TreeInput, sets, inits, tol: Tolerances, cache):
     return _drop_dominated(out, out_init)
 
 
-def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, cache: dict | None = None) -> bool:
-    """Once a set fixes the pose (three members or more): are all its
-    segments in front of the camera and unhidden at its best grid pose?"""
+def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float):
+    """``(position_pinned, yaw_pinned, g, cam)`` for a set R: its best grid
+    yaw index ``g`` (None when no yaw is left) and camera position ``cam``
+    (2,) there. The position is pinned when the set's feasible points at
+    that yaw (every member's term <= ``q_max``) reach less than
+    _PINNED_M along the direction the strips fix least; the yaw when,
+    besides, the yaws at which the set is feasible span at most
+    _PINNED_YAW_STEPS grid steps."""
     G = np.nonzero(mR)[0]
     if len(G) == 0:
-        return False
+        return False, False, None, None
     val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
-    g = int(np.argmin(val))
-    q = Qsum[G[g]]
-    # Only judge once the strips alone pin the position: smallest eigenvalue
-    # of their quadratic above 1 / _PINNED_M^2.
-    tr, det = q[0] + q[2], q[0] * q[2] - q[1] * q[1]
-    lam_min = 0.5 * (tr - np.sqrt(max(tr * tr - 4 * det, 0.0)))
-    if lam_min < 1.0 / _PINNED_M**2:
+    i = int(np.argmin(val))
+    g = int(G[i])
+    z = np.array([zx[i], zy[i]])
+    cam = inp.centre[:2] + z
+    lam, e = posegrid.weakest_direction(Qsum[g])
+    if lam < 1.0 / _PINNED_M**2:  # cheap early out: even the summed strips leave it loose
+        return False, False, g, cam
+    if posegrid.extent_along(inp.quad[R, g], z, e, q_max, inp.dt) > _PINNED_M:
+        return False, False, g, cam
+    ok = G[val <= len(R) + 1.0]
+    return True, bool(ok.max() - ok.min() <= _PINNED_YAW_STEPS), g, cam
+
+
+def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float,
+                     cache: dict | None = None) -> bool:
+    """Once a set fixes the pose (three members or more): is its best grid
+    pose in free space, with all its segments in front of the camera and
+    unhidden? (Before that the best point may be far from the truth and the
+    test would prune true sets.)"""
+    pinned, _, g, cam = _best_pose(inp, R, Qsum, mR, q_max)
+    if g is None:
+        return False
+    if not pinned:
         return True
-    cam = inp.centre[:2] + np.array([zx[g], zy[g]])
-    return bool(_seen_cached(inp, np.asarray(sorted(R)), cam, int(G[g]), cache).all())
+    if not inp.in_free_space(cam):
+        return False
+    return bool(_seen_cached(inp, np.asarray(sorted(R)), cam, g, cache).all())
 
 
 def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None,
@@ -299,8 +336,8 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dic
     dropping the worst member, or None if it falls below ``min_matches``.
 
     Feasible at a grid yaw: every member's yaw mask holds, the summed strip
-    quadratic's minimum is <= |S| + 1, every member's own term there is <=
-    ``q_max``, and at that best point every segment has a part in front of
+    quadratic's minimum is <= |S| + 1 and lies in free space, every member's
+    own term there is <= ``q_max``, and at that best point every segment has a part in front of
     the camera and, with walls, a part not hidden by a wall (unless
     ``visibility`` is False). ``fit`` is the summed quadratic's minimum per
     member."""
@@ -311,6 +348,7 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dic
         val, zx, zy = posegrid.minimise(q.sum(axis=0), inp.dt)
         each = posegrid.evaluate(q, zx, zy)  # (S, Y)
         good = allm & (val <= len(members) + 1.0) & (each <= tol.q_max).all(axis=0)
+        good &= inp.in_free_space(ce[:2] + np.stack([zx, zy], axis=-1))
         if not good.any():
             if allm.any():
                 g = int(np.argmin(np.where(allm, val, np.inf)))
