@@ -10,21 +10,9 @@ import numpy as np
 
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
-from matcher.constraints import (
-    bearing_noise,
-    plane_noises,
-    vertical_bearing,
-    vertical_candidates,
-    wrap,
-)
+from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
 from matcher.freespace import free_space
-from matcher.generate import (
-    ImageLines,
-    class_samples,
-    collinear_classes,
-    generate,
-    in_field_of_view,
-)
+from matcher.generate import ImageLines, class_samples, collinear_classes, generate, in_field_of_view
 from matcher.occlusion import wall_edges
 from matcher.rank import verify_hypotheses
 from matcher.result import LocalizeResult
