@@ -31,7 +31,7 @@ from matcher import posegrid
 from matcher.camera import Camera
 from matcher.camera import world2cam_rotation
 from matcher.constraints import binary_constraint, unary_constraint, wrap
-from matcher.occlusion import ray_cast
+from matcher.occlusion import SightRays
 from matcher.tolerances import VERTICAL_AXIS_DEG, Tolerances
 from matcher.tree import TreeInput, search
 
@@ -111,54 +111,36 @@ def in_field_of_view(segments: np.ndarray, camera: Camera, prior, dt: float, dya
     return ok | (dist <= dt) | (reach >= math.pi)
 
 
-#: Bearing step of the sight rays cast from vertical edges, radians (the
-#: visible stretch of a ray changes little over two degrees, and the test
-#: takes the longest of three neighbouring bins).
-_SIGHT_STEP = math.radians(2.0)
-#: Rays start this far from the edge, which stands on the walls it belongs to.
-_SIGHT_SKIP_M = 0.05
-
-
-def _vertical_sight(points, alpha, yaws, centre, dt, width, step, walls, extent) -> np.ndarray:
+def _vertical_sight(points, alpha, yaws, centre, dt, width, step, sight, extent) -> np.ndarray:
     """(Kv, Y) bool: for a vertical edge at floor point ``points[k]`` seen at
     bearing ``alpha[k]`` (right of the axis) with heading ``yaws[g]``, the
     camera lies on the ray back from the edge at world bearing ``yaw - alpha``,
     up to the first wall that would hide the edge. True where that stretch
     comes within ``dt + width[k, g]`` of the disk centre; the stretch is also
     cut at ``extent[k]``, the farthest the edge can be for its image line to
-    fit inside its projection (:func:`vertical_extent_bound`). Rays are cast
-    once per distinct edge on a 1 degree bearing grid."""
+    fit inside its projection (:func:`vertical_extent_bound`). The stretches
+    come from the map's :class:`~matcher.occlusion.SightRays` table."""
     uniq, inv = np.unique(points, axis=0, return_inverse=True)
     inv = inv.reshape(-1)
-    rel = uniq - centre
-    dist = np.linalg.norm(rel, axis=1)
-    to_edge = np.arctan2(rel[:, 1], rel[:, 0])
-    half = np.where(dist > dt, np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1)), np.pi) + 2 * step
-    n_b = np.ceil(2 * half / _SIGHT_STEP).astype(int) + 1
-    seg_of = np.repeat(np.arange(len(uniq)), n_b)
-    k_in = np.arange(n_b.sum()) - np.repeat(np.cumsum(n_b) - n_b, n_b)
-    b0 = to_edge - half
-    bear = b0[seg_of] + k_in * _SIGHT_STEP
-    back = -np.stack([np.cos(bear), np.sin(bear)], axis=1)
-    reach = np.minimum(ray_cast(uniq[seg_of], back, walls, _SIGHT_SKIP_M), dist[seg_of] + dt + 1.0)
-    starts = np.cumsum(n_b) - n_b
-    # For each correspondence and yaw: the bearing from camera to edge.
+    dist = np.linalg.norm(uniq - centre, axis=1)
+    reach = sight.reach(uniq)[inv]  # (Kv, B)
+    B = reach.shape[1]
+    # For each correspondence and yaw: the bearing from camera to edge, and
+    # the longest stretch among its bin and the two neighbours (a ray that
+    # just grazes a door jamb is blocked in one bin and clear in the next).
     beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
-    j = np.rint(wrap(beta - b0[inv][:, None]) / _SIGHT_STEP).astype(int)
-    inside = (j >= 0) & (j < n_b[inv][:, None])
-    # The longest stretch among the bin and its two neighbours: a ray that
-    # just grazes a door jamb is blocked in one bin and clear in the next.
-    hi = n_b[inv][:, None] - 1
-    near_bins = [starts[inv][:, None] + np.clip(j + o, 0, hi) for o in (-1, 0, 1)]
-    lam = np.minimum(np.maximum.reduce([reach[i] for i in near_bins]), extent[:, None])  # (Kv, Y)
+    j = sight.bin_of(beta + np.pi)  # the ray runs back from the edge
+    rows = np.arange(len(reach))[:, None]
+    lam = np.maximum.reduce([reach[rows, (j + o) % B] for o in (-1, 0, 1)])
+    lam = np.minimum(np.minimum(lam, (dist[inv] + dt + 1.0)[:, None]), extent[:, None])  # (Kv, Y)
     # Distance from the disk centre to the stretch P - s u, s in [0, lam].
     u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
     pc = centre - points[:, None, :]  # (Kv, 1, 2)
     s_ = np.clip(-np.einsum("kgi,kgi->kg", np.broadcast_to(pc, u.shape), u), 0.0, lam)
     closest = points[:, None, :] - s_[..., None] * u
     gap = np.linalg.norm(closest - centre, axis=-1)
-    slack = width + dist[inv][:, None] * (0.5 * step + _SIGHT_STEP)
-    return ~inside | (gap <= dt + slack)
+    slack = width + dist[inv][:, None] * (0.5 * step + sight.step)
+    return gap <= dt + slack
 
 
 def vertical_extent_bound(camera: Camera, lines: np.ndarray, segments: np.ndarray, tol: Tolerances) -> np.ndarray:
@@ -273,6 +255,7 @@ def generate(
     samples: np.ndarray | None = None,
     debug: dict | None = None,
     free=None,
+    sight=None,
 ) -> Hypotheses:
     """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
 
@@ -280,7 +263,9 @@ def generate(
     of the tree's final test, or None; ``samples`` (N, n, 3) points of each
     candidate tested for visibility (spread over the pieces of a collinear
     group, see :func:`collinear_classes`); ``free`` the map's
-    :class:`~matcher.freespace.FreeSpace`, or None to allow any position. ``debug``, if a dict, receives
+    :class:`~matcher.freespace.FreeSpace`, or None to allow any position;
+    ``sight`` the walls' :class:`~matcher.occlusion.SightRays` (kept with the
+    map by the pipeline; made here from ``walls`` if None). ``debug``, if a dict, receives
     the intermediate arrays (for tools)."""
     t_start = time.perf_counter()
     xe, ye, yaw_e = prior
@@ -323,7 +308,7 @@ def generate(
         return empty
 
     mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], yaws, ce, dt, step,
-                         tol, walls)
+                         tol, sight if sight is not None or walls is None else SightRays(walls))
     val, _, _ = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
     keep = mask.any(axis=1)
@@ -358,7 +343,7 @@ def generate(
                       truncated, counts)
 
 
-def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, dt, step, tol, walls):
+def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, dt, step, tol, sight):
     """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of correspondences
     ``(seg_k, line_k)`` (K,); ``Wk`` (K, Y, 3) their lines' world normals at
     each grid yaw, ``v`` (N, 3) unit directions, ``near`` (N, 3) points of
@@ -407,11 +392,11 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     dr_dyaw += np.linalg.norm(a, axis=-1) * dt
     t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
     quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
-    if is_v.any() and walls is not None:
+    if is_v.any() and sight is not None:
         ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
         width = (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v]
         mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt, width,
-                                      step, walls, ext)
+                                      step, sight, ext)
     return mask, quad
 
 

@@ -34,6 +34,40 @@ def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float) -> np.nd
     return np.where(hit, t, np.inf).min(axis=1)
 
 
+class SightRays:
+    """How far one sees back from floor points, per bearing: the distance
+    along the ray from the point at each of ``bins`` bearings to the first
+    wall it crosses (beyond ``skip`` metres: the point stands on a wall face).
+    A vertical edge seen at bearing b stands on the ray back from it at
+    b + pi, up to that distance. Rays are cast once per point and kept, so
+    a map's table fills up over the frames."""
+
+    def __init__(self, walls, bins: int = 180, skip: float = 0.05) -> None:
+        self.walls = walls
+        self.bins = int(bins)
+        self.step = 2 * np.pi / self.bins
+        self.skip = float(skip)
+        self._rows: dict[tuple[float, float], np.ndarray] = {}
+        bear = np.arange(self.bins) * self.step - np.pi
+        self._dirs = np.stack([np.cos(bear), np.sin(bear)], axis=1)
+
+    def bin_of(self, bearing: np.ndarray) -> np.ndarray:
+        """Bin index of world bearings (radians, any range)."""
+        return np.rint((bearing + np.pi) / self.step).astype(np.int64) % self.bins
+
+    def reach(self, points: np.ndarray) -> np.ndarray:
+        """(U, bins) distances from ``points`` (U, 2) along each bearing."""
+        keys = [(round(float(x), 6), round(float(y), 6)) for x, y in points]
+        todo = [i for i, k in enumerate(keys) if k not in self._rows]
+        if todo:
+            o = np.repeat(points[todo], self.bins, axis=0)
+            d = np.tile(self._dirs, (len(todo), 1))
+            got = ray_cast(o, d, self.walls, self.skip).reshape(len(todo), self.bins)
+            for i, row in zip(todo, got):
+                self._rows[keys[i]] = row
+        return np.array([self._rows[k] for k in keys]).reshape(len(keys), self.bins)
+
+
 def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -> np.ndarray:
     """(Q,) bool: the floor sight line from ``cam`` (2,) or (Q, 2) to each of
     ``points`` (Q, 2) crosses no wall edge farther than ``end_margin`` metres

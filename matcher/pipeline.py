@@ -13,7 +13,7 @@ from matcher.checks import check_lines, check_prior
 from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
 from matcher.freespace import free_space
 from matcher.generate import ImageLines, class_samples, collinear_classes, generate, in_field_of_view
-from matcher.occlusion import wall_edges
+from matcher.occlusion import SightRays, wall_edges
 from matcher.rank import verify_hypotheses
 from matcher.result import LocalizeResult
 from matcher.tolerances import DEFAULT, Tolerances
@@ -87,10 +87,11 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     # ---- stage 1 ---------------------------------------------------------
     t1 = time.perf_counter()
     label, reps = collinear_classes(segs)
-    walls = wall_edges(linemap)
+    walls = linemap.cached("matcher.walls", lambda: wall_edges(linemap))
     free = free_space(linemap)
+    sight = linemap.cached("matcher.sight", lambda: SightRays(walls)) if walls is not None else None
     hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
-                    class_samples(segs, label), free=free)
+                    class_samples(segs, label), free=free, sight=sight)
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
     if n_h == 0:
@@ -108,7 +109,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         t3 = time.perf_counter()
         tol1 = replace(tol, match_slack=1)
         hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol1, walls,
-                        class_samples(segs, label), free=free)
+                        class_samples(segs, label), free=free, sight=sight)
         n_h = len(hyps.sets)
         ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
                                      free)
