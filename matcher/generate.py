@@ -256,6 +256,7 @@ def generate(
     debug: dict | None = None,
     free=None,
     sight=None,
+    faces: np.ndarray | None = None,
 ) -> Hypotheses:
     """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
 
@@ -265,7 +266,9 @@ def generate(
     group, see :func:`collinear_classes`); ``free`` the map's
     :class:`~matcher.freespace.FreeSpace`, or None to allow any position;
     ``sight`` the walls' :class:`~matcher.occlusion.SightRays` (kept with the
-    map by the pipeline; made here from ``walls`` if None). ``debug``, if a dict, receives
+    map by the pipeline; made here from ``walls`` if None); ``faces`` (N, 2)
+    the room-side normal of the wall face each candidate lies on, zeros for
+    none (:func:`~matcher.occlusion.face_normals`), or None. ``debug``, if a dict, receives
     the intermediate arrays (for tools)."""
     t_start = time.perf_counter()
     xe, ye, yaw_e = prior
@@ -309,10 +312,13 @@ def generate(
 
     mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], yaws, ce, dt, step,
                          tol, sight if sight is not None or walls is None else SightRays(walls))
-    val, _, _ = posegrid.minimise(quad, dt)
+    val, zx, zy = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
+    front_c, front_b = _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces)
+    mask &= posegrid.halfplane_reachable(quad, val, zx, zy, 1, tol.q_max, dt, front_c, front_b)
     keep = mask.any(axis=1)
     seg_k, line_k, is_v, mask, quad = seg_k[keep], line_k[keep], is_v[keep], mask[keep], quad[keep]
+    front_c, front_b = front_c[keep], front_b[keep]
     K = len(seg_k)
     counts["correspondences"] = int(K)
     empty.segment, empty.line, empty.n_correspondences = seg_ids[seg_k], line_k, K
@@ -321,7 +327,7 @@ def generate(
 
     # ---- pairwise compatibility ----------------------------------------
     t_pairs = time.perf_counter()
-    compat = _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, (xe, ye), dt, tol)
+    compat = _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, (xe, ye), dt, tol, front_c, front_b)
     counts["compatible_pairs"] = int(compat.sum() // 2)
     if debug is not None:
         debug.update(seg_k=seg_k, line_k=line_k, is_v=is_v, mask=mask, quad=quad, compat=compat, yaws=yaws,
@@ -330,7 +336,8 @@ def generate(
     # ---- interpretation tree -------------------------------------------
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
-                    None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m)
+                    None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m,
+                    front_c, front_b)
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)
@@ -400,10 +407,45 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     return mask, quad
 
 
-def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol) -> np.ndarray:
+#: Slack of the half-plane constraints (:func:`_half_planes`), metres: a
+#: vertical edge still counts as ahead from this far behind the camera, a
+#: wall face as facing from this far behind it (pose grid and noise).
+_FRONT_SLACK_M = 0.1
+
+
+def _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces):
+    """Half-planes ``c . z <= b`` (c (K, Y, 2), b (K, Y)) on the camera
+    position z (relative to the disk centre) at each grid yaw, one per
+    correspondence (c = 0, b = inf: none). A strip alone is a whole line,
+    both sides of the segment; but
+    - a vertical edge seen at bearing alpha lies ahead along the world
+      bearing ``yaw - alpha``: the camera stands behind it on that ray;
+    - a segment on a wall face (``faces``) is seen from the room side only."""
+    K, Y = len(seg_k), len(yaws)
+    c = np.zeros((K, Y, 2))
+    b = np.full((K, Y), np.inf)
+    if is_v.any():
+        beta = yaws[None, :] - img.alpha[line_k[is_v]][:, None]  # (Kv, Y)
+        u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
+        rel = near[seg_k[is_v], :2] - ce[:2]  # (Kv, 2)
+        c[is_v] = u
+        b[is_v] = np.einsum("kgi,ki->kg", u, rel) + _FRONT_SLACK_M
+    if faces is not None:
+        f = faces[seg_k]  # (K, 2)
+        has = ~is_v & (np.abs(f).sum(axis=1) > 0)
+        if has.any():
+            # Room side: f . (C - P) >= -slack, i.e. (-f) . z <= f . (ce - P) + slack.
+            c[has] = -f[has][:, None, :]
+            rel = ce[:2] - segments[seg_k[has], 0, :2]
+            b[has] = (np.einsum("ki,ki->k", f[has], rel) + _FRONT_SLACK_M)[:, None]
+    return c, b
+
+
+def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, front_c, front_b) -> np.ndarray:
     """(K, K) bool pairwise compatibility: one-to-one, a common pose of the
-    two in the prior set at one grid yaw, and the paper's binary constraint
-    for two vertical correspondences."""
+    two in the prior set at one grid yaw (with their vertical edges in front
+    of the camera, see :func:`_edge_in_front`), and the paper's binary
+    constraint for two vertical correspondences."""
     K = len(seg_k)
     iu, ju = np.triu_indices(K, 1)
     distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
@@ -412,6 +454,8 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol) ->
     qi, qj = quad[iu[p], g], quad[ju[p], g]
     pval, zx, zy = posegrid.minimise(qi + qj, dt)
     ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
+    for k in (iu[p], ju[p]):
+        ok &= posegrid.halfplane_reachable(qi + qj, pval, zx, zy, 2, tol.q_max, dt, front_c[k, g], front_b[k, g])
     pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):

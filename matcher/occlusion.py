@@ -18,6 +18,46 @@ def wall_edges(linemap) -> tuple[np.ndarray, np.ndarray] | None:
     return np.concatenate(rings), np.concatenate([np.roll(r, -1, axis=0) for r in rings])
 
 
+def inside_walls(points: np.ndarray, walls) -> np.ndarray:
+    """(Q,) bool: floor points (Q, 2) inside the wall outlines (even-odd)."""
+    if walls is None or len(walls[0]) == 0 or len(points) == 0:
+        return np.zeros(len(points), dtype=bool)
+    a, b = walls
+    x, y = points[:, 0:1], points[:, 1:2]
+    straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (y - a[None, :, 1]) / (b[None, :, 1] - a[None, :, 1])
+        xc = a[None, :, 0] + t * (b[None, :, 0] - a[None, :, 0])
+    return ((straddle & (xc > x)).sum(axis=1) % 2) == 1
+
+
+def face_normals(segments: np.ndarray, walls, probe: float = 0.03) -> np.ndarray:
+    """(N, 2) unit normal of the wall face each non-vertical segment (N, 2, 3)
+    lies on, pointing into the room; zeros where there is no single face (a
+    vertical segment, a line in a doorway or away from the walls). Probed
+    ``probe`` metres to either side at a quarter, half and three quarters
+    of the segment: the face is where one side is wall all three times and
+    the other side never. Such a segment is seen only from the room side."""
+    n = len(segments)
+    out = np.zeros((n, 2))
+    d = segments[:, 1, :2] - segments[:, 0, :2]
+    length = np.linalg.norm(d, axis=1)
+    ok = length > 1e-6
+    if walls is None or not ok.any():
+        return out
+    idx = np.nonzero(ok)[0]
+    perp = np.stack([-d[idx, 1], d[idx, 0]], axis=1) / length[idx, None]
+    t = np.array([0.25, 0.5, 0.75])
+    pts = segments[idx, None, 0, :2] + t[None, :, None] * d[idx, None, :]  # (M, 3, 2)
+    left = inside_walls((pts + probe * perp[:, None]).reshape(-1, 2), walls).reshape(-1, 3)
+    right = inside_walls((pts - probe * perp[:, None]).reshape(-1, 2), walls).reshape(-1, 3)
+    to_left = right.all(axis=1) & ~left.any(axis=1)  # wall on the right: the room is left
+    to_right = left.all(axis=1) & ~right.any(axis=1)
+    out[idx[to_left]] = perp[to_left]
+    out[idx[to_right]] = -perp[to_right]
+    return out
+
+
 def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float) -> np.ndarray:
     """(R,) distance along each ray (origins (R, 2), unit dirs (R, 2)) to the
     first wall edge crossed beyond ``skip`` metres; inf if none."""

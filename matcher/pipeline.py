@@ -13,7 +13,7 @@ from matcher.checks import check_lines, check_prior
 from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
 from matcher.freespace import free_space
 from matcher.generate import ImageLines, class_samples, collinear_classes, generate, in_field_of_view
-from matcher.occlusion import SightRays, wall_edges
+from matcher.occlusion import SightRays, face_normals, wall_edges
 from matcher.rank import verify_hypotheses
 from matcher.result import LocalizeResult
 from matcher.tolerances import DEFAULT, Tolerances
@@ -90,8 +90,9 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     walls = linemap.cached("matcher.walls", lambda: wall_edges(linemap))
     free = free_space(linemap)
     sight = linemap.cached("matcher.sight", lambda: SightRays(walls)) if walls is not None else None
+    faces = _class_faces(linemap.cached("matcher.faces", lambda: face_normals(linemap.segments, walls))[ids], label)
     hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
-                    class_samples(segs, label), free=free, sight=sight)
+                    class_samples(segs, label), free=free, sight=sight, faces=faces)
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
     if n_h == 0:
@@ -109,7 +110,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         t3 = time.perf_counter()
         tol1 = replace(tol, match_slack=1)
         hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol1, walls,
-                        class_samples(segs, label), free=free, sight=sight)
+                        class_samples(segs, label), free=free, sight=sight, faces=faces)
         n_h = len(hyps.sets)
         ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
                                      free)
@@ -139,6 +140,20 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         return res
     return LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
                           matches=matches_of(best), **common)
+
+
+def _class_faces(faces: np.ndarray, label: np.ndarray) -> np.ndarray:
+    """(G, 2) wall-face normal per collinear group: its members' when they
+    all agree, else zeros (no constraint)."""
+    G = int(label.max()) + 1 if len(label) else 0
+    out = np.zeros((G, 2))
+    first = np.full(G, -1)
+    first[label[::-1]] = np.arange(len(label))[::-1]
+    ref = faces[first]
+    agree = np.ones(G, dtype=bool)
+    np.logical_and.at(agree, label, np.abs(faces - ref[label]).max(axis=1) < 1e-9)
+    out[agree] = ref[agree]
+    return out
 
 
 def _doubtful(ranked, hyps, tol) -> bool:

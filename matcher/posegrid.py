@@ -87,3 +87,26 @@ def extent_along(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: 
     root = np.sqrt(max(ze * ze - (float(z @ z) - dt * dt), 0.0))
     lo, hi = max(lo, -ze - root), min(hi, -ze + root)
     return max(hi - lo, 0.0)
+
+
+def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms,
+                        q_max: float, dt: float, c: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(...) bool: can a point of the feasible set of summed quadratics ``q``
+    (..., 6) satisfy ``c . z <= b`` (c (..., 2), b (...))? A necessary test.
+
+    ``val, zx, zy`` are :func:`minimise`'s output for ``q`` and ``n_terms``
+    the number of strips summed. Every feasible point keeps each strip's term
+    <= ``q_max`` and lies in the disk, so ``F(z) = q(z) + |z|^2/dt^2 <=
+    n_terms q_max + 1``: an ellipse around the minimiser, on which the
+    smallest ``c . z`` is ``c . z* - sqrt(rho c^T A^-1 c)`` (A the Hessian
+    half, rho the level above the minimum). The disk gives ``-|c| dt``; the
+    larger of the two lower bounds holds."""
+    inv = 1.0 / (dt * dt)
+    axx, axy, ayy = q[..., 0] + inv, q[..., 1], q[..., 2] + inv
+    det = axx * ayy - axy * axy
+    cx, cy = c[..., 0], c[..., 1]
+    cAc = (ayy * cx * cx - 2 * axy * cx * cy + axx * cy * cy) / det
+    rho = np.maximum(n_terms * q_max + 1.0 - val, 0.0)
+    lo_ellipse = cx * zx + cy * zy - np.sqrt(rho * np.maximum(cAc, 0.0))
+    lo_disk = -np.hypot(cx, cy) * dt
+    return np.maximum(lo_ellipse, lo_disk) <= b

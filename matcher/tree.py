@@ -64,7 +64,10 @@ class TreeInput:
     visibility (by default 5 along ``segments``); ``line`` and ``seg`` (K,)
     the image line and model segment (group) of each correspondence;
     ``free`` the map's :class:`~matcher.freespace.FreeSpace` (or None) and
-    ``free_m`` how far outside it the camera may stand."""
+    ``free_m`` how far outside it the camera may stand; ``front_c`` (K, Y, 2)
+    and ``front_b`` (K, Y) half-planes ``c . z <= b`` on the camera position
+    relative to the centre that keep a vertical edge ahead of the camera
+    (c = 0, b = inf for the others), or None."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -81,6 +84,8 @@ class TreeInput:
     seg: np.ndarray | None = None
     free: object | None = None
     free_m: float = 0.0
+    front_c: np.ndarray | None = None
+    front_b: np.ndarray | None = None
 
     def in_free_space(self, xy: np.ndarray) -> np.ndarray:
         """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
@@ -104,6 +109,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
     cache: dict = {}
     weak = np.zeros(K, dtype=bool) if inp.vertical is None else inp.vertical
     degree = compat.sum(axis=1)
+    has_plane = np.zeros(K, dtype=bool) if inp.front_b is None else np.isfinite(inp.front_b).any(axis=1)
 
     # Levels: image lines. Lines with a non-vertical candidate first (their
     # unary constraint fixes the yaw, so the pose gets pinned early), then
@@ -140,11 +146,23 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             no = np.zeros(len(cand), dtype=bool)
             return (no, np.full(len(cand), np.inf)) if fit else no
         qc = quad[np.ix_(cand, G)]  # (C, G, 6)
-        val, zx, zy = posegrid.minimise(Qsum[G] + qc, dt)
+        qs = Qsum[G] + qc
+        val, zx, zy = posegrid.minimise(qs, dt)
         ok = mask[np.ix_(cand, G)] & (val <= len(R) + 2.0) & (posegrid.evaluate(qc, zx, zy) <= tol.q_max)
         if R:
             each = posegrid.evaluate(quad[np.ix_(R, G)][:, None], zx, zy)  # (S, C, G)
             ok &= (each <= tol.q_max).all(axis=0)
+        if inp.front_c is not None:
+            # Half-planes (vertical edges ahead, wall faces seen from the
+            # room): the candidate's and those of R's members, all at once
+            # (the feasible set shrinks as R grows).
+            hp = [r for r in R if has_plane[r]]
+            c_ = inp.front_c[np.ix_(cand, G)][None]  # (1, C, G, 2)
+            b_ = inp.front_b[np.ix_(cand, G)][None]
+            if hp:
+                c_ = np.concatenate([c_, np.broadcast_to(inp.front_c[np.ix_(hp, G)][:, None], (len(hp),) + c_.shape[1:])])
+                b_ = np.concatenate([b_, np.broadcast_to(inp.front_b[np.ix_(hp, G)][:, None], (len(hp),) + b_.shape[1:])])
+            ok &= posegrid.halfplane_reachable(qs, val, zx, zy, len(R) + 1, tol.q_max, dt, c_, b_).all(axis=0)
         if fit:
             best = np.where(ok, val, np.inf).min(axis=1)
             return np.isfinite(best), best
