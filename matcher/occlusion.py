@@ -82,7 +82,7 @@ class SightRays:
     b + pi, up to that distance. Rays are cast once per point and kept, so
     a map's table fills up over the frames."""
 
-    def __init__(self, walls, bins: int = 180, skip: float = 0.05) -> None:
+    def __init__(self, walls, bins: int = 720, skip: float = 0.05) -> None:
         self.walls = walls
         self.bins = int(bins)
         self.step = 2 * np.pi / self.bins

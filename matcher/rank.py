@@ -35,7 +35,7 @@ from matcher.overlap import distance_and_overlap
 _VISIBLE_END_M = 0.02
 #: A refined pose may leave the prior bounds by this much (metres, degrees)
 #: before the hypothesis is dropped: noise on a pose at the border.
-_PRIOR_SLACK_M = 0.05
+_PRIOR_SLACK_M = 0.1
 _PRIOR_SLACK_DEG = 2.0
 
 
