@@ -54,39 +54,36 @@ def evaluate(q: np.ndarray, zx: np.ndarray, zy: np.ndarray) -> np.ndarray:
     )
 
 
-def weakest_direction(q: np.ndarray) -> tuple[float, np.ndarray]:
-    """Smallest eigenvalue and its unit eigenvector (2,) of the quadratic part
-    of ``q`` (6,): the direction in which the strips fix the position least."""
-    A = np.array([[q[0], q[1]], [q[1], q[2]]])
-    w, v = np.linalg.eigh(A)
-    return float(w[0]), v[:, 0]
+def stretch(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The stretch ``[lo, hi]`` (...) of the line ``z + s e`` (z, e (..., 2),
+    z relative to the disk centre, e unit) on which every quadratic of ``q``
+    (S, ..., 6) stays <= ``q_max`` and which lies in the disk of radius
+    ``dt``: how far the feasible set of a set of strips reaches in that
+    direction (lo > hi: nowhere). Summed quadratics understate it: N
+    coinciding strips sum to a curvature N times one strip's, yet meet all
+    along the same band."""
+    ex, ey = e[..., 0], e[..., 1]
+    zx, zy = z[..., 0], z[..., 1]
+    alpha = q[..., 0] * ex**2 + 2 * q[..., 1] * ex * ey + q[..., 2] * ey**2
+    beta = 2 * ((q[..., 0] * zx + q[..., 1] * zy - q[..., 3]) * ex + (q[..., 1] * zx + q[..., 2] * zy - q[..., 4]) * ey)
+    gamma = evaluate(q, zx, zy) - q_max
+    # Each quadratic alpha s^2 + beta s + gamma <= 0 on [lo, hi]; a flat one
+    # (alpha ~ 0: a strip along e) does not bound s.
+    bounded = alpha > 1e-12
+    a = np.where(bounded, alpha, 1.0)
+    root = np.sqrt(np.maximum(beta * beta - 4 * a * gamma, 0.0))
+    lo = np.where(bounded, (-beta - root) / (2 * a), -np.inf).max(axis=0)
+    hi = np.where(bounded, (-beta + root) / (2 * a), np.inf).min(axis=0)
+    # The disk: |z + s e|^2 <= dt^2.
+    ze = zx * ex + zy * ey
+    root = np.sqrt(np.maximum(ze * ze - (zx * zx + zy * zy - dt * dt), 0.0))
+    return np.maximum(lo, -ze - root), np.minimum(hi, -ze + root)
 
 
 def extent_along(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: float) -> float:
-    """Length, metres, of the stretch of the line ``z + s e`` (z (2,) relative
-    to the disk centre, e (2,) unit) on which every quadratic of ``q`` (S, 6)
-    stays <= ``q_max`` and which lies in the disk of radius ``dt``: how far
-    the feasible set of a set of strips reaches in that direction. (Summed
-    quadratics understate it: N coinciding strips sum to a curvature N
-    times one strip's, yet meet all along the same band.)"""
-    alpha = q[:, 0] * e[0] ** 2 + 2 * q[:, 1] * e[0] * e[1] + q[:, 2] * e[1] ** 2
-    Az = np.stack([q[:, 0] * z[0] + q[:, 1] * z[1], q[:, 1] * z[0] + q[:, 2] * z[1]], axis=1)
-    beta = 2 * ((Az - q[:, 3:5]) @ e)
-    gamma = evaluate(q, np.full(len(q), z[0]), np.full(len(q), z[1])) - q_max
-    # Each quadratic alpha s^2 + beta s + gamma <= 0 on [lo, hi]; a flat one
-    # (alpha ~ 0: a strip along e) does not bound s.
-    lo, hi = -np.inf, np.inf
-    bounded = alpha > 1e-12
-    if bounded.any():
-        a, b, c = alpha[bounded], beta[bounded], gamma[bounded]
-        root = np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))
-        lo = float(((-b - root) / (2 * a)).max())
-        hi = float(((-b + root) / (2 * a)).min())
-    # The disk: |z + s e|^2 <= dt^2.
-    ze = float(z @ e)
-    root = np.sqrt(max(ze * ze - (float(z @ z) - dt * dt), 0.0))
-    lo, hi = max(lo, -ze - root), min(hi, -ze + root)
-    return max(hi - lo, 0.0)
+    """Length, metres, of :func:`stretch` for quadratics (S, 6) along one line."""
+    lo, hi = stretch(q, z, e, q_max, dt)
+    return max(float(hi - lo), 0.0)
 
 
 def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms,
@@ -110,3 +107,18 @@ def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.n
     lo_ellipse = cx * zx + cy * zy - np.sqrt(rho * np.maximum(cAc, 0.0))
     lo_disk = -np.hypot(cx, cy) * dt
     return np.maximum(lo_ellipse, lo_disk) <= b
+
+
+def weak_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For quadratics (..., 6): the unit direction (..., 2) in which they fix
+    the position least, and the eigenvalues (small, large) of their
+    quadratic part, in closed form."""
+    axx, axy, ayy = q[..., 0], q[..., 1], q[..., 2]
+    mean, diff = 0.5 * (axx + ayy), np.sqrt(0.25 * (axx - ayy) ** 2 + axy * axy)
+    lam_lo, lam_hi = mean - diff, mean + diff
+    ex, ey = axy, lam_lo - axx
+    norm = np.hypot(ex, ey)
+    flat = norm < 1e-12
+    ex = np.where(flat, np.where(axx <= ayy, 1.0, 0.0), ex / np.where(flat, 1.0, norm))
+    ey = np.where(flat, np.where(axx <= ayy, 0.0, 1.0), ey / np.where(flat, 1.0, norm))
+    return np.stack([ex, ey], axis=-1), lam_lo, lam_hi

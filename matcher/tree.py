@@ -323,7 +323,7 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
     g = int(G[i])
     z = np.array([zx[i], zy[i]])
     cam = inp.centre[:2] + z
-    lam, e = posegrid.weakest_direction(Qsum[g])
+    e, lam, _ = posegrid.weak_axes(Qsum[g])
     if lam < 1.0 / _PINNED_M**2:  # cheap early out: even the summed strips leave it loose
         return False, False, g, cam
     if posegrid.extent_along(inp.quad[R, g], z, e, q_max, inp.dt) > _PINNED_M:
