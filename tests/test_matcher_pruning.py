@@ -104,3 +104,52 @@ def test_frame_of_vertical_edges_only(flat):
     assert res, res.reason
     assert {tuple(m) for m in res.matches} == truth
     assert res.sets_found < 100
+
+
+def test_halfplane_reachable_hand_worked():
+    from matcher import posegrid
+
+    dt = 1.0
+    # One strip x = 0 (|x| <= 0.1): its feasible set is the chord x ~ 0, y in [-1, 1].
+    q = posegrid.strip_quadratics(np.array([1.0, 0.0]), np.array(0.0), np.array(0.1))
+    val, zx, zy = posegrid.minimise(q, dt)
+    reach = lambda c, b: bool(posegrid.halfplane_reachable(q, val, zx, zy, 1, 1.5, dt, np.array(c), np.array(b)))  # noqa: E731
+    assert reach([0.0, 1.0], -0.9)  # y <= -0.9: the chord's end
+    assert not reach([0.0, 1.0], -1.1)  # beyond the disk
+    assert reach([1.0, 0.0], 0.0)  # x <= 0 on the strip
+    assert not reach([1.0, 0.0], -0.2)  # x <= -0.2: off the strip (0.1 * sqrt(1.5) = 0.12 wide)
+    assert reach([0.0, 0.0], np.inf)  # no constraint
+
+
+def test_face_normals_point_into_the_rooms(flat):
+    from matcher.occlusion import face_normals, inside_walls, wall_edges
+
+    walls = wall_edges(flat)
+    f = face_normals(flat.segments, walls)
+    has = np.abs(f).sum(axis=1) > 0
+    vertical = np.abs(flat.segments[:, 1, 2] - flat.segments[:, 0, 2]) > 0.5
+    assert not has[vertical].any()
+    assert has.sum() > 0.5 * (~vertical).sum()  # most floor and ceiling lines lie on a wall face
+    mid = flat.segments[has, :, :2].mean(axis=1)
+    # A step along the normal leaves the wall, a step against it enters the wall.
+    assert not inside_walls(mid + 0.03 * f[has], walls).any()
+    assert inside_walls(mid - 0.03 * f[has], walls).all()
+
+
+def test_vertical_edge_behind_the_camera_is_not_a_candidate():
+    """A vertical edge right behind the prior's position (within dt) used to
+    pass for any image line at some yaw: its bearing line runs through the
+    disk, on both sides of the edge. The camera must stand behind the edge
+    on the ray towards it."""
+    from matcher.generate import _half_planes
+
+    class _Img:
+        alpha = np.array([0.0])  # the line is straight ahead
+
+    yaws = np.array([0.0])
+    ce = np.array([0.0, 0.0, 1.2])
+    near = np.array([[1.0, 0.0, 0.0], [-0.5, 0.0, 0.0]])  # one ahead (+x), one behind
+    c, b = _half_planes(_Img, None, near, np.array([0, 1]), np.array([0, 0]), np.array([True, True]), yaws, ce, None)
+    # At the disk centre (z = 0): c . z <= b holds for the edge ahead only.
+    assert (0.0 <= b[0, 0]) and not (0.0 <= b[1, 0])
+    assert np.allclose(c[:, 0], [[1.0, 0.0], [1.0, 0.0]])

@@ -3,6 +3,7 @@
     python tools/bench_paper.py                 # 100 poses per PEQ, baseline on 20
     python tools/bench_paper.py --quick         # 20 poses, baseline on 5
     python tools/bench_paper.py --synthetic     # on the synthetic flat instead of maps/flat.lmap
+    python tools/bench_paper.py --max-hypotheses 100000 --baseline-poses 0   # stage 1 uncapped
 
 For each PEQ (method.md section 9): ``--poses`` simulated frames (seeded),
 each localised by our matcher and, on the first ``--baseline-poses`` of
@@ -83,7 +84,7 @@ def run_peq(linemap, camera, peq, args, rng):
         times = []
         for _ in range(args.repeat):
             t0 = time.perf_counter()
-            res = matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw)
+            res = matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw, args.tolerances)
             times.append((time.perf_counter() - t0) * 1e3)
         equiv = indistinguishable(linemap, camera, fr)
         ranked = [(E, mm, p) for E, mm, p in res.ranked]
@@ -257,7 +258,10 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="20 poses, baseline on 5, 1 timing run")
     ap.add_argument("--out", default="docs/images", help="directory for the PNG figures")
     ap.add_argument("--json", help="also write all per-frame rows and the summary to this file")
+    ap.add_argument("--max-hypotheses", type=int, default=matcher.Tolerances().max_hypotheses,
+                    help="stage 1's cap on hypotheses (a large value shows how many pass stage 1 uncapped)")
     args = ap.parse_args(argv)
+    args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses)
     if args.quick:
         args.poses, args.baseline_poses, args.repeat = 20, 5, 1
     from _synthetic_map import cached_flat_map
