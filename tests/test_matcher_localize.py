@@ -139,7 +139,7 @@ def built_map():
 
 @pytest.mark.parametrize("peq", sorted(PEQ))
 def test_recovery_on_the_built_example_map(built_map, cam, peq):
-    # The benchmark (docs/matcher.md) finds 93-99 % correct on this map; 8 of 10 here.
+    # The benchmark (docs/matcher.md) finds 97-100 % correct on this map; 8 of 10 here.
     good, pos, yaw = _recover(built_map, cam, peq, seed=21, n=10)
     assert good >= 8, f"PEQ {peq}: {good} of 10 frames matched correctly"
     assert pos < 0.03 and yaw < 0.3
