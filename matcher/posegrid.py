@@ -80,12 +80,6 @@ def stretch(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: float
     return np.maximum(lo, -ze - root), np.minimum(hi, -ze + root)
 
 
-def extent_along(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: float) -> float:
-    """Length, metres, of :func:`stretch` for quadratics (S, 6) along one line."""
-    lo, hi = stretch(q, z, e, q_max, dt)
-    return max(float(hi - lo), 0.0)
-
-
 def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms,
                         q_max: float, dt: float, c: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(...) bool: can a point of the feasible set of summed quadratics ``q``

@@ -326,7 +326,8 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
     e, lam, _ = posegrid.weak_axes(Qsum[g])
     if lam < 1.0 / _PINNED_M**2:  # cheap early out: even the summed strips leave it loose
         return False, False, g, cam
-    if posegrid.extent_along(inp.quad[R, g], z, e, q_max, inp.dt) > _PINNED_M:
+    lo, hi = posegrid.stretch(inp.quad[R, g], z, e, q_max, inp.dt)
+    if hi - lo > _PINNED_M:
         return False, False, g, cam
     ok = G[val <= len(R) + 1.0]
     return True, bool(ok.max() - ok.min() <= _PINNED_YAW_STEPS), g, cam
