@@ -25,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from matcher.camera import Camera  # noqa: E402
 from matcher.constraints import wrap  # noqa: E402
+from matcher.occlusion import wall_edges  # noqa: E402
 
 PEQ = {1: (0.2, 10.0), 2: (0.4, 20.0), 3: (0.6, 30.0), 4: (0.8, 40.0), 5: (1.0, 50.0)}
 
@@ -51,14 +52,6 @@ class Frame:
 
     def true_matches(self) -> list[list[int]]:
         return sorted([int(s), j] for j, s in enumerate(self.truth) if s >= 0)
-
-
-def _wall_edges(linemap) -> tuple[np.ndarray, np.ndarray]:
-    a, b = [], []
-    for ring in linemap.wall_rings():
-        a.append(ring)
-        b.append(np.roll(ring, -1, axis=0))
-    return np.concatenate(a), np.concatenate(b)
 
 
 def _occluded(c: np.ndarray, q: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
@@ -115,7 +108,8 @@ def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: 
     long."""
     x, y, yaw_deg = pose
     yaw = math.radians(yaw_deg)
-    ea, eb = _wall_edges(linemap)
+    walls = wall_edges(linemap)
+    ea, eb = walls if walls is not None else (np.zeros((0, 2)), np.zeros((0, 2)))
     c = np.array([x, y])
     out, ids = [], []
     for i, seg in enumerate(linemap.segments):
