@@ -454,8 +454,9 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
     qi, qj = quad[iu[p], g], quad[ju[p], g]
     pval, zx, zy = posegrid.minimise(qi + qj, dt)
     ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
+    ell = posegrid.feasible_ellipse(qi + qj, pval, zx, zy, 2, tol.q_max, dt)
     for k in (iu[p], ju[p]):
-        ok &= posegrid.halfplane_reachable(qi + qj, pval, zx, zy, 2, tol.q_max, dt, front_c[k, g], front_b[k, g])
+        ok &= posegrid.ellipse_reaches(ell, front_c[k, g], front_b[k, g], dt)
     pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):

@@ -21,6 +21,8 @@ c]`` for ``q(z) = z^T A z - 2 b . z + c``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -54,30 +56,33 @@ def evaluate(q: np.ndarray, zx: np.ndarray, zy: np.ndarray) -> np.ndarray:
     )
 
 
-def stretch(q: np.ndarray, z: np.ndarray, e: np.ndarray, q_max: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """The stretch ``[lo, hi]`` (...) of the line ``z + s e`` (z, e (..., 2),
-    z relative to the disk centre, e unit) on which every quadratic of ``q``
-    (S, ..., 6) stays <= ``q_max`` and which lies in the disk of radius
-    ``dt``: how far the feasible set of a set of strips reaches in that
-    direction (lo > hi: nowhere). Summed quadratics understate it: N
-    coinciding strips sum to a curvature N times one strip's, yet meet all
-    along the same band."""
-    ex, ey = e[..., 0], e[..., 1]
-    zx, zy = z[..., 0], z[..., 1]
-    alpha = q[..., 0] * ex**2 + 2 * q[..., 1] * ex * ey + q[..., 2] * ey**2
-    beta = 2 * ((q[..., 0] * zx + q[..., 1] * zy - q[..., 3]) * ex + (q[..., 1] * zx + q[..., 2] * zy - q[..., 4]) * ey)
-    gamma = evaluate(q, zx, zy) - q_max
-    # Each quadratic alpha s^2 + beta s + gamma <= 0 on [lo, hi]; a flat one
-    # (alpha ~ 0: a strip along e) does not bound s.
-    bounded = alpha > 1e-12
-    a = np.where(bounded, alpha, 1.0)
-    root = np.sqrt(np.maximum(beta * beta - 4 * a * gamma, 0.0))
-    lo = np.where(bounded, (-beta - root) / (2 * a), -np.inf).max(axis=0)
-    hi = np.where(bounded, (-beta + root) / (2 * a), np.inf).min(axis=0)
+def stretch(q: np.ndarray, z: tuple[float, float], e: tuple[float, float], q_max: float,
+            dt: float) -> tuple[float, float]:
+    """The stretch ``[lo, hi]`` of the line ``z + s e`` (z relative to the
+    disk centre, e unit) on which every quadratic of ``q`` (S, 6), all at one
+    yaw, stays <= ``q_max`` and which lies in the disk of radius ``dt``: how
+    far the feasible set of a set of strips reaches in that direction (lo >
+    hi: nowhere). Summed quadratics understate it: N coinciding strips sum to
+    a curvature N times one strip's, yet meet all along the same band.
+
+    Plain floats: S is a handful and this runs at every tree node, where
+    numpy's per-call cost would dominate."""
+    zx, zy = z
+    ex, ey = e
+    lo, hi = -math.inf, math.inf
+    for qxx, qxy, qyy, bx, by, c in q.tolist():
+        alpha = qxx * ex * ex + 2 * qxy * ex * ey + qyy * ey * ey
+        if alpha <= 1e-12:  # a strip along e does not bound s
+            continue
+        beta = 2 * ((qxx * zx + qxy * zy - bx) * ex + (qxy * zx + qyy * zy - by) * ey)
+        gamma = qxx * zx * zx + 2 * qxy * zx * zy + qyy * zy * zy - 2 * (bx * zx + by * zy) + c - q_max
+        root = math.sqrt(max(beta * beta - 4 * alpha * gamma, 0.0))
+        lo = max(lo, (-beta - root) / (2 * alpha))
+        hi = min(hi, (-beta + root) / (2 * alpha))
     # The disk: |z + s e|^2 <= dt^2.
     ze = zx * ex + zy * ey
-    root = np.sqrt(np.maximum(ze * ze - (zx * zx + zy * zy - dt * dt), 0.0))
-    return np.maximum(lo, -ze - root), np.minimum(hi, -ze + root)
+    root = math.sqrt(max(ze * ze - (zx * zx + zy * zy - dt * dt), 0.0))
+    return max(lo, -ze - root), min(hi, -ze + root)
 
 
 def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms,
@@ -92,27 +97,55 @@ def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.n
     smallest ``c . z`` is ``c . z* - sqrt(rho c^T A^-1 c)`` (A the Hessian
     half, rho the level above the minimum). The disk gives ``-|c| dt``; the
     larger of the two lower bounds holds."""
+    return ellipse_reaches(feasible_ellipse(q, val, zx, zy, n_terms, q_max, dt), c, b, dt)
+
+
+def feasible_ellipse(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms, q_max: float,
+                     dt: float) -> tuple[np.ndarray, ...]:
+    """The ellipse holding the feasible set of summed quadratics ``q`` (...,
+    6) (see :func:`halfplane_reachable`): ``(zx, zy, sxx, sxy, syy)``, its
+    centre and ``rho A^-1``, so that the smallest ``c . z`` on it is
+    ``c . z* - sqrt(c^T S c)``. Made once and tested against many
+    half-planes with :func:`ellipse_reaches`."""
     inv = 1.0 / (dt * dt)
     axx, axy, ayy = q[..., 0] + inv, q[..., 1], q[..., 2] + inv
-    det = axx * ayy - axy * axy
+    k = np.maximum(n_terms * q_max + 1.0 - val, 0.0) / (axx * ayy - axy * axy)
+    return zx, zy, ayy * k, -axy * k, axx * k
+
+
+def ellipse_reaches(ell: tuple[np.ndarray, ...], c: np.ndarray, b: np.ndarray, dt: float) -> np.ndarray:
+    """(...) bool: does the ellipse of :func:`feasible_ellipse` (or the disk
+    of radius ``dt``, whichever is smaller there) reach ``c . z <= b``? c
+    (..., 2) and b (...) broadcast against the ellipse's shape."""
+    zx, zy, sxx, sxy, syy = ell
     cx, cy = c[..., 0], c[..., 1]
-    cAc = (ayy * cx * cx - 2 * axy * cx * cy + axx * cy * cy) / det
-    rho = np.maximum(n_terms * q_max + 1.0 - val, 0.0)
-    lo_ellipse = cx * zx + cy * zy - np.sqrt(rho * np.maximum(cAc, 0.0))
-    lo_disk = -np.hypot(cx, cy) * dt
-    return np.maximum(lo_ellipse, lo_disk) <= b
+    spread = np.sqrt(np.maximum(sxx * cx * cx + 2 * sxy * cx * cy + syy * cy * cy, 0.0))
+    lo_disk = -np.sqrt(cx * cx + cy * cy) * dt
+    return np.maximum(cx * zx + cy * zy - spread, lo_disk) <= b
 
 
-def weak_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For quadratics (..., 6): the unit direction (..., 2) in which they fix
-    the position least, and the eigenvalues (small, large) of their
-    quadratic part, in closed form."""
-    axx, axy, ayy = q[..., 0], q[..., 1], q[..., 2]
-    mean, diff = 0.5 * (axx + ayy), np.sqrt(0.25 * (axx - ayy) ** 2 + axy * axy)
+def evaluate_at(q: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """q(z) for quadratics q (..., 6) at points given by their
+    :func:`monomials` ``phi`` (..., 6): one product-sum instead of a dozen
+    array operations (this runs at every tree node)."""
+    return (q * phi).sum(axis=-1)
+
+
+def monomials(zx: np.ndarray, zy: np.ndarray) -> np.ndarray:
+    """(..., 6) ``[x^2, 2xy, y^2, -2x, -2y, 1]`` at points ``(zx, zy)`` (...):
+    a quadratic's value there is its dot product with these."""
+    return np.stack([zx * zx, 2 * zx * zy, zy * zy, -2 * zx, -2 * zy, np.ones_like(zx)], axis=-1)
+
+
+def weak_axis(q: np.ndarray) -> tuple[tuple[float, float], float, float]:
+    """For one quadratic (6,): the unit direction ``(ex, ey)`` in which it
+    fixes the position least, and the eigenvalues (small, large) of its
+    quadratic part, in closed form (plain floats, as :func:`stretch`)."""
+    axx, axy, ayy = float(q[0]), float(q[1]), float(q[2])
+    mean, diff = 0.5 * (axx + ayy), math.hypot(0.5 * (axx - ayy), axy)
     lam_lo, lam_hi = mean - diff, mean + diff
     ex, ey = axy, lam_lo - axx
-    norm = np.hypot(ex, ey)
-    flat = norm < 1e-12
-    ex = np.where(flat, np.where(axx <= ayy, 1.0, 0.0), ex / np.where(flat, 1.0, norm))
-    ey = np.where(flat, np.where(axx <= ayy, 0.0, 1.0), ey / np.where(flat, 1.0, norm))
-    return np.stack([ex, ey], axis=-1), lam_lo, lam_hi
+    norm = math.hypot(ex, ey)
+    if norm < 1e-12:  # isotropic or axis-aligned: the axis with less weight
+        return ((1.0, 0.0) if axx <= ayy else (0.0, 1.0)), lam_lo, lam_hi
+    return (ex / norm, ey / norm), lam_lo, lam_hi

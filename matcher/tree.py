@@ -145,24 +145,30 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         if len(G) == 0:
             no = np.zeros(len(cand), dtype=bool)
             return (no, np.full(len(cand), np.inf)) if fit else no
-        qc = quad[np.ix_(cand, G)]  # (C, G, 6)
+        # Index arrays broadcast (C, 1) x (G,) rather than np.ix_: this runs
+        # at every node and np.ix_ alone cost a third of it.
+        cc = cand[:, None]
+        qc = quad[cc, G]  # (C, G, 6)
         qs = Qsum[G] + qc
         val, zx, zy = posegrid.minimise(qs, dt)
-        ok = mask[np.ix_(cand, G)] & (val <= len(R) + 2.0) & (posegrid.evaluate(qc, zx, zy) <= tol.q_max)
+        phi = posegrid.monomials(zx, zy)  # (C, G, 6)
+        ok = mask[cc, G] & (val <= len(R) + 2.0) & (posegrid.evaluate_at(qc, phi) <= tol.q_max)
         if R:
-            each = posegrid.evaluate(quad[np.ix_(R, G)][:, None], zx, zy)  # (S, C, G)
+            each = np.einsum("sgk,cgk->scg", quad[np.array(R)[:, None], G], phi)  # (S, C, G)
             ok &= (each <= tol.q_max).all(axis=0)
         if inp.front_c is not None:
             # Half-planes (vertical edges ahead, wall faces seen from the
-            # room): the candidate's and those of R's members, all at once
-            # (the feasible set shrinks as R grows).
+            # room): the candidates' own and those of R's members (the
+            # feasible set shrinks as R grows), each at every candidate.
             hp = [r for r in R if has_plane[r]]
-            c_ = inp.front_c[np.ix_(cand, G)][None]  # (1, C, G, 2)
-            b_ = inp.front_b[np.ix_(cand, G)][None]
-            if hp:
-                c_ = np.concatenate([c_, np.broadcast_to(inp.front_c[np.ix_(hp, G)][:, None], (len(hp),) + c_.shape[1:])])
-                b_ = np.concatenate([b_, np.broadcast_to(inp.front_b[np.ix_(hp, G)][:, None], (len(hp),) + b_.shape[1:])])
-            ok &= posegrid.halfplane_reachable(qs, val, zx, zy, len(R) + 1, tol.q_max, dt, c_, b_).all(axis=0)
+            own = has_plane[cand].any()
+            if own or hp:
+                ell = posegrid.feasible_ellipse(qs, val, zx, zy, len(R) + 1, tol.q_max, dt)
+                if own:
+                    ok &= posegrid.ellipse_reaches(ell, inp.front_c[cc, G], inp.front_b[cc, G], dt)
+                if hp:
+                    hh = np.array(hp)[:, None, None]  # (H, 1, 1) against (C, G)
+                    ok &= posegrid.ellipse_reaches(ell, inp.front_c[hh, G], inp.front_b[hh, G], dt).all(axis=0)
         if fit:
             best = np.where(ok, val, np.inf).min(axis=1)
             return np.isfinite(best), best
@@ -174,7 +180,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         c = cands[level]
         c = c[~used[seg_of[c]]]
         if R and c.size:
-            c = c[compat[np.ix_(R, c)].all(axis=0)]
+            c = c[compat[np.array(R)[:, None], c].all(axis=0)]
         return c
 
     def maximal(R: list[int], Qsum, mR, used, skipped: list[int]) -> bool:
@@ -208,7 +214,22 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         if len(sets) >= tol.max_sets:
             state["truncated"] = True
 
+    level_hot = np.eye(L, dtype=np.int32)  # row l: one-hot of level l
     strong_level = np.array([(~weak[c]).any() for c in cands], dtype=bool)
+
+    def well_supported(n_members: int, ahead: np.ndarray) -> np.ndarray:
+        """The candidates of ``ahead`` that can still be part of a set of the
+        bound's size with ``n_members`` others: compatible with candidates of
+        enough other lines of ``ahead`` (repeated until no more go: each
+        removal lowers the others' counts). Pairwise only, so cheap next to a
+        feasibility pass, which it spares those candidates."""
+        while ahead.size:
+            reach = (compat[ahead[:, None], ahead].astype(np.int32) @ level_hot[level_of[ahead]] > 0).sum(axis=1)
+            keep = n_members + 1 + reach >= state["bound"]
+            if keep.all():
+                break
+            ahead = ahead[keep]
+        return ahead
 
     def rec(R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int], pool: np.ndarray,
             fit: np.ndarray | None) -> None:
@@ -229,10 +250,16 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             ahead = ahead[~used[seg_of[ahead]]]
             if R and ahead.size:
                 ahead = ahead[compat[R[-1], ahead]]
+            ahead = well_supported(len(R), ahead)
             fit = np.zeros(0)
             if ahead.size:
                 ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
                 ahead, fit = ahead[ok], fit[ok]
+        else:  # the bound may have risen since the parent filtered the pool
+            kept = well_supported(len(R), ahead)
+            if len(kept) < len(ahead):
+                fit = fit[np.isin(ahead, kept)]
+                ahead = kept
         counts = np.bincount(level_of[ahead], minlength=L)
         reachable = int((counts > 0).sum())
         if len(R) + reachable < state["bound"]:
@@ -252,8 +279,17 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         # true match, which raises the bound for the rest of the search.
         c = c[np.lexsort((order_rank[c], fit[here]))] if len(R) >= 2 else c[np.argsort(order_rank[c])]
         rest = ahead[~here]
-        for v in c:
-            v = int(v)
+        # Lines each candidate can still reach: its child's look-ahead keeps
+        # only the rest compatible with it, so a candidate that cannot reach
+        # the bound is not worth a node (a cheap count against a feasibility
+        # pass over the whole pool).
+        if rest.size:
+            reach = (compat[c[:, None], rest].astype(np.int32) @ level_hot[level_of[rest]] > 0).sum(axis=1)
+        else:
+            reach = np.zeros(len(c), dtype=np.int64)
+        for v, reach_v in zip(c.tolist(), reach.tolist()):
+            if len(R) + 1 + reach_v < state["bound"]:
+                continue
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
             if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache):
                 continue
@@ -321,9 +357,9 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
     val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
     i = int(np.argmin(val))
     g = int(G[i])
-    z = np.array([zx[i], zy[i]])
+    z = (float(zx[i]), float(zy[i]))
     cam = inp.centre[:2] + z
-    e, lam, _ = posegrid.weak_axes(Qsum[g])
+    e, lam, _ = posegrid.weak_axis(Qsum[g])
     if lam < 1.0 / _PINNED_M**2:  # cheap early out: even the summed strips leave it loose
         return False, False, g, cam
     lo, hi = posegrid.stretch(inp.quad[R, g], z, e, q_max, inp.dt)
