@@ -121,6 +121,57 @@ def test_halfplane_reachable_hand_worked():
     assert reach([0.0, 0.0], np.inf)  # no constraint
 
 
+def test_stretch_and_weak_axis_against_sampling():
+    """The pinned test's two pieces: the weak axis of two crossing strips and
+    the extent of their common part along it, against a dense sampling."""
+    from matcher import posegrid
+
+    dt, q_max = 1.0, 1.5
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        ang = rng.uniform(0, np.pi, 2)
+        a = np.stack([np.cos(ang), np.sin(ang)], axis=1)  # two strip normals
+        d = rng.uniform(-0.3, 0.3, 2)
+        t = rng.uniform(0.02, 0.2, 2)
+        q = posegrid.strip_quadratics(a, d, t)  # (2, 6)
+        val, zx, zy = posegrid.minimise(q.sum(axis=0), dt)
+        e, lam_lo, lam_hi = posegrid.weak_axis(q.sum(axis=0))
+        A = np.array([[q[:, 0].sum(), q[:, 1].sum()], [q[:, 1].sum(), q[:, 2].sum()]])
+        assert np.allclose([lam_lo, lam_hi], np.linalg.eigvalsh(A), rtol=1e-9, atol=1e-9)
+        assert np.allclose(A @ np.array(e), lam_lo * np.array(e), atol=1e-6 * lam_hi)
+        lo, hi = posegrid.stretch(q, (float(zx), float(zy)), e, q_max, dt)
+        s = np.linspace(-2.5, 2.5, 50001)
+        pts_x, pts_y = zx + s * e[0], zy + s * e[1]
+        inside = (posegrid.evaluate(q[:, None], pts_x, pts_y) <= q_max).all(axis=0) & (pts_x**2 + pts_y**2 <= dt * dt)
+        if inside.any():
+            assert lo == pytest.approx(s[inside].min(), abs=2e-4)
+            assert hi == pytest.approx(s[inside].max(), abs=2e-4)
+        else:
+            assert lo > hi
+
+
+def test_feasible_ellipse_reaches_equals_halfplane_reachable():
+    from matcher import posegrid
+
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(40, 2))
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    q = posegrid.strip_quadratics(a, rng.uniform(-0.5, 0.5, 40), rng.uniform(0.05, 0.3, 40))
+    val, zx, zy = posegrid.minimise(q, 1.0)
+    c = rng.normal(size=(40, 2))
+    b = rng.uniform(-1, 1, 40)
+    ell = posegrid.feasible_ellipse(q, val, zx, zy, 1, 1.5, 1.0)
+    # Sampled points of each strip's feasible chord that satisfy c . z <= b
+    # exist only where the test says so (it is a necessary condition).
+    reach = posegrid.ellipse_reaches(ell, c, b, 1.0)
+    assert (reach == posegrid.halfplane_reachable(q, val, zx, zy, 1, 1.5, 1.0, c, b)).all()
+    g = rng.uniform(-1, 1, (4000, 2))
+    g = g[(g**2).sum(axis=1) <= 1]
+    feas = posegrid.evaluate(q[:, None], g[None, :, 0], g[None, :, 1]) <= 1.5  # (40, P)
+    sat = (c @ g.T) <= b[:, None]
+    assert not ((feas & sat).any(axis=1) & ~reach).any()
+
+
 def test_face_normals_point_into_the_rooms(flat):
     from matcher.occlusion import face_normals, inside_walls, wall_edges
 
