@@ -191,30 +191,63 @@ def horizon_side_ok(camera: Camera, lines: np.ndarray, segments: np.ndarray, tol
     return ~bad
 
 
-def collinear_classes(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float = 0.01):
+def collinear_classes(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float = 0.01,
+                      label: np.ndarray | None = None):
     """Group segments (N, 2, 3) lying on one 3D line (pieces of a wall split by
     a door, say): image lines cannot tell them apart, so stage 1 works on one
     representative per group. Returns ``(label (N,), reps (G, 2, 3))``, each
-    representative spanning all its members."""
+    representative spanning all its members. ``label`` (N,), if given, is a
+    grouping already known (any integers, such as the map-wide
+    :func:`collinear_labels` of these segments): only the spans are made."""
+    if label is None:
+        label = collinear_labels(segments, angle_deg, dist_m)
+    # Groups numbered in order of their first member (as the greedy grouping
+    # does), whatever integers ``label`` used.
+    _, first, label = np.unique(label, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    label, first = rank[label.reshape(-1)], np.sort(first)
+    if len(first) == 0:
+        return label.astype(np.int64), np.zeros((0, 2, 3))
+    # Span of each group along its first member's direction.
+    p0 = segments[first, 0]  # (G, 3)
+    v = segments[first, 1] - p0
+    v = v / np.linalg.norm(v, axis=1, keepdims=True)
+    t = np.einsum("nek,nk->ne", segments - p0[label][:, None], v[label])  # (N, 2)
+    lo = np.full(len(first), np.inf)
+    hi = np.full(len(first), -np.inf)
+    np.minimum.at(lo, label, t.min(axis=1))
+    np.maximum.at(hi, label, t.max(axis=1))
+    reps = np.stack([p0 + lo[:, None] * v, p0 + hi[:, None] * v], axis=1)
+    return label.astype(np.int64), reps
+
+
+def collinear_labels(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float = 0.01,
+                     chunk: int = 256) -> np.ndarray:
+    """(N,) group id of segments (N, 2, 3): two segments go together when
+    they are parallel within ``angle_deg`` and each one's end points lie
+    within ``dist_m`` of the other's line; groups form greedily in index
+    order. The pairwise test runs in row chunks so that a large map does not
+    need an (N, N, 2, 3) array; the pipeline makes this once per map."""
     n = len(segments)
     v = segments[:, 1] - segments[:, 0]
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
-    par = np.linalg.norm(np.cross(v[:, None], v[None]), axis=2) <= math.sin(math.radians(angle_deg))
-    rel = segments[None, :, :, :] - segments[:, None, None, 0, :]  # (N, N, 2, 3): j's ends from i's start
-    off = np.linalg.norm(np.cross(rel, v[:, None, None, :]), axis=3).max(axis=2)
-    same = par & (off <= dist_m)
-    same &= same.T
+    sin_max = math.sin(math.radians(angle_deg))
+    near = np.zeros((n, n), dtype=bool)
+    for i0 in range(0, n, chunk):
+        rows = slice(i0, min(i0 + chunk, n))
+        par = np.linalg.norm(np.cross(v[rows, None], v[None]), axis=2) <= sin_max
+        rel = segments[None, :, :, :] - segments[rows, None, None, 0, :]  # (r, N, 2, 3): j's ends from i's start
+        off = np.linalg.norm(np.cross(rel, v[rows, None, None, :]), axis=3).max(axis=2)
+        near[rows] = par & (off <= dist_m)
+    near &= near.T
     label = np.full(n, -1, dtype=np.int64)
-    reps = []
+    g = 0
     for i in range(n):
-        if label[i] >= 0:
-            continue
-        members = np.nonzero(same[i] & (label < 0))[0]
-        label[members] = len(reps)
-        pts = segments[members].reshape(-1, 3)
-        t = (pts - segments[i, 0]) @ v[i]
-        reps.append([segments[i, 0] + t.min() * v[i], segments[i, 0] + t.max() * v[i]])
-    return label, np.array(reps).reshape(-1, 2, 3)
+        if label[i] < 0:
+            label[near[i] & (label < 0)] = g
+            g += 1
+    return label
 
 
 def class_samples(segments: np.ndarray, label: np.ndarray, per_piece: int = 5) -> np.ndarray:
@@ -222,15 +255,16 @@ def class_samples(segments: np.ndarray, label: np.ndarray, per_piece: int = 5) -
     group (``per_piece`` per member, groups padded by repeating points), so
     that a visibility test sees a narrow visible piece of a long group."""
     t = np.linspace(0.02, 0.98, per_piece)
-    pts = segments[:, None, 0] + t[None, :, None] * (segments[:, None, 1] - segments[:, None, 0])  # (N, p, 3)
     G = int(label.max()) + 1 if len(label) else 0
-    size = np.bincount(label, minlength=G)
-    n = per_piece * int(size.max()) if G else per_piece
-    out = np.empty((G, n, 3))
-    for g in range(G):
-        p = pts[label == g].reshape(-1, 3)
-        out[g] = p[np.arange(n) % len(p)]
-    return out
+    if G == 0:
+        return np.empty((0, per_piece, 3))
+    order = np.argsort(label, kind="stable")
+    pts = segments[order, None, 0] + t[None, :, None] * (segments[order, None, 1] - segments[order, None, 0])
+    pts = pts.reshape(-1, 3)  # members' points, group after group
+    size = np.bincount(label, minlength=G) * per_piece  # points per group
+    start = np.concatenate([[0], np.cumsum(size)[:-1]])
+    n = int(size.max())
+    return pts[start[:, None] + np.arange(n)[None, :] % size[:, None]]
 
 
 def yaw_grid(yaw_e: float, dyaw: float, step: float) -> np.ndarray:

@@ -204,3 +204,29 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     # At the disk centre (z = 0): c . z <= b holds for the edge ahead only.
     assert (0.0 <= b[0, 0]) and not (0.0 <= b[1, 0])
     assert np.allclose(c[:, 0], [[1.0, 0.0], [1.0, 0.0]])
+
+
+def test_collinear_groups_hand_worked_and_from_map_labels(flat):
+    from matcher.generate import class_samples, collinear_classes, collinear_labels
+
+    segs = np.array([
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],  # a wall's floor line, split by a door...
+        [[2.0, 0.0, 0.0], [3.0, 0.0, 0.0]],  # ...and its other piece
+        [[0.0, 0.005, 2.5], [3.0, 0.005, 2.5]],  # the ceiling line above: parallel, not collinear
+        [[1.5, 0.004, 0.0], [1.6, 0.004, 0.0]],  # 4 mm off the floor line: same line
+        [[0.0, 0.0, 0.0], [0.0, 0.0, 2.1]],  # a jamb
+    ])
+    label, reps = collinear_classes(segs)
+    assert label.tolist() == [0, 0, 1, 0, 2]
+    assert np.allclose(reps[0], [[0, 0, 0], [3, 0, 0]], atol=1e-2)
+    samples = class_samples(segs, label, per_piece=5)
+    assert samples.shape == (3, 15, 3)
+    assert np.allclose(samples[2, 5:10], samples[2, :5])  # a lone piece repeats its points
+    # Map-wide labels restricted to a subset give the same groups and spans.
+    rng = np.random.default_rng(2)
+    all_labels = collinear_labels(flat.segments, chunk=64)
+    for _ in range(5):
+        ids = np.sort(rng.choice(flat.n_segments, 120, replace=False))
+        a, ra = collinear_classes(flat.segments[ids])
+        b, rb = collinear_classes(flat.segments[ids], label=all_labels[ids])
+        assert (a == b).all() and np.allclose(ra, rb)
