@@ -119,8 +119,8 @@ def ellipse_reaches(ell: tuple[np.ndarray, ...], c: np.ndarray, b: np.ndarray, d
     (..., 2) and b (...) broadcast against the ellipse's shape."""
     zx, zy, sxx, sxy, syy = ell
     cx, cy = c[..., 0], c[..., 1]
-    spread = np.sqrt(np.maximum(sxx * cx * cx + 2 * sxy * cx * cy + syy * cy * cy, 0.0))
-    lo_disk = -np.sqrt(cx * cx + cy * cy) * dt
+    spread = np.sqrt(np.maximum(cx * (sxx * cx + sxy * cy) + cy * (sxy * cx + syy * cy), 0.0))
+    lo_disk = np.hypot(cx, cy) * -dt
     return np.maximum(cx * zx + cy * zy - spread, lo_disk) <= b
 
 

@@ -29,6 +29,9 @@ _ITERATIONS = 6
 #: start may be tens of centimetres off along a weakly fixed direction, and
 #: weighting residuals from there would throw out true matches.
 _PLAIN_FIRST = 2
+#: Gauss-Newton stops early once no hypothesis moves more than this (metres
+#: and radians) in one step: a micrometre, far below the pose's noise.
+_CONVERGED = 1e-6
 
 
 def _cross(a, b):
@@ -108,7 +111,10 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
         # Small Levenberg damping keeps degenerate hypotheses (all lines
         # parallel) from jumping away; it is negligible for a well-posed set.
         A += np.eye(3)[None] * (1e-9 + 1e-6 * np.trace(A, axis1=1, axis2=2))[:, None, None]
-        params -= np.linalg.solve(A, b[..., None])[..., 0]
+        step = np.linalg.solve(A, b[..., None])[..., 0]
+        params -= step
+        if np.abs(step).max() < _CONVERGED and (robust_scale is None or it >= _PLAIN_FIRST):
+            break  # every hypothesis has converged (with its robust weights, if any)
     return params
 
 
