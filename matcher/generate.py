@@ -252,8 +252,10 @@ def collinear_labels(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float
 
 def class_samples(segments: np.ndarray, label: np.ndarray, per_piece: int = 5) -> np.ndarray:
     """(G, n, 3) points spread over the member segments of each collinear
-    group (``per_piece`` per member, groups padded by repeating points), so
-    that a visibility test sees a narrow visible piece of a long group."""
+    group (``per_piece`` per member), so that a visibility test sees a
+    narrow visible piece of a long group. Groups with fewer members are
+    padded with NaN points, which no test counts as seen (most groups are
+    single segments: repeating their points would test each one again)."""
     t = np.linspace(0.02, 0.98, per_piece)
     G = int(label.max()) + 1 if len(label) else 0
     if G == 0:
@@ -264,7 +266,10 @@ def class_samples(segments: np.ndarray, label: np.ndarray, per_piece: int = 5) -
     size = np.bincount(label, minlength=G) * per_piece  # points per group
     start = np.concatenate([[0], np.cumsum(size)[:-1]])
     n = int(size.max())
-    return pts[start[:, None] + np.arange(n)[None, :] % size[:, None]]
+    k = np.arange(n)[None, :]
+    out = pts[start[:, None] + k % size[:, None]]
+    out[np.broadcast_to(k >= size[:, None], (G, n))] = np.nan
+    return out
 
 
 def yaw_grid(yaw_e: float, dyaw: float, step: float) -> np.ndarray:
