@@ -217,19 +217,27 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
     level_hot = np.eye(L, dtype=np.int32)  # row l: one-hot of level l
     strong_level = np.array([(~weak[c]).any() for c in cands], dtype=bool)
 
+    def lines_reached(cand: np.ndarray, pool: np.ndarray) -> np.ndarray:
+        """(C,) for each of ``cand``: how many lines hold a candidate of
+        ``pool`` compatible with it (one boolean matrix product)."""
+        if not pool.size:
+            return np.zeros(len(cand), dtype=np.int64)
+        return (compat[cand[:, None], pool].astype(np.int32) @ level_hot[level_of[pool]] > 0).sum(axis=1)
+
     def well_supported(n_members: int, ahead: np.ndarray) -> np.ndarray:
-        """The candidates of ``ahead`` that can still be part of a set of the
-        bound's size with ``n_members`` others: compatible with candidates of
-        enough other lines of ``ahead`` (repeated until no more go: each
-        removal lowers the others' counts). Pairwise only, so cheap next to a
-        feasibility pass, which it spares those candidates."""
-        while ahead.size:
-            reach = (compat[ahead[:, None], ahead].astype(np.int32) @ level_hot[level_of[ahead]] > 0).sum(axis=1)
-            keep = n_members + 1 + reach >= state["bound"]
-            if keep.all():
+        """(A,) bool: the candidates of ``ahead`` that can still be part of a
+        set of the bound's size with ``n_members`` others: compatible with
+        candidates of enough other lines of ``ahead`` (repeated until no more
+        go: each removal lowers the others' counts). Pairwise only, so cheap
+        next to a feasibility pass, which it spares those candidates."""
+        keep = np.ones(len(ahead), dtype=bool)
+        while keep.any():
+            idx = np.nonzero(keep)[0]
+            ok = n_members + 1 + lines_reached(ahead[idx], ahead[idx]) >= state["bound"]
+            if ok.all():
                 break
-            ahead = ahead[keep]
-        return ahead
+            keep[idx[~ok]] = False
+        return keep
 
     def rec(R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int], pool: np.ndarray,
             fit: np.ndarray | None) -> None:
@@ -250,16 +258,14 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             ahead = ahead[~used[seg_of[ahead]]]
             if R and ahead.size:
                 ahead = ahead[compat[R[-1], ahead]]
-            ahead = well_supported(len(R), ahead)
+            ahead = ahead[well_supported(len(R), ahead)]
             fit = np.zeros(0)
             if ahead.size:
                 ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
                 ahead, fit = ahead[ok], fit[ok]
         else:  # the bound may have risen since the parent filtered the pool
-            kept = well_supported(len(R), ahead)
-            if len(kept) < len(ahead):
-                fit = fit[np.isin(ahead, kept)]
-                ahead = kept
+            keep = well_supported(len(R), ahead)
+            ahead, fit = ahead[keep], fit[keep]
         counts = np.bincount(level_of[ahead], minlength=L)
         reachable = int((counts > 0).sum())
         if len(R) + reachable < state["bound"]:
@@ -283,10 +289,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         # only the rest compatible with it, so a candidate that cannot reach
         # the bound is not worth a node (a cheap count against a feasibility
         # pass over the whole pool).
-        if rest.size:
-            reach = (compat[c[:, None], rest].astype(np.int32) @ level_hot[level_of[rest]] > 0).sum(axis=1)
-        else:
-            reach = np.zeros(len(c), dtype=np.int64)
+        reach = lines_reached(c, rest)
         for v, reach_v in zip(c.tolist(), reach.tolist()):
             if len(R) + 1 + reach_v < state["bound"]:
                 continue
