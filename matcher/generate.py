@@ -358,6 +358,10 @@ def generate(
     keep = mask.any(axis=1)
     seg_k, line_k, is_v, mask, quad = seg_k[keep], line_k[keep], is_v[keep], mask[keep], quad[keep]
     front_c, front_b = front_c[keep], front_b[keep]
+    # Each correspondence alone as the tree's root tests it (its own term
+    # within q_max at the minimiser too), from the arrays at hand.
+    val, zx, zy = val[keep], zx[keep], zy[keep]
+    single_fit = np.where(mask & (posegrid.evaluate(quad, zx, zy) <= tol.q_max), val, np.inf).min(axis=1)
     K = len(seg_k)
     counts["correspondences"] = int(K)
     empty.segment, empty.line, empty.n_correspondences = seg_ids[seg_k], line_k, K
@@ -376,7 +380,7 @@ def generate(
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
                     None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m,
-                    front_c, front_b)
+                    front_c, front_b, single_fit)
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)

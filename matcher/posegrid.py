@@ -85,6 +85,37 @@ def stretch(q: np.ndarray, z: tuple[float, float], e: tuple[float, float], q_max
     return max(lo, -ze - root), min(hi, -ze + root)
 
 
+def stretches(q: np.ndarray, zx: np.ndarray, zy: np.ndarray, ex: np.ndarray, ey: np.ndarray, q_max: float,
+              dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`stretch` for many lines at once: quadratics q (S, ..., 6), the
+    lines ``z + s e`` given by (...) arrays. Returns ``(lo, hi)`` (...)."""
+    alpha = q[..., 0] * ex * ex + 2 * q[..., 1] * ex * ey + q[..., 2] * ey * ey
+    beta = 2 * ((q[..., 0] * zx + q[..., 1] * zy - q[..., 3]) * ex + (q[..., 1] * zx + q[..., 2] * zy - q[..., 4]) * ey)
+    gamma = evaluate(q, zx, zy) - q_max
+    bounds = alpha > 1e-12  # a strip along e does not bound s
+    a = np.where(bounds, alpha, 1.0)
+    root = np.sqrt(np.maximum(beta * beta - 4 * a * gamma, 0.0))
+    lo = np.where(bounds, (-beta - root) / (2 * a), -np.inf).max(axis=0)
+    hi = np.where(bounds, (-beta + root) / (2 * a), np.inf).min(axis=0)
+    ze = zx * ex + zy * ey
+    root = np.sqrt(np.maximum(ze * ze - (zx * zx + zy * zy - dt * dt), 0.0))
+    return np.maximum(lo, -ze - root), np.minimum(hi, -ze + root)
+
+
+def weak_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`weak_axis`'s direction for quadratics q (..., 6): ``(ex, ey)``
+    (...) unit vectors."""
+    axx, axy, ayy = q[..., 0], q[..., 1], q[..., 2]
+    lam_lo = 0.5 * (axx + ayy) - np.hypot(0.5 * (axx - ayy), axy)
+    ex, ey = axy, lam_lo - axx
+    norm = np.hypot(ex, ey)
+    flat = norm < 1e-12  # isotropic or axis-aligned: the axis with less weight
+    x_axis = axx <= ayy
+    ex = np.where(flat, np.where(x_axis, 1.0, 0.0), ex / np.where(flat, 1.0, norm))
+    ey = np.where(flat, np.where(x_axis, 0.0, 1.0), ey / np.where(flat, 1.0, norm))
+    return ex, ey
+
+
 def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms,
                         q_max: float, dt: float, c: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(...) bool: can a point of the feasible set of summed quadratics ``q``

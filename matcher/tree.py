@@ -15,6 +15,9 @@ Once three members pin the position, the set's best grid pose must stand in
 the map's free space (near its regions), and every matched segment must be
 in front of the camera and, when the map has walls, not hidden behind one
 there; each leaf gets that check again before it becomes a hypothesis.
+Sets that leave the position loose are tested only in scenes that need
+many nodes: a vertical edge just added must be visible from some free
+point of the set's feasible region.
 """
 
 from __future__ import annotations
@@ -48,6 +51,19 @@ _PINNED_M = 0.15
 #: most this many grid steps (the grid wraps for a lost robot, so a wide
 #: span is not pinned).
 _PINNED_YAW_STEPS = 4
+#: A set that leaves the position loose gets a test of its own
+#: (:func:`_edge_seen_from_region`) once the search has made this many
+#: nodes. It costs a few tenths of a millisecond, and the scenes that need
+#: it are those where loose sets multiply (a row of door jambs seen along a
+#: wall, each jamb line fitting many jambs): most frames end well before.
+_LOOSE_TEST_AFTER = 200
+#: Spacing, metres, of the camera positions that test samples in a set's
+#: feasible region at each yaw, and the most per axis.
+_REGION_STEP_M = 0.15
+_REGION_MAX = 16
+#: Above this many samples in free space, samples closer than this
+#: (metres) are merged before the sight lines are cast.
+_REGION_MERGE_M = 0.05
 
 
 @dataclass
@@ -67,7 +83,10 @@ class TreeInput:
     ``free_m`` how far outside it the camera may stand; ``front_c`` (K, Y, 2)
     and ``front_b`` (K, Y) half-planes ``c . z <= b`` on the camera position
     relative to the centre that keep a vertical edge ahead of the camera
-    (c = 0, b = inf for the others), or None."""
+    (c = 0, b = inf for the others), or None; ``single_fit`` (K,) each
+    correspondence's best value alone (the root's look-ahead: the summed
+    quadratic's minimum over the yaws where it passes every test of the
+    look-ahead, inf where none), or None to compute it at the root."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -86,6 +105,7 @@ class TreeInput:
     free_m: float = 0.0
     front_c: np.ndarray | None = None
     front_b: np.ndarray | None = None
+    single_fit: np.ndarray | None = None
 
     def in_free_space(self, xy: np.ndarray) -> np.ndarray:
         """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
@@ -161,14 +181,15 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             # room): the candidates' own and those of R's members (the
             # feasible set shrinks as R grows), each at every candidate.
             hp = [r for r in R if has_plane[r]]
-            own = has_plane[cand].any()
-            if own or hp:
+            if hp or has_plane[cand].any():
                 ell = posegrid.feasible_ellipse(qs, val, zx, zy, len(R) + 1, tol.q_max, dt)
-                if own:
-                    ok &= posegrid.ellipse_reaches(ell, inp.front_c[cc, G], inp.front_b[cc, G], dt)
-                if hp:
-                    hh = np.array(hp)[:, None, None]  # (H, 1, 1) against (C, G)
-                    ok &= posegrid.ellipse_reaches(ell, inp.front_c[hh, G], inp.front_b[hh, G], dt).all(axis=0)
+                # One test for all: row 0 the candidates' own half-planes,
+                # then one row per member of R broadcast over the candidates;
+                # (H + 1, C, 1) indices against G.
+                rows = np.empty((len(hp) + 1, len(cand), 1), dtype=np.int64)
+                rows[0, :, 0] = cand
+                rows[1:] = np.array(hp, dtype=np.int64)[:, None, None]
+                ok &= posegrid.ellipse_reaches(ell, inp.front_c[rows, G], inp.front_b[rows, G], dt).all(axis=0)
         if fit:
             best = np.where(ok, val, np.inf).min(axis=1)
             return np.isfinite(best), best
@@ -254,7 +275,12 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         # Look ahead: the open candidates of all lines still to decide, kept if
         # consistent with R. Lines with none cannot be matched any more.
         ahead = pool
-        if fit is None:
+        if fit is None and not R and inp.single_fit is not None:
+            # The root: each candidate alone, as stage 1 already tested it.
+            ahead = ahead[np.isfinite(inp.single_fit[ahead])]
+            ahead = ahead[well_supported(0, ahead)]
+            fit = inp.single_fit[ahead]
+        elif fit is None:
             ahead = ahead[~used[seg_of[ahead]]]
             if R and ahead.size:
                 ahead = ahead[compat[R[-1], ahead]]
@@ -294,7 +320,8 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             if len(R) + 1 + reach_v < state["bound"]:
                 continue
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
-            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache):
+            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache,
+                                                                   loose=state["nodes"] > _LOOSE_TEST_AFTER):
                 continue
             used2 = used.copy()
             used2[seg_of[v]] = True
@@ -373,19 +400,65 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
 
 
 def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float,
-                     cache: dict | None = None) -> bool:
+                     cache: dict | None = None, loose: bool = False) -> bool:
     """Once a set fixes the pose (three members or more): is its best grid
     pose in free space, with all its segments in front of the camera and
     unhidden? (Before that the best point may be far from the truth and the
-    test would prune true sets.)"""
+    test would prune true sets.) With ``loose``, a set that does not fix the
+    position and has just taken a vertical edge is tested too, on its whole
+    feasible region (:func:`_edge_seen_from_region`)."""
     pinned, _, g, cam = _best_pose(inp, R, Qsum, mR, q_max)
     if g is None:
         return False
     if not pinned:
+        if loose and inp.walls is not None and inp.vertical is not None and inp.vertical[R[-1]]:
+            return _edge_seen_from_region(inp, R, Qsum, mR, q_max)
         return True
     if not inp.in_free_space(cam):
         return False
     return bool(_seen_cached(inp, np.asarray(sorted(R)), cam, g, cache).all())
+
+
+def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float) -> bool:
+    """Can the vertical edge of ``R[-1]`` be seen from some point of R's
+    feasible region that lies in free space? If not, no leaf below R passes
+    the leaf test (its pose is such a point, and must see every member).
+
+    The region at each yaw of ``mR`` is taken as the box spanned by its
+    stretches (every member's term <= ``q_max``) along the two axes of the
+    summed quadratic through its minimiser, sampled every _REGION_STEP_M: a
+    box holds the points of the region near those axes and more, so the
+    test errs towards keeping. The edge stands at one floor point, so one
+    sight line per sample decides."""
+    G = np.nonzero(mR)[0]
+    if len(G) == 0:
+        return False
+    qs = Qsum[G]
+    _, zx, zy = posegrid.minimise(qs, inp.dt)
+    ex, ey = posegrid.weak_axes(qs)  # (G,)
+    q = inp.quad[np.array(R)[:, None], G]  # (S, G, 6)
+    lo_w, hi_w = posegrid.stretches(q, zx, zy, ex, ey, q_max, inp.dt)
+    lo_s, hi_s = posegrid.stretches(q, zx, zy, -ey, ex, q_max, inp.dt)
+    ok = (lo_w <= hi_w) & (lo_s <= hi_s)
+    if not ok.any():
+        return False
+    lo_w, hi_w, lo_s, hi_s = lo_w[ok], hi_w[ok], lo_s[ok], hi_s[ok]
+    n_w = int(min(np.ceil((hi_w - lo_w).max() / _REGION_STEP_M) + 1, _REGION_MAX))
+    n_s = int(min(np.ceil((hi_s - lo_s).max() / _REGION_STEP_M) + 1, _REGION_MAX))
+    tw = lo_w[:, None] + np.linspace(0.0, 1.0, n_w)[None, :] * (hi_w - lo_w)[:, None]  # (G', n_w)
+    ts = lo_s[:, None] + np.linspace(0.0, 1.0, n_s)[None, :] * (hi_s - lo_s)[:, None]  # (G', n_s)
+    e = np.stack([ex[ok], ey[ok]], axis=-1)[:, None, None, :]
+    f = np.stack([-ey[ok], ex[ok]], axis=-1)[:, None, None, :]
+    z = np.stack([zx[ok], zy[ok]], axis=-1)[:, None, None, :]
+    pts = (inp.centre[:2] + z + tw[:, :, None, None] * e + ts[:, None, :, None] * f).reshape(-1, 2)
+    pts = pts[inp.in_free_space(pts)]
+    if not len(pts):
+        return False
+    if len(pts) > _REGION_MAX**2:  # neighbouring yaws give nearly the same points
+        _, first = np.unique(np.round(pts / _REGION_MERGE_M), axis=0, return_index=True)
+        pts = pts[first]
+    edge = inp.segments[R[-1], 0, :2]
+    return bool(sight_clear(pts, np.broadcast_to(edge, pts.shape), inp.walls, _OCCLUSION_END_M).any())
 
 
 def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None,
