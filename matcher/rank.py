@@ -77,22 +77,20 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     keep = inl & (n_in[hyp] >= tol.min_matches)
     hyp, line_ids, local = hyp[keep], line_ids[keep], local[keep]
     alive = n_in >= tol.min_matches
-    if alive.any():
+    if alive.any() and not keep.all():
+        # Matches were dropped: refit, so that the lines added back below
+        # are judged at a pose the dropped ones no longer pull.
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
+    if alive.any():
         alive &= _allowed(poses, prior, free, tol)
     if alive.any():
-        # Contenders get the lines they are missing back, then a last refit.
+        # Contenders get the lines they are missing back, then a last refit
+        # (plain least squares on the final matches).
         top = int(n_in[alive].max())
         contenders = np.nonzero(alive & (n_in >= top - 1))[0]
-        new_hyp, new_local, new_line = [hyp[~np.isin(hyp, contenders)]], [local[~np.isin(hyp, contenders)]], \
-            [line_ids[~np.isin(hyp, contenders)]]
-        for h in contenders:
-            sel = hyp == h
-            lo, li = extend(camera, img, segs, poses[h], local[sel], line_ids[sel], tol, walls)
-            new_hyp.append(np.full(len(lo), h))
-            new_local.append(lo)
-            new_line.append(li)
-        hyp, local, line_ids = (np.concatenate(a).astype(np.int64) for a in (new_hyp, new_local, new_line))
+        add_h, add_l, add_s = extend_all(camera, img, segs, poses, hyp, local, line_ids, contenders, tol, walls)
+        hyp, local, line_ids = (np.concatenate(a).astype(np.int64)
+                                for a in ((hyp, add_h), (local, add_s), (line_ids, add_l)))
         order_t = np.argsort(hyp, kind="stable")
         hyp, local, line_ids = hyp[order_t], local[order_t], line_ids[order_t]
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
@@ -200,26 +198,49 @@ def fit_bound_px(length, tol):
     return tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length + 2.0
 
 
-def extend(camera, img, segs, pose, local, line_ids, tol, walls):
-    """Add (segment, line) pairs that fit at ``pose`` (3,) among the
-    unmatched usable lines and segments (see :func:`fits`; the segment
-    visible too), closest first, each segment and line once."""
-    free_lines = np.setdiff1d(np.nonzero(img.usable)[0], line_ids)
-    free_segs = np.setdiff1d(np.arange(len(segs)), local)
-    if len(free_lines) == 0 or len(free_segs) == 0:
-        return local, line_ids
-    li, si = np.repeat(free_lines, len(free_segs)), np.tile(free_segs, len(free_lines))
+def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls):
+    """For each hypothesis h of ``hyps``: the (segment, line) pairs that fit
+    at its pose ``poses[h]`` among its unmatched usable lines and segments
+    (see :func:`fits`; the segment visible too), closest first, each segment
+    and line once. All hypotheses' pairs are tested in one batch. Returns
+    ``(hyp, line, local)`` (A,) of the pairs to add; matches are given as
+    ``hyp, local, line_ids`` (T,)."""
+    usable = np.nonzero(img.usable)[0]
+    U, N = len(usable), len(segs)
+    ph, pl, ps = [], [], []
+    for h in hyps:
+        sel = hyp == h
+        lines_free = np.ones(len(img.usable), dtype=bool)
+        lines_free[line_ids[sel]] = False
+        segs_free = np.ones(N, dtype=bool)
+        segs_free[local[sel]] = False
+        fl, fs = usable[lines_free[usable]], np.nonzero(segs_free)[0]
+        ph.append(np.full(len(fl) * len(fs), h))
+        pl.append(np.repeat(fl, len(fs)))
+        ps.append(np.tile(fs, len(fl)))
+    empty = np.zeros(0, dtype=np.int64)
+    if not U or not ph:
+        return empty, empty, empty
+    ph, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
+    if not len(ph):
+        return empty, empty, empty
     lines = img.lines[li]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
-    dist, ov = distance_and_overlap(camera, np.repeat(pose[None], len(li), 0), segs[si], lines)
+    dist, ov = distance_and_overlap(camera, poses[ph], segs[si], lines)
     ok = (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
     if ok.any():
         sel = np.nonzero(ok)[0]
-        ok[sel] = visible(np.repeat(pose[None], len(sel), 0), segs[si[sel]], walls)
-    add_s, add_l = [], []
-    for k in np.argsort(np.where(ok, dist, np.inf))[: int(ok.sum())]:
-        if si[k] in add_s or li[k] in add_l:
+        ok[sel] = visible(poses[ph[sel]], segs[si[sel]], walls)
+    out_h, out_l, out_s = [], [], []
+    taken = set()
+    # Closest first within each hypothesis; a segment or line is added once.
+    cand = np.nonzero(ok)[0]
+    for k in cand[np.lexsort((dist[cand], ph[cand]))].tolist():
+        h, s_, l_ = int(ph[k]), int(si[k]), int(li[k])
+        if (h, "s", s_) in taken or (h, "l", l_) in taken:
             continue
-        add_s.append(int(si[k]))
-        add_l.append(int(li[k]))
-    return np.concatenate([local, add_s]).astype(np.int64), np.concatenate([line_ids, add_l]).astype(np.int64)
+        taken.update([(h, "s", s_), (h, "l", l_)])
+        out_h.append(h)
+        out_s.append(s_)
+        out_l.append(l_)
+    return (np.array(out_h, dtype=np.int64), np.array(out_l, dtype=np.int64), np.array(out_s, dtype=np.int64))
