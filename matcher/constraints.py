@@ -230,9 +230,14 @@ def binary_constraint(
     rho = alpha_i - alpha_k
     th = np.linspace(0, 2 * np.pi, _CIRCLE_SAMPLES, endpoint=False)
     ring = c + dt * np.stack([np.cos(th), np.sin(th)], 1)  # (S, 2)
-    di = points_i[:, None, :] - ring[None]
-    dk = points_k[:, None, :] - ring[None]
-    g = np.arctan2(dk[..., 1], dk[..., 0]) - np.arctan2(di[..., 1], di[..., 0])
+    # Bearings from the ring samples to each distinct point, once: couples
+    # share their points (a few dozen edges make hundreds of couples).
+    C = len(points_i)
+    uniq, inv = np.unique(np.concatenate([points_i, points_k]), axis=0, return_inverse=True)
+    inv = inv.reshape(-1)
+    d = uniq[:, None, :] - ring[None]
+    bearing = np.arctan2(d[..., 1], d[..., 0])  # (U, S)
+    g = bearing[inv[C:]] - bearing[inv[:C]]
     h = wrap(g - rho[:, None])  # (C, S): zero on the arc
     # Sampling slack: between samples the angle moves by at most the step
     # times dt over the distance to the nearer point.

@@ -120,26 +120,28 @@ def _vertical_sight(points, alpha, yaws, centre, dt, width, step, sight, extent)
     cut at ``extent[k]``, the farthest the edge can be for its image line to
     fit inside its projection (:func:`vertical_extent_bound`). The stretches
     come from the map's :class:`~matcher.occlusion.SightRays` table."""
-    uniq, inv = np.unique(points, axis=0, return_inverse=True)
+    # Edges shared by several correspondences are looked up once (distinct
+    # points found through a complex view: np.unique on rows is slow).
+    _, first, inv = np.unique(points[:, 0] + 1j * points[:, 1], return_index=True, return_inverse=True)
     inv = inv.reshape(-1)
-    dist = np.linalg.norm(uniq - centre, axis=1)
-    reach = sight.reach(uniq)[inv]  # (Kv, B)
+    reach = sight.reach(points[first])  # (U, B)
     B = reach.shape[1]
     # For each correspondence and yaw: the bearing from camera to edge, and
     # the longest stretch among its bin and the two neighbours (a ray that
     # just grazes a door jamb is blocked in one bin and clear in the next).
     beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
     j = sight.bin_of(beta + np.pi)  # the ray runs back from the edge
-    rows = np.arange(len(reach))[:, None]
+    rows = inv[:, None]
     lam = np.maximum.reduce([reach[rows, (j + o) % B] for o in (-1, 0, 1)])
-    lam = np.minimum(np.minimum(lam, (dist[inv] + dt + 1.0)[:, None]), extent[:, None])  # (Kv, Y)
-    # Distance from the disk centre to the stretch P - s u, s in [0, lam].
-    u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
-    pc = centre - points[:, None, :]  # (Kv, 1, 2)
-    s_ = np.clip(-np.einsum("kgi,kgi->kg", np.broadcast_to(pc, u.shape), u), 0.0, lam)
-    closest = points[:, None, :] - s_[..., None] * u
-    gap = np.linalg.norm(closest - centre, axis=-1)
-    slack = width + dist[inv][:, None] * (0.5 * step + sight.step)
+    rel = points - centre  # (Kv, 2) edge from the disk centre
+    dist = np.hypot(rel[:, 0], rel[:, 1])
+    lam = np.minimum(np.minimum(lam, (dist + dt + 1.0)[:, None]), extent[:, None])  # (Kv, Y)
+    # Distance from the disk centre to the stretch P - s u, s in [0, lam],
+    # on components (no (Kv, Y, 2) stacks).
+    ux, uy = np.cos(beta), np.sin(beta)
+    s_ = np.clip(rel[:, 0, None] * ux + rel[:, 1, None] * uy, 0.0, lam)
+    gap = np.hypot(rel[:, 0, None] - s_ * ux, rel[:, 1, None] - s_ * uy)
+    slack = width + dist[:, None] * (0.5 * step + sight.step)
     return gap <= dt + slack
 
 
@@ -397,8 +399,8 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of correspondences
     ``(seg_k, line_k)`` (K,); ``Wk`` (K, Y, 3) their lines' world normals at
     each grid yaw, ``v`` (N, 3) unit directions, ``near`` (N, 3) points of
-    the segments' lines nearest the prior centre ``ce``."""
-    h = camera.height_m
+    the segments' lines nearest the prior centre ``ce`` (the camera
+    centre of the prior: ``ce[2]`` is the camera height)."""
     # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
     mask = np.empty((len(seg_k), len(yaws)), dtype=bool)
     dir_res = np.abs(np.einsum("kgi,ki->kg", Wk, v[seg_k]))
@@ -432,19 +434,22 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     seg_len = np.linalg.norm(segments[seg_k, 1] - P0, axis=1)[:, None]
     sp = np.clip(sp, 0.0, seg_len)
     Pstar = P0[:, None, :] + sp[..., None] * vk[:, None, :]  # (K, Y, 3)
-    D = np.linalg.norm(Pstar - ce, axis=-1) + dt
+    rel = Pstar - ce  # (K, Y, 3) from the disk centre (camera height)
+    D = np.sqrt(np.einsum("kgi,kgi->kg", rel, rel)) + dt
     a = Wk[..., :2]
-    d = np.einsum("kgi,kgi->kg", Wk, Pstar) - Wk[..., 2] * h - np.einsum("kgi,i->kg", a, ce[:2])
+    a_len = np.hypot(Wk[..., 0], Wk[..., 1])
+    # a . c = d for camera positions c (relative to ce) with the plane
+    # through the camera containing P*: W . (P* - C) = 0.
+    d = np.einsum("kgi,kgi->kg", Wk, rel)
     e_rot = img.eps_rot[line_k][:, None]
     e_off = img.eps_off[line_k][:, None]
     # Between grid yaws the residual moves at d r / d yaw = (-w_y, w_x) . (P - C).
-    dr_dyaw = np.abs(-Wk[..., 1] * (Pstar[..., 0] - ce[0]) + Wk[..., 0] * (Pstar[..., 1] - ce[1]))
-    dr_dyaw += np.linalg.norm(a, axis=-1) * dt
+    dr_dyaw = np.abs(Wk[..., 0] * rel[..., 1] - Wk[..., 1] * rel[..., 0]) + a_len * dt
     t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
     quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
     if is_v.any() and sight is not None:
         ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
-        width = (t / np.maximum(np.linalg.norm(a, axis=-1), 1e-9))[is_v]
+        width = (t / np.maximum(a_len, 1e-9))[is_v]
         mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt, width,
                                       step, sight, ext)
     return mask, quad
