@@ -23,23 +23,26 @@ def wrap(a):
     return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2 * np.pi)
 
 
+#: The noise cases of :func:`_perturbed_lines`: (rotation, offset) signs.
+#: The first four are the extreme cases of the noise model; then rotation
+#: alone and offset alone.
+_NOISE_CASES = np.array([[-1, -1], [-1, 1], [1, -1], [1, 1], [-1, 0], [1, 0], [0, -1], [0, 1]], dtype=float)
+
+
 def _perturbed_lines(lines: np.ndarray, px: float, deg: float) -> np.ndarray:
-    """(4, M, 2, 2): each line rotated by +-deg about its midpoint and shifted
-    by +-px along its normal, the extreme cases of the noise model."""
+    """(8, M, 2, 2): each line rotated by ``+-deg`` about its midpoint and
+    shifted by ``+-px`` along its normal, in the cases of _NOISE_CASES."""
     a, b = lines[:, 0], lines[:, 1]
     mid = 0.5 * (a + b)
     half = 0.5 * (b - a)
-    ln = np.linalg.norm(half, axis=1, keepdims=True)
+    ln = np.hypot(half[:, 0], half[:, 1])[:, None]  # (M, 1)
     d = half / ln
     perp = np.stack([-d[:, 1], d[:, 0]], axis=1)
-    out = []
-    for s_rot in (-1.0, 1.0):
-        c, s = math.cos(s_rot * math.radians(deg)), math.sin(s_rot * math.radians(deg))
-        dr = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
-        for s_off in (-1.0, 1.0):
-            m = mid + s_off * px * perp
-            out.append(np.stack([m - ln * dr, m + ln * dr], axis=1))
-    return np.stack(out)
+    rot = np.radians(deg) * _NOISE_CASES[:, 0]
+    c, s = np.cos(rot)[:, None, None], np.sin(rot)[:, None, None]  # (8, 1, 1)
+    dr = c * d + s * perp  # (8, M, 2): d turned by rot
+    m = mid + (px * _NOISE_CASES[:, 1])[:, None, None] * perp
+    return np.stack([m - ln * dr, m + ln * dr], axis=2)
 
 
 def plane_noise(camera: Camera, lines: np.ndarray, px: float, deg: float) -> np.ndarray:
@@ -56,8 +59,7 @@ def plane_noises(camera: Camera, lines: np.ndarray, px: float, deg: float):
     of perturbed lines."""
     M = len(lines)
     n = camera.interpretation_normals(lines)
-    pert = np.concatenate([_perturbed_lines(lines, px, deg), _perturbed_lines(lines, 0.0, deg)[::3],
-                           _perturbed_lines(lines, px, 0.0)[:2]])  # (4 + 2 + 2, M, 2, 2)
+    pert = _perturbed_lines(lines, px, deg)  # (4 + 2 + 2, M, 2, 2)
     n2 = camera.interpretation_normals(pert.reshape(-1, 2, 2)).reshape(8, M, 3)
     c = np.cross(n[None], n2)
     s = np.sqrt((c * c).sum(axis=-1))  # (8, M) sines of the turns
@@ -96,11 +98,10 @@ def vertical_bearing(camera: Camera, lines: np.ndarray) -> np.ndarray:
 
 def bearing_noise(camera: Camera, lines: np.ndarray, px: float, deg: float) -> np.ndarray:
     """(M,) largest change of :func:`vertical_bearing` under the noise bounds."""
+    M = len(lines)
     alpha = vertical_bearing(camera, lines)
-    worst = np.zeros(len(lines))
-    for p in _perturbed_lines(lines, px, deg):
-        worst = np.maximum(worst, np.abs(vertical_bearing(camera, p) - alpha))
-    return worst * 1.05 + 1e-4
+    moved = vertical_bearing(camera, _perturbed_lines(lines, px, deg)[:4].reshape(-1, 2, 2)).reshape(4, M)
+    return np.abs(moved - alpha).max(axis=0) * 1.05 + 1e-4
 
 
 # --------------------------------------------------------------------------
