@@ -351,8 +351,10 @@ def generate(
     if len(seg_k) < tol.min_matches:
         return empty
 
+    if sight is None and walls is not None:
+        sight = SightRays(walls)
     mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], yaws, ce, dt, step,
-                         tol, sight if sight is not None or walls is None else SightRays(walls))
+                         tol, sight)
     val, zx, zy = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
     front_c, front_b = _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces)
@@ -382,7 +384,7 @@ def generate(
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
                     None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m,
-                    front_c, front_b, single_fit)
+                    front_c, front_b, single_fit, sight)
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)

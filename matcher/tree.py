@@ -86,7 +86,9 @@ class TreeInput:
     (c = 0, b = inf for the others), or None; ``single_fit`` (K,) each
     correspondence's best value alone (the root's look-ahead: the summed
     quadratic's minimum over the yaws where it passes every test of the
-    look-ahead, inf where none), or None to compute it at the root."""
+    look-ahead, inf where none), or None to compute it at the root;
+    ``sight`` the walls' :class:`~matcher.occlusion.SightRays` (how far one
+    sees from a vertical edge, per bearing), or None to cast sight lines."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -106,6 +108,7 @@ class TreeInput:
     front_c: np.ndarray | None = None
     front_b: np.ndarray | None = None
     single_fit: np.ndarray | None = None
+    sight: object | None = None
 
     def in_free_space(self, xy: np.ndarray) -> np.ndarray:
         """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
@@ -320,8 +323,8 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             if len(R) + 1 + reach_v < state["bound"]:
                 continue
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
-            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache,
-                                                                   loose=state["nodes"] > _LOOSE_TEST_AFTER):
+            loose = len(R2) + reach_v if state["nodes"] > _LOOSE_TEST_AFTER else 0
+            if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache, loose):
                 continue
             used2 = used.copy()
             used2[seg_of[v]] = True
@@ -400,26 +403,28 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
 
 
 def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float,
-                     cache: dict | None = None, loose: bool = False) -> bool:
+                     cache: dict | None = None, loose: int = 0) -> bool:
     """Once a set fixes the pose (three members or more): is its best grid
     pose in free space, with all its segments in front of the camera and
     unhidden? (Before that the best point may be far from the truth and the
-    test would prune true sets.) With ``loose``, a set that does not fix the
-    position and has just taken a vertical edge is tested too, on its whole
-    feasible region (:func:`_edge_seen_from_region`)."""
+    test would prune true sets.) With ``loose`` (the most members a leaf
+    below R can have; 0: off), a set that does not fix the position and has
+    just taken a vertical edge is tested too, on its whole feasible region
+    (:func:`_edge_seen_from_region`)."""
     pinned, _, g, cam = _best_pose(inp, R, Qsum, mR, q_max)
     if g is None:
         return False
     if not pinned:
         if loose and inp.walls is not None and inp.vertical is not None and inp.vertical[R[-1]]:
-            return _edge_seen_from_region(inp, R, Qsum, mR, q_max)
+            return _edge_seen_from_region(inp, R, Qsum, mR, q_max, loose)
         return True
     if not inp.in_free_space(cam):
         return False
     return bool(_seen_cached(inp, np.asarray(sorted(R)), cam, g, cache).all())
 
 
-def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float) -> bool:
+def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float,
+                           most: int) -> bool:
     """Can the vertical edge of ``R[-1]`` be seen from some point of R's
     feasible region that lies in free space? If not, no leaf below R passes
     the leaf test (its pose is such a point, and must see every member).
@@ -429,16 +434,21 @@ def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: n
     summed quadratic through its minimiser, sampled every _REGION_STEP_M: a
     box holds the points of the region near those axes and more, so the
     test errs towards keeping. The edge stands at one floor point, so one
-    sight line per sample decides."""
+    sight line per sample decides. Only yaws where a leaf of at most
+    ``most`` members could stand count: adding members only raises the
+    summed quadratic's minimum, and a leaf's must stay <= its size + 1."""
     G = np.nonzero(mR)[0]
+    val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
+    near = val <= most + 1.0
+    G, zx, zy = G[near], zx[near], zy[near]
     if len(G) == 0:
         return False
     qs = Qsum[G]
-    _, zx, zy = posegrid.minimise(qs, inp.dt)
     ex, ey = posegrid.weak_axes(qs)  # (G,)
     q = inp.quad[np.array(R)[:, None], G]  # (S, G, 6)
-    lo_w, hi_w = posegrid.stretches(q, zx, zy, ex, ey, q_max, inp.dt)
-    lo_s, hi_s = posegrid.stretches(q, zx, zy, -ey, ex, q_max, inp.dt)
+    # Both axes in one call: rows 0 the weak axis e, 1 the strong one (e turned).
+    lo, hi = posegrid.stretches(q[:, None], zx, zy, np.stack([ex, -ey]), np.stack([ey, ex]), q_max, inp.dt)
+    (lo_w, lo_s), (hi_w, hi_s) = lo, hi
     ok = (lo_w <= hi_w) & (lo_s <= hi_s)
     if not ok.any():
         return False
@@ -458,7 +468,17 @@ def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: n
         _, first = np.unique(np.round(pts / _REGION_MERGE_M), axis=0, return_index=True)
         pts = pts[first]
     edge = inp.segments[R[-1], 0, :2]
-    return bool(sight_clear(pts, np.broadcast_to(edge, pts.shape), inp.walls, _OCCLUSION_END_M).any())
+    if inp.sight is None:
+        return bool(sight_clear(pts, np.broadcast_to(edge, pts.shape), inp.walls, _OCCLUSION_END_M).any())
+    # The edge's row of the sight table (rays cast from it once per map):
+    # a sample sees it if the ray from the edge towards the sample, or one
+    # in the next bins, runs that far before meeting a wall.
+    reach = inp.sight.reach(edge[None])[0]
+    rel = pts - edge
+    j = inp.sight.bin_of(np.arctan2(rel[:, 1], rel[:, 0]))
+    B = len(reach)
+    far = np.maximum.reduce([reach[(j + o) % B] for o in (-1, 0, 1)])
+    return bool((np.hypot(rel[:, 0], rel[:, 1]) <= far).any())
 
 
 def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None,

@@ -271,9 +271,17 @@ def test_edge_seen_from_a_loose_region_hand_worked():
     not matter."""
     from matcher.tree import _edge_seen_from_region
 
+    from dataclasses import replace
+
+    from matcher.occlusion import SightRays
+
     def seen(walls):
         inp = _loose_set_facing_an_edge(walls)
-        return _edge_seen_from_region(inp, [0, 1, 2], inp.quad.sum(axis=0), np.ones(1, dtype=bool), 1.5)
+        args = ([0, 1, 2], inp.quad.sum(axis=0), np.ones(1, dtype=bool), 1.5, 3)
+        cast = _edge_seen_from_region(inp, *args)  # sight lines cast
+        table = _edge_seen_from_region(replace(inp, sight=SightRays(walls)), *args)  # the map's sight table
+        assert cast == table
+        return cast
 
     wall = (np.array([[2.0, -2.0]]), np.array([[2.0, 2.0]]))
     door = (np.array([[2.0, -2.0], [2.0, 0.4]]), np.array([[2.0, -0.4], [2.0, 2.0]]))
