@@ -353,7 +353,7 @@ def generate(
 
     if sight is None and walls is not None:
         sight = SightRays(walls)
-    mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], yaws, ce, dt, step,
+    mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], Rg, yaws, ce, dt, step,
                          tol, sight)
     val, zx, zy = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
@@ -397,10 +397,11 @@ def generate(
                       truncated, counts)
 
 
-def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, dt, step, tol, sight):
+def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, Rg, yaws, ce, dt, step, tol, sight):
     """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of correspondences
     ``(seg_k, line_k)`` (K,); ``Wk`` (K, Y, 3) their lines' world normals at
-    each grid yaw, ``v`` (N, 3) unit directions, ``near`` (N, 3) points of
+    each grid yaw, ``Rg`` (Y, 3, 3) the world-to-camera rotations at the grid
+    yaws ``yaws`` (Y,), ``v`` (N, 3) unit directions, ``near`` (N, 3) points of
     the segments' lines nearest the prior centre ``ce`` (the camera
     centre of the prior: ``ce[2]`` is the camera height)."""
     # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
@@ -421,7 +422,6 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, yaws, ce, d
     # that point moves by the turn times the lever arm: how far the true ray
     # can pass from the point (the camera's offset in the disk, the yaw step,
     # the offset noise), not the distance to the whole segment.
-    Rg = world2cam_rotation(yaws, camera.pitch)
     U = np.einsum("gki,mk->mgi", Rg, img.mid_rays)[line_k]  # (K, Y, 3) world direction of the midpoint ray
     P0, vk = segments[seg_k, 0], v[seg_k]
     w0 = ce - P0  # (K, 3)
