@@ -493,9 +493,9 @@ def _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces):
 
 def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, front_c, front_b) -> np.ndarray:
     """(K, K) bool pairwise compatibility: one-to-one, a common pose of the
-    two in the prior set at one grid yaw (with their vertical edges in front
-    of the camera, see :func:`_edge_in_front`), and the paper's binary
-    constraint for two vertical correspondences."""
+    two in the prior set at one grid yaw (within both half-planes, see
+    :func:`_half_planes`), and the paper's binary constraint for two
+    vertical correspondences."""
     K = len(seg_k)
     iu, ju = np.triu_indices(K, 1)
     distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
