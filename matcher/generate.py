@@ -123,16 +123,10 @@ def _vertical_sight(points, alpha, yaws, centre, dt, width, step, sight, extent)
     # Edges shared by several correspondences are looked up once (distinct
     # points found through a complex view: np.unique on rows is slow).
     _, first, inv = np.unique(points[:, 0] + 1j * points[:, 1], return_index=True, return_inverse=True)
-    inv = inv.reshape(-1)
-    reach = sight.reach(points[first])  # (U, B)
-    B = reach.shape[1]
     # For each correspondence and yaw: the bearing from camera to edge, and
-    # the longest stretch among its bin and the two neighbours (a ray that
-    # just grazes a door jamb is blocked in one bin and clear in the next).
+    # how far the ray back from the edge runs.
     beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
-    j = sight.bin_of(beta + np.pi)  # the ray runs back from the edge
-    rows = inv[:, None]
-    lam = np.maximum.reduce([reach[rows, (j + o) % B] for o in (-1, 0, 1)])
+    lam = sight.reach_along(points[first], inv.reshape(-1, 1), beta + np.pi)
     rel = points - centre  # (Kv, 2) edge from the disk centre
     dist = np.hypot(rel[:, 0], rel[:, 1])
     lam = np.minimum(np.minimum(lam, (dist + dt + 1.0)[:, None]), extent[:, None])  # (Kv, Y)

@@ -107,6 +107,15 @@ class SightRays:
                 self._rows[keys[i]] = row
         return np.array([self._rows[k] for k in keys]).reshape(len(keys), self.bins)
 
+    def reach_along(self, points: np.ndarray, rows: np.ndarray, bearings: np.ndarray) -> np.ndarray:
+        """(...) how far one sees from ``points[rows]`` (points (U, 2), rows
+        (...) int) along world ``bearings`` (...): the longest reach among the
+        bearing's bin and its two neighbours (a ray that just grazes a door
+        jamb is blocked in one bin and clear in the next)."""
+        reach = self.reach(points)  # (U, B)
+        j = self.bin_of(bearings)
+        return np.maximum.reduce([reach[rows, (j + o) % self.bins] for o in (-1, 0, 1)])
+
 
 def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -> np.ndarray:
     """(Q,) bool: the floor sight line from ``cam`` (2,) or (Q, 2) to each of

@@ -171,10 +171,16 @@ def fits(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
     the image border only ever shorten the image of a segment, so a line
     sticking out beyond a projected end point by more than the end-point
     noise shows another segment."""
+    return fits_and_distance(camera, img, poses, segments, line_ids, tol)[0]
+
+
+def fits_and_distance(camera, img, poses, segments, line_ids, tol):
+    """:func:`fits` (T,) and the lines' distances (T,), pixels, to the
+    projected segments."""
     lines = img.lines[line_ids]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = distance_and_overlap(camera, poses, segments, lines)
-    return (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
+    return (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0), dist
 
 
 def visible(poses, segments, walls) -> np.ndarray:
@@ -224,22 +230,20 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     ph, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
     if not len(ph):
         return empty, empty, empty
-    lines = img.lines[li]
-    L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
-    dist, ov = distance_and_overlap(camera, poses[ph], segs[si], lines)
-    ok = (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0)
+    ok, dist = fits_and_distance(camera, img, poses[ph], segs[si], li, tol)
     if ok.any():
         sel = np.nonzero(ok)[0]
         ok[sel] = visible(poses[ph[sel]], segs[si[sel]], walls)
     out_h, out_l, out_s = [], [], []
-    taken = set()
+    segs_taken, lines_taken = set(), set()  # (hypothesis, segment), (hypothesis, line)
     # Closest first within each hypothesis; a segment or line is added once.
     cand = np.nonzero(ok)[0]
     for k in cand[np.lexsort((dist[cand], ph[cand]))].tolist():
         h, s_, l_ = int(ph[k]), int(si[k]), int(li[k])
-        if (h, "s", s_) in taken or (h, "l", l_) in taken:
+        if (h, s_) in segs_taken or (h, l_) in lines_taken:
             continue
-        taken.update([(h, "s", s_), (h, "l", l_)])
+        segs_taken.add((h, s_))
+        lines_taken.add((h, l_))
         out_h.append(h)
         out_s.append(s_)
         out_l.append(l_)

@@ -61,9 +61,6 @@ _LOOSE_TEST_AFTER = 200
 #: feasible region at each yaw, and the most per axis.
 _REGION_STEP_M = 0.15
 _REGION_MAX = 16
-#: Above this many samples in free space, samples closer than this
-#: (metres) are merged before the sight lines are cast.
-_REGION_MERGE_M = 0.05
 
 
 @dataclass
@@ -464,20 +461,13 @@ def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: n
     pts = pts[inp.in_free_space(pts)]
     if not len(pts):
         return False
-    if len(pts) > _REGION_MAX**2:  # neighbouring yaws give nearly the same points
-        _, first = np.unique(np.round(pts / _REGION_MERGE_M), axis=0, return_index=True)
-        pts = pts[first]
     edge = inp.segments[R[-1], 0, :2]
     if inp.sight is None:
         return bool(sight_clear(pts, np.broadcast_to(edge, pts.shape), inp.walls, _OCCLUSION_END_M).any())
-    # The edge's row of the sight table (rays cast from it once per map):
-    # a sample sees it if the ray from the edge towards the sample, or one
-    # in the next bins, runs that far before meeting a wall.
-    reach = inp.sight.reach(edge[None])[0]
+    # The map's sight table (rays cast from the edge once per map): a sample
+    # sees the edge if the ray from the edge towards it runs that far.
     rel = pts - edge
-    j = inp.sight.bin_of(np.arctan2(rel[:, 1], rel[:, 0]))
-    B = len(reach)
-    far = np.maximum.reduce([reach[(j + o) % B] for o in (-1, 0, 1)])
+    far = inp.sight.reach_along(edge[None], np.zeros(len(pts), dtype=np.int64), np.arctan2(rel[:, 1], rel[:, 0]))
     return bool((np.hypot(rel[:, 0], rel[:, 1]) <= far).any())
 
 
