@@ -63,8 +63,8 @@ class Tolerances:
     #: for scenes where the lines leave the pose nearly undetermined, such
     #: as a row of door jambs along one wall; the sets found by then (the
     #: first dives follow the best-fitting candidates) are kept. The two
-    #: hardest frames of the benchmark (seed 0, PEQ 5) take 1900 and 4400
-    #: nodes to search completely; the first 2000 hold the true set of each.
+    #: hardest frames of the benchmark (seed 0, PEQ 5) reach this budget,
+    #: and the sets found by then hold the true one.
     max_nodes: int = 2000
     #: Stage 1 hands at most this many hypotheses to stage 2: the largest
     #: sets, then those that fit best at their grid pose (mean normalised

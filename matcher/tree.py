@@ -52,11 +52,12 @@ _PINNED_M = 0.15
 #: span is not pinned).
 _PINNED_YAW_STEPS = 4
 #: A set that leaves the position loose gets a test of its own
-#: (:func:`_edge_seen_from_region`) once the search has made this many
-#: nodes. It costs a few tenths of a millisecond, and the scenes that need
-#: it are those where loose sets multiply (a row of door jambs seen along a
-#: wall, each jamb line fitting many jambs): most frames end well before.
-_LOOSE_TEST_AFTER = 200
+#: (:func:`_edge_seen_from_region`) once the search has used this share of
+#: its node budget (200 nodes by default). It costs a few tenths of a
+#: millisecond, and the scenes that need it are those where loose sets
+#: multiply (a row of door jambs seen along a wall, each jamb line fitting
+#: many jambs): most frames end well before.
+_LOOSE_TEST_AFTER = 0.1
 #: Spacing, metres, of the camera positions that test samples in a set's
 #: feasible region at each yaw, and the most per axis.
 _REGION_STEP_M = 0.15
@@ -320,7 +321,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             if len(R) + 1 + reach_v < state["bound"]:
                 continue
             R2, Q2, m2 = R + [v], Qsum + quad[v], mR & mask[v]
-            loose = len(R2) + reach_v if state["nodes"] > _LOOSE_TEST_AFTER else 0
+            loose = len(R2) + reach_v if state["nodes"] > _LOOSE_TEST_AFTER * tol.max_nodes else 0
             if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache, loose):
                 continue
             used2 = used.copy()
