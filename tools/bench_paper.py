@@ -14,10 +14,12 @@ ranked first (%), accepted (%), E of the correct hypothesis against the
 best false one (medians), pose error (median), latency (median, p95) of
 ours and of the baseline, wall clock per frame with the lines given.
 
-Figures (PNG): ``paper_fig5.png``, hypotheses per sample for each PEQ (the
-paper's figure 5); ``paper_fig6.png``, mean and standard deviation of the
-five smallest E per PEQ with the acceptance threshold (the paper's figure 6),
-and E of the correct hypothesis against the best false one.
+Figures (PNG, in ``--out``): ``paper_fig5.png``, hypotheses per sample for
+each PEQ (the paper's figure 5); ``paper_fig6.png``, mean and standard
+deviation of the five smallest E per PEQ with the acceptance threshold (the
+paper's figure 6), and E of the correct hypothesis against the best false
+one. On another map than maps/flat.lmap the names carry the map's name
+(``paper_fig5_synthetic.png``), so the documented figures stay as they are.
 """
 
 from __future__ import annotations
@@ -185,7 +187,8 @@ def table(summary: dict) -> str:
     return "\n".join(lines)
 
 
-def plot(all_rows, summary, out_dir: Path, e_accept: float):
+def plot(all_rows, summary, out_dir: Path, e_accept: float, tag: str = "") -> list[Path]:
+    """Draw figures 5 and 6 into ``out_dir`` (names end in ``tag``); returns their paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -203,7 +206,7 @@ def plot(all_rows, summary, out_dir: Path, e_accept: float):
     axes[0].set_title("Figure 5: number of hypotheses after stage 1 (dashed: 25)")
     axes[-1].set_xlabel("sample number")
     fig.tight_layout()
-    fig.savefig(out_dir / "paper_fig5.png", dpi=110)
+    fig.savefig(out_dir / f"paper_fig5{tag}.png", dpi=110)
     plt.close(fig)
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 3.8))
@@ -236,8 +239,9 @@ def plot(all_rows, summary, out_dir: Path, e_accept: float):
     ax2.set_title("E: correct vs best false hypotheses")
     ax2.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out_dir / "paper_fig6.png", dpi=110)
+    fig.savefig(out_dir / f"paper_fig6{tag}.png", dpi=110)
     plt.close(fig)
+    return [out_dir / f"paper_fig5{tag}.png", out_dir / f"paper_fig6{tag}.png"]
 
 
 def main(argv=None) -> int:
@@ -267,13 +271,15 @@ def main(argv=None) -> int:
     from _synthetic_map import cached_flat_map
 
     default_map = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
+    tag = ""  # figure names: plain for maps/flat.lmap, tagged with the map otherwise
     if args.synthetic:
-        linemap, map_name = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)"
-    elif args.map or default_map.exists():
-        map_name = args.map or "maps/flat.lmap"
-        linemap = matcher.load_map(args.map or default_map)
+        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)", "_synthetic"
+    elif args.map and Path(args.map).resolve() != default_map:
+        linemap, map_name, tag = matcher.load_map(args.map), args.map, "_" + Path(args.map).stem
+    elif default_map.exists():
+        linemap, map_name = matcher.load_map(default_map), "maps/flat.lmap"
     else:
-        linemap, map_name = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)"
+        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)", "_synthetic"
     camera = paper_camera(args.height, args.pitch)
     matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
     all_rows, summary = {}, {}
@@ -285,12 +291,13 @@ def main(argv=None) -> int:
               file=sys.stderr)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    plot(all_rows, summary, out, matcher.Tolerances().e_accept)
+    figures = plot(all_rows, summary, out, matcher.Tolerances().e_accept, tag)
     print(f"map {map_name}: {linemap.n_segments} segments, {linemap.n_regions} regions")
     print(f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
           f"{args.noise_deg} deg; {args.clutter} clutter lines; {args.poses} poses per PEQ; seed {args.seed}; "
           f"{platform.python_version()} on {platform.machine()}")
     print(table(summary))
+    print("figures: " + ", ".join(str(f) for f in figures), file=sys.stderr)
     if args.json:
         Path(args.json).write_text(json.dumps({"summary": summary, "rows": all_rows}, default=float, indent=1))
     return 0
