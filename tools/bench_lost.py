@@ -1,0 +1,60 @@
+#!/usr/bin/env python3
+"""Time lost mode (matcher.localize_global) on simulated frames.
+
+Each frame is drawn as in tools/simulate.py (PEQ 1 poses; the prior is not
+used), then localised with no prior: one search per region of the map. The
+table gives per frame the seconds, the regions tried, the pose error and
+whether the answer is right (within 10 cm and 1 degree), then the median.
+
+    python tools/bench_lost.py                  # maps/flat.lmap, 8 frames, seed 7
+    python tools/bench_lost.py --frames 20 --first-accepted
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tools"))
+
+import matcher  # noqa: E402
+from simulate import make_frame, paper_camera, pose_error  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description="Time lost mode (localize_global) on simulated frames.")
+    ap.add_argument("--map", default=str(ROOT / "maps" / "flat.lmap"), help=".lmap map")
+    ap.add_argument("--frames", type=int, default=8, help="frames to localise")
+    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--first-accepted", action="store_true", help="stop at the first accepted region (the paper's loop)")
+    args = ap.parse_args(argv)
+    linemap = matcher.load_map(args.map)
+    camera = paper_camera(1.2, 0.0)
+    rng = np.random.default_rng([args.seed, 1])
+    print(f"map {args.map}: {linemap.n_segments} segments, {linemap.n_regions} regions; "
+          f"{'first accepted region' if args.first_accepted else 'every region'}")
+    print("| frame | s | regions tried | position err m | yaw err deg | right |")
+    print("|---|---|---|---|---|---|")
+    seconds, right = [], 0
+    for i in range(args.frames):
+        frame = make_frame(linemap, camera, rng, 1, 1.0, 1.0, clutter=3)
+        t0 = time.perf_counter()
+        res = matcher.localize_global(linemap, camera, frame.lines, first_accepted=args.first_accepted)
+        seconds.append(time.perf_counter() - t0)
+        err = pose_error(res.pose, frame.pose) if res else (float("nan"), float("nan"))
+        ok = bool(res) and err[0] < 0.1 and err[1] < 1.0
+        right += ok
+        print(f"| {i} | {seconds[-1]:.1f} | {res.time_ms.get('regions_tried')} | {err[0]:.3f} | {err[1]:.2f} | "
+              f"{'yes' if ok else 'no: ' + (res.reason or 'wrong pose')} |", flush=True)
+    print(f"median {np.median(seconds):.1f} s (min {min(seconds):.1f}, max {max(seconds):.1f}); right {right} of {args.frames}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
