@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -193,15 +194,12 @@ class Camera:
 
     def horizontal_half_fov(self) -> float:
         """Largest horizontal angle, radians, between the optical axis's heading and
-        the heading of any pixel's ray (used to drop segments out of view).
-        Computed once per camera (the camera is immutable)."""
-        cached = self.__dict__.get("_half_fov")
-        if cached is None:
-            cached = self._border_half_fov()
-            object.__setattr__(self, "_half_fov", cached)
-        return cached
+        the heading of any pixel's ray (used to drop segments out of view)."""
+        return self._half_fov
 
-    def _border_half_fov(self) -> float:
+    @cached_property
+    def _half_fov(self) -> float:
+        """:meth:`horizontal_half_fov`, computed once per camera (it is immutable)."""
         w, h = self.width, self.height
         t = np.linspace(0.0, 1.0, 129)
         border = np.concatenate([np.stack([np.zeros_like(t), t * h], 1), np.stack([np.full_like(t, w), t * h], 1)])

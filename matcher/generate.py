@@ -30,7 +30,7 @@ import numpy as np
 from matcher import posegrid
 from matcher.camera import Camera
 from matcher.camera import world2cam_rotation
-from matcher.constraints import binary_constraint, unary_constraint, wrap
+from matcher.constraints import binary_constraint, distinct_points, unary_constraint, wrap
 from matcher.occlusion import SightRays
 from matcher.tolerances import VERTICAL_AXIS_DEG, Tolerances
 from matcher.tree import TreeInput, search
@@ -120,13 +120,11 @@ def _vertical_sight(points, alpha, yaws, centre, dt, width, step, sight, extent)
     cut at ``extent[k]``, the farthest the edge can be for its image line to
     fit inside its projection (:func:`vertical_extent_bound`). The stretches
     come from the map's :class:`~matcher.occlusion.SightRays` table."""
-    # Edges shared by several correspondences are looked up once (distinct
-    # points found through a complex view: np.unique on rows is slow).
-    _, first, inv = np.unique(points[:, 0] + 1j * points[:, 1], return_index=True, return_inverse=True)
+    first, inv = distinct_points(points)  # edges shared by several correspondences: looked up once
     # For each correspondence and yaw: the bearing from camera to edge, and
     # how far the ray back from the edge runs.
     beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
-    lam = sight.reach_along(points[first], inv.reshape(-1, 1), beta + np.pi)
+    lam = sight.reach_along(points[first], inv[:, None], beta + np.pi)
     rel = points - centre  # (Kv, 2) edge from the disk centre
     dist = np.hypot(rel[:, 0], rel[:, 1])
     lam = np.minimum(np.minimum(lam, (dist + dt + 1.0)[:, None]), extent[:, None])  # (Kv, Y)

@@ -47,10 +47,6 @@ _CAMERA_JITTER = np.array([[0.0, 0.0], [0.15, 0.0], [-0.15, 0.0], [0.0, 0.15], [
 #: this far, metres, in any direction. Before that the best point may be far
 #: from the truth and the tests would prune true sets.
 _PINNED_M = 0.15
-#: The yaw is fixed too when the yaws at which the set is feasible span at
-#: most this many grid steps (the grid wraps for a lost robot, so a wide
-#: span is not pinned).
-_PINNED_YAW_STEPS = 4
 #: A set that leaves the position loose gets a test of its own
 #: (:func:`_edge_seen_from_region`) once the search has used this share of
 #: its node budget (200 nodes by default). It costs a few tenths of a
@@ -375,16 +371,14 @@ def _visible_best(inp: TreeInput, sets, inits, tol: Tolerances, cache):
 
 
 def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float):
-    """``(position_pinned, yaw_pinned, g, cam)`` for a set R: its best grid
-    yaw index ``g`` (None when no yaw is left) and camera position ``cam``
-    (2,) there. The position is pinned when the set's feasible points at
-    that yaw (every member's term <= ``q_max``) reach less than
-    _PINNED_M along the direction the strips fix least; the yaw when,
-    besides, the yaws at which the set is feasible span at most
-    _PINNED_YAW_STEPS grid steps."""
+    """``(pinned, g, cam)`` for a set R: its best grid yaw index ``g`` (None
+    when no yaw is left) and camera position ``cam`` (2,) there. The
+    position is pinned when the set's feasible points at that yaw (every
+    member's term <= ``q_max``) reach less than _PINNED_M along the
+    direction the strips fix least."""
     G = np.nonzero(mR)[0]
     if len(G) == 0:
-        return False, False, None, None
+        return False, None, None
     val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
     i = int(np.argmin(val))
     g = int(G[i])
@@ -392,12 +386,9 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
     cam = inp.centre[:2] + z
     e, lam, _ = posegrid.weak_axis(Qsum[g])
     if lam < 1.0 / _PINNED_M**2:  # cheap early out: even the summed strips leave it loose
-        return False, False, g, cam
+        return False, g, cam
     lo, hi = posegrid.stretch(inp.quad[R, g], z, e, q_max, inp.dt)
-    if hi - lo > _PINNED_M:
-        return False, False, g, cam
-    ok = G[val <= len(R) + 1.0]
-    return True, bool(ok.max() - ok.min() <= _PINNED_YAW_STEPS), g, cam
+    return hi - lo <= _PINNED_M, g, cam
 
 
 def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q_max: float,
@@ -409,7 +400,7 @@ def _visible_at_best(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndar
     below R can have; 0: off), a set that does not fix the position and has
     just taken a vertical edge is tested too, on its whole feasible region
     (:func:`_edge_seen_from_region`)."""
-    pinned, _, g, cam = _best_pose(inp, R, Qsum, mR, q_max)
+    pinned, g, cam = _best_pose(inp, R, Qsum, mR, q_max)
     if g is None:
         return False
     if not pinned:
