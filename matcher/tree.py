@@ -9,7 +9,9 @@ keeps the whole set feasible (:mod:`matcher.posegrid`, checked for all the
 line's candidates at once); a segment is matched once. A branch is cut when
 it cannot reach the minimum number of matches, which rises to the largest
 set found minus ``match_slack``. A leaf is reported if it is maximal (no
-skipped line could join).
+skipped line could join). The tree is searched first in passes that aim at
+the largest sets (every line matched, then one fewer, ...), so that the
+small sets a dive from the minimum would meet first are never enumerated.
 
 Once three members pin the position, the set's best grid pose must stand in
 the map's free space (near its regions), and every matched segment must be
@@ -58,6 +60,11 @@ _LOOSE_TEST_AFTER = 0.1
 #: feasible region at each yaw, and the most per axis.
 _REGION_STEP_M = 0.15
 _REGION_MAX = 16
+#: Share of the node budget the passes that aim at large sets may spend
+#: without finding one (see :func:`search`).
+_AIM_HIGH_SHARE = 0.05
+#: A sort key above every real one.
+_NEVER = np.iinfo(np.int64).max
 
 
 @dataclass
@@ -112,9 +119,10 @@ class TreeInput:
         return self.free.distance(xy) <= self.free_m
 
 
-def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
+def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool = True):
     """Maximal consistent sets (leaves tested for visibility as found if
-    ``eager``, else afterwards). Returns ``(sets, inits, truncated, nodes,
+    ``eager``, else afterwards; passes that aim at large sets first if
+    ``aim_high``, see below). Returns ``(sets, inits, truncated, nodes,
     found)``: sets as sorted index arrays, ``inits`` (x, y, yaw) their best
     grid pose; at most ``max_hypotheses`` of the ``found`` sets: the largest,
     then those that fit best."""
@@ -122,7 +130,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
     K, Y = mask.shape
     sets: list[np.ndarray] = []
     inits: list[tuple] = []
-    state = {"bound": tol.min_matches, "truncated": False, "nodes": 0}
+    state = {"bound": tol.min_matches, "truncated": False, "nodes": 0, "give_up_at": np.inf}
     cache: dict = {}
     weak = np.zeros(K, dtype=bool) if inp.vertical is None else inp.vertical
     degree = compat.sum(axis=1)
@@ -266,7 +274,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
         if state["truncated"]:
             return
         state["nodes"] += 1
-        if state["nodes"] > tol.max_nodes:
+        if state["nodes"] > tol.max_nodes or (state["nodes"] > state["give_up_at"] and not sets):
             state["truncated"] = True
             return
         # Look ahead: the open candidates of all lines still to decide, kept if
@@ -299,7 +307,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             return
         # Fail first: decide next the line with the fewest candidates left
         # (lines with a non-vertical candidate first among equals).
-        key = np.where(counts > 0, counts * 2 - strong_level, np.iinfo(np.int64).max)
+        key = np.where(counts > 0, counts * 2 - strong_level, _NEVER)
         level = int(np.argmin(key))
         here = level_of[ahead] == level
         c = ahead[here]
@@ -329,8 +337,38 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False):
             # The line left unmatched: R is unchanged, so is its filtered pool.
             rec(R, Qsum, mR, used, skipped + [level], rest, fit[~here])
 
-    rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
-        np.arange(K), None)
+    def run(target: int, allowance: float = np.inf) -> bool:
+        """One pass of the tree for the sets of at least ``target`` members;
+        False if it was given up, having met no set within ``allowance``
+        more nodes."""
+        state["bound"] = target
+        state["give_up_at"] = state["nodes"] + allowance
+        rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
+            np.arange(K), None)
+        given_up = state["truncated"] and not sets and state["nodes"] > state["give_up_at"]
+        if given_up:
+            state["truncated"] = False
+        return not given_up
+
+    # Aim high first: one pass per target size, from every line matched
+    # down, until a pass finds a set. A pass whose target is out of reach
+    # mostly dies near the root (the look-ahead counts cut it), while a
+    # single pass from the minimum enumerates every small set met before its
+    # first dive finds a large one. Where sets that leave the position loose
+    # abound (a row of door jambs), a target out of reach can cost many
+    # nodes: after _AIM_HIGH_SHARE of the budget the passes stop and one
+    # pass from the minimum raises its bound as it finds sets, as do the
+    # searches that keep more than the largest sets (a slack, or every leaf
+    # tested as found).
+    if aim_high and not eager and tol.match_slack == 0:
+        alone = np.arange(K) if inp.single_fit is None else np.nonzero(np.isfinite(inp.single_fit))[0]
+        target = len(np.unique(level_of[alone]))
+        while target > tol.min_matches and not sets and not state["truncated"]:
+            if not run(target, _AIM_HIGH_SHARE * tol.max_nodes - state["nodes"]):
+                break
+            target -= 1
+    if not sets and not state["truncated"]:
+        run(tol.min_matches)
     sets, inits = _drop_duplicates(sets, inits)
     state["found"] = len(sets)
     found_any = bool(sets)
