@@ -340,3 +340,37 @@ def test_aiming_at_large_sets_first_finds_the_same_sets_sooner(flat, monkeypatch
     assert [s.tolist() for s in aimed[0]] == [s.tolist() for s in single[0]]
     assert max(len(s) for s in aimed[0]) == len(fr.true_matches()) == 9
     assert aimed[3] * 3 < single[3]  # nodes: about 30 against 150
+
+
+@pytest.mark.parametrize("box_filter", [False, True])
+def test_sight_clear_against_shapely(flat, monkeypatch, box_filter):
+    """matcher.occlusion.sight_clear against shapely on the example map's
+    walls: sight lines from random cameras to random floor points and to
+    points on wall faces, trimmed by the end margin, cross no wall edge
+    exactly when the function says clear (with and without the edges'
+    bounding-box filter that large maps use)."""
+    from shapely.geometry import LineString, MultiLineString
+
+    import matcher.occlusion as occlusion
+
+    if box_filter:
+        monkeypatch.setattr(occlusion, "_BOX_FILTER_EDGES", 0)
+    walls = occlusion.wall_edges(flat)
+    outline = MultiLineString([[tuple(a), tuple(b)] for a, b in zip(*walls)])
+    rng = np.random.default_rng(3)
+    lo, hi = walls[0].min(axis=0), walls[0].max(axis=0)
+    margin = 0.05
+    n_blocked = 0
+    for _ in range(40):
+        cam = lo + rng.random(2) * (hi - lo)
+        pts = lo + rng.random((30, 2)) * (hi - lo)
+        on_wall = rng.integers(0, len(walls[0]), 15)
+        pts[:15] = walls[0][on_wall] + rng.random((15, 1)) * (walls[1][on_wall] - walls[0][on_wall])
+        got = occlusion.sight_clear(cam, pts, walls, margin)
+        for p, clear in zip(pts, got):
+            r = p - cam
+            u = r / np.linalg.norm(r)
+            blocked = LineString([tuple(cam + margin * u), tuple(p - margin * u)]).intersects(outline)
+            assert clear == (not blocked), (cam, p)
+            n_blocked += blocked
+    assert 100 < n_blocked < 1100  # both outcomes well represented
