@@ -494,11 +494,19 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
     iu, ju = iu[distinct], ju[distinct]
     p, g = np.nonzero(mask[iu] & mask[ju])
     qi, qj = quad[iu[p], g], quad[ju[p], g]
-    pval, zx, zy = posegrid.minimise(qi + qj, dt)
+    qs = qi + qj
+    pval, zx, zy = posegrid.minimise(qs, dt)
     ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
-    ell = posegrid.feasible_ellipse(qi + qj, pval, zx, zy, 2, tol.q_max, dt)
-    for k in (iu[p], ju[p]):
-        ok &= posegrid.ellipse_reaches(ell, front_c[k, g], front_b[k, g], dt)
+    # The half-planes, on the (pair, yaw) entries left and only for the
+    # correspondences that have one (most of these arrays' entries fail the
+    # value test).
+    has_plane = np.isfinite(front_b).any(axis=1)
+    e = np.nonzero(ok & (has_plane[iu[p]] | has_plane[ju[p]]))[0]
+    if len(e):
+        ell = posegrid.feasible_ellipse(qs[e], pval[e], zx[e], zy[e], 2, tol.q_max, dt)
+        ge = g[e]
+        for k in (iu[p[e]], ju[p[e]]):
+            ok[e] &= posegrid.ellipse_reaches(ell, front_c[k, ge], front_b[k, ge], dt)
     pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):
