@@ -71,7 +71,8 @@ _NEVER = np.iinfo(np.int64).max
 class TreeInput:
     """Per correspondence k: strip quadratics ``quad`` (K, Y, 6) and yaw masks
     ``mask`` (K, Y) on the grid ``yaws`` (Y,); ``compat`` (K, K) bool pairwise
-    compatibility; ``segments`` (K, 2, 3) the matched model segment (world);
+    compatibility (the tree relies on it: a pair in compat is taken as
+    feasible, as :func:`matcher.generate._pair_compat` tests it); ``segments`` (K, 2, 3) the matched model segment (world);
     ``centre`` (3,) the prior camera centre, ``dt`` the disk radius;
     ``forward`` (Y, 3) the optical axis at each grid yaw; ``walls`` a pair of
     (E, 2) arrays, the wall edges' end points, or None; ``vertical`` (K,)
@@ -290,8 +291,10 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
             if R and ahead.size:
                 ahead = ahead[compat[R[-1], ahead]]
             ahead = ahead[well_supported(len(R), ahead)]
-            fit = np.zeros(0)
-            if ahead.size:
+            fit = np.zeros(len(ahead))
+            if ahead.size and len(R) >= 2:
+                # (With one member, R + {u} feasible is the pairwise test of
+                # stage 1 that compat holds, and the fits order nothing yet.)
                 ok, fit = feasible_with(R, Qsum, mR, ahead, fit=True)
                 ahead, fit = ahead[ok], fit[ok]
         else:  # the bound may have risen since the parent filtered the pool
