@@ -111,29 +111,29 @@ def in_field_of_view(segments: np.ndarray, camera: Camera, prior, dt: float, dya
     return ok | (dist <= dt) | (reach >= math.pi)
 
 
-def _vertical_sight(points, alpha, yaws, centre, dt, width, step, sight, extent) -> np.ndarray:
-    """(Kv, Y) bool: for a vertical edge at floor point ``points[k]`` seen at
-    bearing ``alpha[k]`` (right of the axis) with heading ``yaws[g]``, the
-    camera lies on the ray back from the edge at world bearing ``yaw - alpha``,
-    up to the first wall that would hide the edge. True where that stretch
-    comes within ``dt + width[k, g]`` of the disk centre; the stretch is also
-    cut at ``extent[k]``, the farthest the edge can be for its image line to
+def _vertical_sight(points, rows, alpha, yaw, centre, dt, width, step, sight, extent) -> np.ndarray:
+    """(E,) bool per entry e: a vertical edge at floor point
+    ``points[rows[e]]`` (points (U, 2)) seen at bearing ``alpha[e]`` (right
+    of the axis) with heading ``yaw[e]``: the camera lies on the ray back
+    from the edge at world bearing ``yaw - alpha``, up to the first wall that
+    would hide the edge. True where that stretch comes within ``dt +
+    width[e]`` of the disk centre; the stretch is also cut at
+    ``extent[rows[e]]``, the farthest the edge can be for its image line to
     fit inside its projection (:func:`vertical_extent_bound`). The stretches
     come from the map's :class:`~matcher.occlusion.SightRays` table."""
     first, inv = distinct_points(points)  # edges shared by several correspondences: looked up once
-    # For each correspondence and yaw: the bearing from camera to edge, and
-    # how far the ray back from the edge runs.
-    beta = yaws[None, :] - alpha[:, None]  # (Kv, Y)
-    lam = sight.reach_along(points[first], inv[:, None], beta + np.pi)
-    rel = points - centre  # (Kv, 2) edge from the disk centre
+    # For each entry: the bearing from camera to edge, and how far the ray
+    # back from the edge runs.
+    beta = yaw - alpha  # (E,)
+    lam = sight.reach_along(points[first], inv[rows], beta + np.pi)
+    rel = points[rows] - centre  # (E, 2) edge from the disk centre
     dist = np.hypot(rel[:, 0], rel[:, 1])
-    lam = np.minimum(np.minimum(lam, (dist + dt + 1.0)[:, None]), extent[:, None])  # (Kv, Y)
-    # Distance from the disk centre to the stretch P - s u, s in [0, lam],
-    # on components (no (Kv, Y, 2) stacks).
+    lam = np.minimum(np.minimum(lam, dist + dt + 1.0), extent[rows])
+    # Distance from the disk centre to the stretch P - s u, s in [0, lam].
     ux, uy = np.cos(beta), np.sin(beta)
-    s_ = np.clip(rel[:, 0, None] * ux + rel[:, 1, None] * uy, 0.0, lam)
-    gap = np.hypot(rel[:, 0, None] - s_ * ux, rel[:, 1, None] - s_ * uy)
-    slack = width + dist[:, None] * (0.5 * step + sight.step)
+    s_ = np.clip(rel[:, 0] * ux + rel[:, 1] * uy, 0.0, lam)
+    gap = np.hypot(rel[:, 0] - s_ * ux, rel[:, 1] - s_ * uy)
+    slack = width + dist * (0.5 * step + sight.step)
     return gap <= dt + slack
 
 
@@ -345,7 +345,7 @@ def generate(
 
     if sight is None and walls is not None:
         sight = SightRays(walls)
-    mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W[line_k], Rg, yaws, ce, dt, step,
+    mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce, dt, step,
                          tol, sight)
     val, zx, zy = posegrid.minimise(quad, dt)
     mask &= val <= 2.0
@@ -389,17 +389,21 @@ def generate(
                       truncated, counts)
 
 
-def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, Rg, yaws, ce, dt, step, tol, sight):
+def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce, dt, step, tol, sight):
     """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of correspondences
-    ``(seg_k, line_k)`` (K,); ``Wk`` (K, Y, 3) their lines' world normals at
-    each grid yaw, ``Rg`` (Y, 3, 3) the world-to-camera rotations at the grid
-    yaws ``yaws`` (Y,), ``v`` (N, 3) unit directions, ``near`` (N, 3) points of
-    the segments' lines nearest the prior centre ``ce`` (the camera
-    centre of the prior: ``ce[2]`` is the camera height)."""
+    ``(seg_k, line_k)`` (K,); ``W`` (M, Y, 3) the image lines' world normals
+    at each grid yaw, ``Rg`` (Y, 3, 3) the world-to-camera rotations at the
+    grid yaws ``yaws`` (Y,), ``v`` (N, 3) unit directions, ``near`` (N, 3)
+    points of the segments' lines nearest the prior centre ``ce`` (the
+    camera centre of the prior: ``ce[2]`` is the camera height). Strips are
+    computed only where the yaw mask holds (zeros elsewhere): a third of
+    the entries or fewer."""
+    K, Y = len(seg_k), len(yaws)
     # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
-    mask = np.empty((len(seg_k), len(yaws)), dtype=bool)
-    dir_res = np.abs(np.einsum("kgi,ki->kg", Wk, v[seg_k]))
-    mask[~is_v] = (dir_res <= img.eps[line_k][:, None] + 0.5 * step)[~is_v]
+    mask = np.empty((K, Y), dtype=bool)
+    ih = np.nonzero(~is_v)[0]
+    dir_res = np.abs(np.einsum("kgi,ki->kg", W[line_k[ih]], v[seg_k[ih]]))
+    mask[ih] = dir_res <= img.eps[line_k[ih]][:, None] + 0.5 * step
     if is_v.any():
         pv = near[seg_k[is_v], :2] - ce[:2]
         dist = np.linalg.norm(pv, axis=1)
@@ -407,6 +411,10 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, Rg, yaws, c
         half = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1))
         half = np.where(dist <= dt, np.pi, half) + img.alpha_eps[line_k[is_v]] + 0.5 * step
         mask[is_v] = np.abs(wrap(yaws[None, :] - img.alpha[line_k[is_v]][:, None] - beta[:, None])) <= half[:, None]
+    # The entries (correspondence k, grid yaw g) left.
+    k, g = np.nonzero(mask)
+    lk, sk = line_k[k], seg_k[k]
+    Wk = W[lk, g]  # (E, 3)
     # Position strips (relative to the disk centre). The point of each model
     # line used is the one nearest the ray of the image line's midpoint (from
     # the disk centre, at each grid yaw). The line's orientation noise turns
@@ -414,38 +422,41 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, Wk, Rg, yaws, c
     # that point moves by the turn times the lever arm: how far the true ray
     # can pass from the point (the camera's offset in the disk, the yaw step,
     # the offset noise), not the distance to the whole segment.
-    U = np.einsum("gki,mk->mgi", Rg, img.mid_rays)[line_k]  # (K, Y, 3) world direction of the midpoint ray
-    P0, vk = segments[seg_k, 0], v[seg_k]
-    w0 = ce - P0  # (K, 3)
-    b_ = np.einsum("kgi,ki->kg", U, vk)
-    d_ = np.einsum("kgi,ki->kg", U, w0)
-    e_ = np.einsum("ki,ki->k", vk, w0)[:, None]
+    U = np.einsum("eki,ek->ei", Rg[g], img.mid_rays[lk])  # (E, 3) world direction of the midpoint ray
+    P0, vk = segments[sk, 0], v[sk]
+    w0 = ce - P0  # (E, 3)
+    b_ = np.einsum("ei,ei->e", U, vk)
+    d_ = np.einsum("ei,ei->e", U, w0)
+    e_ = np.einsum("ei,ei->e", vk, w0)
     den = np.maximum(1.0 - b_ * b_, 1e-9)
     sp = np.where(1.0 - b_ * b_ > 1e-9, (e_ - b_ * d_) / den, e_)
     # On the segment itself: a true line's midpoint ray meets the segment,
     # and a segment running along the ray would otherwise put the point at
     # infinity and its lever arm with it.
-    seg_len = np.linalg.norm(segments[seg_k, 1] - P0, axis=1)[:, None]
+    seg_len = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)[sk]
     sp = np.clip(sp, 0.0, seg_len)
-    Pstar = P0[:, None, :] + sp[..., None] * vk[:, None, :]  # (K, Y, 3)
-    rel = Pstar - ce  # (K, Y, 3) from the disk centre (camera height)
-    D = np.sqrt(np.einsum("kgi,kgi->kg", rel, rel)) + dt
-    a = Wk[..., :2]
-    a_len = np.hypot(Wk[..., 0], Wk[..., 1])
+    rel = P0 + sp[:, None] * vk - ce  # (E, 3) the point P* from the disk centre (camera height)
+    D = np.sqrt(np.einsum("ei,ei->e", rel, rel)) + dt
+    a_len = np.hypot(Wk[:, 0], Wk[:, 1])
     # a . c = d for camera positions c (relative to ce) with the plane
     # through the camera containing P*: W . (P* - C) = 0.
-    d = np.einsum("kgi,kgi->kg", Wk, rel)
-    e_rot = img.eps_rot[line_k][:, None]
-    e_off = img.eps_off[line_k][:, None]
+    d = np.einsum("ei,ei->e", Wk, rel)
+    e_rot, e_off = img.eps_rot[lk], img.eps_off[lk]
     # Between grid yaws the residual moves at d r / d yaw = (-w_y, w_x) . (P - C).
-    dr_dyaw = np.abs(Wk[..., 0] * rel[..., 1] - Wk[..., 1] * rel[..., 0]) + a_len * dt
+    dr_dyaw = np.abs(Wk[:, 0] * rel[:, 1] - Wk[:, 1] * rel[:, 0]) + a_len * dt
     t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
-    quad = posegrid.strip_quadratics(a, d, t)  # (K, Y, 6)
+    quad = np.zeros((K, Y, 6))
+    quad[k, g] = posegrid.strip_quadratics(Wk[:, :2], d, t)
     if is_v.any() and sight is not None:
-        ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
-        width = (t / np.maximum(a_len, 1e-9))[is_v]
-        mask[is_v] &= _vertical_sight(near[seg_k[is_v], :2], img.alpha[line_k[is_v]], yaws, ce[:2], dt, width,
-                                      step, sight, ext)
+        iv = np.nonzero(is_v)[0]
+        ext = np.zeros(K)
+        ext[iv] = vertical_extent_bound(camera, img.lines[line_k[iv]], segments[seg_k[iv]], tol)
+        ev = np.nonzero(is_v[k])[0]
+        # Rows into the vertical correspondences' edges (their floor points).
+        row = np.cumsum(is_v) - 1
+        seen = _vertical_sight(near[seg_k[iv], :2], row[k[ev]], img.alpha[lk[ev]], yaws[g[ev]], ce[:2], dt,
+                               t[ev] / np.maximum(a_len[ev], 1e-9), step, sight, ext[iv])
+        mask[k[ev[~seen]], g[ev[~seen]]] = False
     return mask, quad
 
 
