@@ -72,25 +72,25 @@ class TreeInput:
     """Per correspondence k: strip quadratics ``quad`` (K, Y, 6) and yaw masks
     ``mask`` (K, Y) on the grid ``yaws`` (Y,); ``compat`` (K, K) bool pairwise
     compatibility (the tree relies on it: a pair in compat is taken as
-    feasible, as :func:`matcher.generate._pair_compat` tests it); ``segments`` (K, 2, 3) the matched model segment (world);
-    ``centre`` (3,) the prior camera centre, ``dt`` the disk radius;
-    ``forward`` (Y, 3) the optical axis at each grid yaw; ``walls`` a pair of
-    (E, 2) arrays, the wall edges' end points, or None; ``vertical`` (K,)
-    bool, correspondences of vertical segments (explored last: each fixes
-    only a bearing, so they are compatible with much and prune little);
-    ``samples`` (K, n, 3) points of the matched model segments tested for
-    visibility (by default 5 along ``segments``); ``line`` and ``seg`` (K,)
-    the image line and model segment (group) of each correspondence;
-    ``free`` the map's :class:`~matcher.freespace.FreeSpace` (or None) and
-    ``free_m`` how far outside it the camera may stand; ``front_c`` (K, Y, 2)
-    and ``front_b`` (K, Y) half-planes ``c . z <= b`` on the camera position
-    relative to the centre that keep a vertical edge ahead of the camera
-    (c = 0, b = inf for the others), or None; ``single_fit`` (K,) each
-    correspondence's best value alone (the root's look-ahead: the summed
+    feasible, as :func:`matcher.generate._pair_compat` tests it); ``segments``
+    (K, 2, 3) the matched model segment (world); ``centre`` (3,) the prior
+    camera centre, ``dt`` the disk radius; ``forward`` (Y, 3) the optical axis
+    at each grid yaw; ``walls`` a pair of (E, 2) arrays, the wall edges' end
+    points, or None; ``vertical`` (K,) bool, correspondences of vertical
+    segments (explored last: each fixes only a bearing, so they are compatible
+    with much and prune little); ``samples`` (K, n, 3) points of the matched
+    model segments tested for visibility (by default 5 along ``segments``);
+    ``line`` and ``seg`` (K,) the image line and model segment (group) of each
+    correspondence; ``free`` the map's :class:`~matcher.freespace.FreeSpace`
+    (or None) and ``free_m`` how far outside it the camera may stand;
+    ``front_c`` (K, Y, 2) and ``front_b`` (K, Y) half-planes ``c . z <= b`` on
+    the camera position relative to the centre that keep a vertical edge ahead
+    of the camera (c = 0, b = inf for the others), or None; ``single_fit`` (K,)
+    each correspondence's best value alone (the root's look-ahead: the summed
     quadratic's minimum over the yaws where it passes every test of the
-    look-ahead, inf where none), or None to compute it at the root;
-    ``sight`` the walls' :class:`~matcher.occlusion.SightRays` (how far one
-    sees from a vertical edge, per bearing), or None to cast sight lines."""
+    look-ahead, inf where none), or None to compute it at the root; ``sight``
+    the walls' :class:`~matcher.occlusion.SightRays` (how far one sees from a
+    vertical edge, per bearing), or None to cast sight lines."""
 
     quad: np.ndarray
     mask: np.ndarray
