@@ -448,14 +448,12 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce
     quad = np.zeros((K, Y, 6))
     quad[k, g] = posegrid.strip_quadratics(Wk[:, :2], d, t)
     if is_v.any() and sight is not None:
-        iv = np.nonzero(is_v)[0]
-        ext = np.zeros(K)
-        ext[iv] = vertical_extent_bound(camera, img.lines[line_k[iv]], segments[seg_k[iv]], tol)
+        ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
         ev = np.nonzero(is_v[k])[0]
-        # Rows into the vertical correspondences' edges (their floor points).
+        # Rows into the vertical correspondences (their edges' floor points).
         row = np.cumsum(is_v) - 1
-        seen = _vertical_sight(near[seg_k[iv], :2], row[k[ev]], img.alpha[lk[ev]], yaws[g[ev]], ce[:2], dt,
-                               t[ev] / np.maximum(a_len[ev], 1e-9), step, sight, ext[iv])
+        seen = _vertical_sight(near[seg_k[is_v], :2], row[k[ev]], img.alpha[lk[ev]], yaws[g[ev]], ce[:2], dt,
+                               t[ev] / np.maximum(a_len[ev], 1e-9), step, sight, ext)
         mask[k[ev[~seen]], g[ev[~seen]]] = False
     return mask, quad
 
