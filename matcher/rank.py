@@ -212,7 +212,7 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     ``(hyp, line, local)`` (A,) of the pairs to add; matches are given as
     ``hyp, local, line_ids`` (T,)."""
     usable = np.nonzero(img.usable)[0]
-    U, N = len(usable), len(segs)
+    N = len(segs)
     ph, pl, ps = [], [], []
     for h in hyps:
         sel = hyp == h
@@ -225,10 +225,10 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
         pl.append(np.repeat(fl, len(fs)))
         ps.append(np.tile(fs, len(fl)))
     empty = np.zeros(0, dtype=np.int64)
-    if not U or not ph:
+    if not ph:
         return empty, empty, empty
     ph, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
-    if not len(ph):
+    if not len(ph):  # no usable line or segment left free
         return empty, empty, empty
     ok, dist = fits_and_distance(camera, img, poses[ph], segs[si], li, tol)
     if ok.any():
