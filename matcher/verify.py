@@ -32,55 +32,78 @@ _PLAIN_FIRST = 2
 #: Gauss-Newton stops early once no hypothesis moves more than this (metres
 #: and radians) in one step: a micrometre, far below the pose's noise.
 _CONVERGED = 1e-6
+_DIAG = np.arange(3)
 
 
-def _cross(a, b):
-    """Cross product of vectors given as 3-tuples of (T,) arrays."""
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+class MatchTerms:
+    """Per match, the constants of its residuals, so that a Gauss-Newton
+    iteration is a handful of operations on (T,) and (T, 2) arrays.
+
+    In the world frame the normal of the plane through the camera centre
+    ``C = (x, y, h)`` and a model segment ``A B`` is
+
+        m(C) = (A - C) x (B - C) = A x B + d x C,   d = B - A,
+
+    affine in (x, y). With horizontal parts as complex numbers (``P = x + iy``,
+    ``D = d_x + i d_y``) that is ``m_h = m0_h + i d_z P`` and ``m_z = m0_z +
+    Im(conj(D) P)``. An image end point's ray, taken to the world frame
+    (``R^T ray``), has horizontal part ``w_h e^{i yaw}`` and vertical part
+    ``w_z``, both fixed by the pitch. The residual of an end point is the sine
+    of the angle between its ray and the plane: ``m . u / |m|``, the same
+    number in the camera frame (R is a rotation)."""
+
+    def __init__(self, seg_a, seg_b, ray_a, ray_b, pitch: float, height: float) -> None:
+        """``seg_a, seg_b`` (T, 3) world end points; ``ray_a, ray_b`` (T, 3)
+        unit camera-frame rays of the image line's end points."""
+        seg_a, seg_b = np.asarray(seg_a, dtype=float), np.asarray(seg_b, dtype=float)
+        d = seg_b - seg_a
+        (ax, ay, az), (bx, by, bz) = seg_a.T, seg_b.T
+        # A x B + d x (0, 0, h), written out (np.cross costs more on short arrays).
+        self.m0_h = (ay * bz - az * by + d[:, 1] * height) + 1j * (az * bx - ax * bz - d[:, 0] * height)  # (T,)
+        self.m0_z = ax * by - ay * bx
+        self.D = d[:, 0] + 1j * d[:, 1]
+        self.dz = d[:, 2]
+        self.idz = 1j * d[:, 2]
+        rays = np.empty((len(d), 2, 3))
+        rays[:, 0], rays[:, 1] = ray_a, ray_b
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        # R^T ray with R's rows r, d, f of method.md section 2: horizontal
+        # part (ahead - i * right) e^{i yaw}, ahead = f_z-free part of the ray.
+        self.w_h = (rays[..., 2] * cp - rays[..., 1] * sp) - 1j * rays[..., 0]  # (T, 2)
+        self.w_z = -rays[..., 1] * cp - rays[..., 2] * sp  # (T, 2)
 
 
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+def residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
+    """(T, 2) image-side residuals (and with ``jacobian`` their derivatives
+    (T, 2, 3) in (x, y, yaw)) of matches t at poses ``params`` (H, 3); ``hyp``
+    (T,) the pose of each match, the rest as for :class:`MatchTerms`."""
+    return _residuals(params, hyp, MatchTerms(seg_a, seg_b, ray_a, ray_b, pitch, height), jacobian)
 
 
-def _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
-    """(T, 2) image-side residuals, and with ``jacobian`` their derivatives
-    (T, 2, 3) in (x, y, yaw); params (H, 3), hyp (T,) hypothesis of each match.
+def _residuals(params, hyp, terms: MatchTerms, jacobian=False):
+    """:func:`residuals` on precomputed :class:`MatchTerms`.
 
-    Written on components (3-tuples of (T,) arrays): the arrays are short and
-    numpy's per-call cost dominates, so no (T, 3, 3) rotations or stacks."""
+    The derivatives, with ``N = m . u`` and ``n = |m|``: ``dr = (dN - r (m .
+    dm) / n) / n``. In x and y (as ``d/dx + i d/dy``): ``dN = i (D w_z - d_z
+    U)`` with ``U = w_h e^{i yaw}``, and ``m . dm = i (D m_z - d_z m_h)``; in
+    yaw m is fixed and ``dN = -Im(conj(m_h) U)``."""
     p = params[hyp]
-    c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    ax, ay, az = seg_a[:, 0] - p[:, 0], seg_a[:, 1] - p[:, 1], seg_a[:, 2] - height
-    bx, by, bz = seg_b[:, 0] - p[:, 0], seg_b[:, 1] - p[:, 1], seg_b[:, 2] - height
-    # R (P - C) with rows r, d, f of method.md section 2.
-    ha, hb = c * ax + s * ay, c * bx + s * by
-    qa = (s * ax - c * ay, -sp * ha - cp * az, cp * ha - sp * az)
-    qb = (s * bx - c * by, -sp * hb - cp * bz, cp * hb - sp * bz)
-    m = _cross(qa, qb)
-    nm = np.sqrt(_dot(m, m))
-    mh = (m[0] / nm, m[1] / nm, m[2] / nm)
-    ra = (ray_a[:, 0], ray_a[:, 1], ray_a[:, 2])
-    rb = (ray_b[:, 0], ray_b[:, 1], ray_b[:, 2])
-    r = np.stack([_dot(mh, ra), _dot(mh, rb)], axis=1)
+    P = p[:, 0] + 1j * p[:, 1]
+    m_h = terms.m0_h + terms.idz * P
+    m_z = terms.m0_z + (terms.D.conjugate() * P).imag
+    n = np.sqrt(m_h.real**2 + m_h.imag**2 + m_z**2)
+    U = terms.w_h * np.exp(1j * p[:, 2])[:, None]  # (T, 2)
+    cm = m_h.conjugate()[:, None] * U
+    r = (cm.real + m_z[:, None] * terms.w_z) / n[:, None]
     if not jacobian:
         return r
-    # d q / d x = -R e_x, d q / d y = -R e_y for both end points, so
-    # d (qa x qb) = e x (qa - qb) with e = R e_x (or R e_y); d q / d yaw = R' (P - C).
-    dq = (qa[0] - qb[0], qa[1] - qb[1], qa[2] - qb[2])
-    ex = (s, -sp * c, cp * c)
-    ey = (-c, -sp * s, cp * s)
-    ga, gb = -s * ax + c * ay, -s * bx + c * by  # d/dyaw of ha, hb
-    dqa = (ha, -sp * ga, cp * ga)
-    dqb = (hb, -sp * gb, cp * gb)
-    dyaw = tuple(u + v for u, v in zip(_cross(dqa, qb), _cross(qa, dqb)))
+    dN = 1j * (terms.D[:, None] * terms.w_z - terms.dz[:, None] * U)  # (T, 2): d/dx + i d/dy
+    mdm = 1j * (terms.D * m_z - terms.dz * m_h)  # (T,)
     J = np.empty(r.shape + (3,))
-    for k, dm in enumerate((_cross(ex, dq), _cross(ey, dq), dyaw)):
-        t = _dot(mh, dm)
-        dmh = ((dm[0] - mh[0] * t) / nm, (dm[1] - mh[1] * t) / nm, (dm[2] - mh[2] * t) / nm)
-        J[:, 0, k] = _dot(dmh, ra)
-        J[:, 1, k] = _dot(dmh, rb)
+    J[..., 0] = dN.real - r * (mdm.real / n)[:, None]
+    J[..., 1] = dN.imag - r * (mdm.imag / n)[:, None]
+    J[..., 2] = -cm.imag
+    J /= n[:, None, None]
     return r, J
 
 
@@ -95,22 +118,24 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
     the pose of the others away. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
+    terms = MatchTerms(seg_a, seg_b, ray_a, ray_b, pitch, height)
+    # Sums over each hypothesis's matches as one product: (H, 2T) one-hot of
+    # each residual's hypothesis (np.add.at costs more on these short arrays).
+    onehot = (np.repeat(hyp, 2)[None, :] == np.arange(H)[:, None]).astype(float)
     for it in range(iterations):
-        r0, J = _residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=True)
+        r0, J = _residuals(params, hyp, terms, jacobian=True)
         if robust_scale is None or it < _PLAIN_FIRST:
-            w = np.ones_like(r0)
+            Jw = J
         else:  # Tukey's biweight: residuals beyond twice the scale get no say
             u = np.clip(np.abs(r0) / (2.0 * robust_scale[:, None]), 0.0, 1.0)
-            w = (1.0 - u * u) ** 2 + 1e-6
-        JtJ = np.einsum("tsi,ts,tsj->tij", J, w, J)
-        Jtr = np.einsum("tsi,ts,ts->ti", J, w, r0)
-        A = np.zeros((H, 3, 3))
-        b = np.zeros((H, 3))
-        np.add.at(A, hyp, JtJ)
-        np.add.at(b, hyp, Jtr)
+            Jw = J * ((1.0 - u * u) ** 2 + 1e-6)[..., None]
+        Jw, J = Jw.reshape(-1, 3), J.reshape(-1, 3)
+        A = (onehot @ (Jw[:, :, None] * J[:, None, :]).reshape(-1, 9)).reshape(H, 3, 3)
+        b = onehot @ (Jw * r0.reshape(-1, 1))
         # Small Levenberg damping keeps degenerate hypotheses (all lines
         # parallel) from jumping away; it is negligible for a well-posed set.
-        A += np.eye(3)[None] * (1e-9 + 1e-6 * np.trace(A, axis1=1, axis2=2))[:, None, None]
+        diag = A[:, _DIAG, _DIAG]
+        A[:, _DIAG, _DIAG] = diag + (1e-9 + 1e-6 * diag.sum(axis=1))[:, None]
         step = np.linalg.solve(A, b[..., None])[..., 0]
         params -= step
         if np.abs(step).max() < _CONVERGED and (robust_scale is None or it >= _PLAIN_FIRST):

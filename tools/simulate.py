@@ -260,7 +260,7 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
         p = np.array(start, dtype=float)
         scale = np.array([dt, dt, dyaw])
         for _ in range(4):
-            r, J = verify._residuals(p[None], np.zeros(len(si), dtype=np.int64), segs[si, 0], segs[si, 1],
+            r, J = verify.residuals(p[None], np.zeros(len(si), dtype=np.int64), segs[si, 0], segs[si, 1],
                                      rays[lj, 0], rays[lj, 1], camera.pitch, camera.height_m, jacobian=True)
             r, J = r.reshape(-1), J.reshape(-1, 3)
             dp = p - np.array([xe, ye, yaw_e])
@@ -270,7 +270,7 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
             A = J.T @ J + Jp.T @ Jp
             b = J.T @ r + Jp.T @ rp
             p -= np.linalg.solve(A, b)
-        r = verify._residuals(p[None], np.zeros(len(si), dtype=np.int64), segs[si, 0], segs[si, 1], rays[lj, 0],
+        r = verify.residuals(p[None], np.zeros(len(si), dtype=np.int64), segs[si, 0], segs[si, 1], rays[lj, 0],
                               rays[lj, 1], camera.pitch, camera.height_m)
         ok = np.abs(r).max() <= tol
         ok &= math.hypot(p[0] - xe, p[1] - ye) <= dt + 0.05
