@@ -7,32 +7,45 @@ and to add the image lines of visible segments that stage 1 left unmatched.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from matcher.camera import Camera
-from matcher.camera import world2cam_rotation
 
 #: Segments are cut this far in front of the optical centre before projecting, metres.
 _NEAR_M = 0.05
 
 
 def project_segments(camera: Camera, poses: np.ndarray, segments: np.ndarray):
-    """Project segments (T, 2, 3) at poses (T, 3) ``(x, y, yaw)``.
+    """Project segments (T, 2, 3) at poses (T, 3) ``(x, y, yaw)`` (or one pose
+    per leading index of any shape: poses (..., 3), segments (..., 2, 3)).
 
-    Returns ``(uv (T, 2, 2) pixels, ok (T,))``: the part in front of the
-    camera (``Zc >= 5 cm``); ``ok`` False where nothing is in front."""
-    R = world2cam_rotation(poses[:, 2], camera.pitch)
-    C = np.stack([poses[:, 0], poses[:, 1], np.full(len(poses), camera.height_m)], axis=1)
-    pc = np.einsum("tij,tej->tei", R, segments - C[:, None, :])  # (T, 2, 3)
-    za, zb = pc[:, 0, 2], pc[:, 1, 2]
+    Returns ``(uv (..., 2, 2) pixels, ok (...))``: the part in front of the
+    camera (``Zc >= 5 cm``); ``ok`` False where nothing is in front.
+
+    The camera coordinates are written out from the rotation's rows r, d, f
+    of method.md section 2 (no (T, 3, 3) matrices: these arrays are short and
+    numpy's per-call cost dominates)."""
+    c, s = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
+    cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
+    dx = segments[..., 0] - poses[..., None, 0]  # (..., 2)
+    dy = segments[..., 1] - poses[..., None, 1]
+    dz = segments[..., 2] - camera.height_m
+    ahead = c * dx + s * dy
+    X, Y, Z = s * dx - c * dy, -sp * ahead - cp * dz, cp * ahead - sp * dz
+    za, zb = Z[..., 0], Z[..., 1]
     ok = np.maximum(za, zb) >= _NEAR_M
+    # An end point behind the near plane moves along the segment onto it.
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.clip((_NEAR_M - za) / (zb - za), 0.0, 1.0)
-    a = np.where((za < _NEAR_M)[:, None], pc[:, 0] + t[:, None] * (pc[:, 1] - pc[:, 0]), pc[:, 0])
-    b = np.where((zb < _NEAR_M)[:, None], pc[:, 1] + t[:, None] * (pc[:, 0] - pc[:, 1]), pc[:, 1])
-    pts = np.stack([a, b], axis=1)
-    z = np.maximum(pts[..., 2], _NEAR_M)
-    uv = np.stack([camera.fx * pts[..., 0] / z + camera.cx, camera.fy * pts[..., 1] / z + camera.cy], axis=-1)
+        t = np.clip((_NEAR_M - Z) / (Z[..., ::-1] - Z), 0.0, 1.0)  # (..., 2): each end's move towards the other
+    cut = Z < _NEAR_M
+    X = np.where(cut, X + t * (X[..., ::-1] - X), X)
+    Y = np.where(cut, Y + t * (Y[..., ::-1] - Y), Y)
+    Z = np.maximum(np.where(cut, Z + t * (Z[..., ::-1] - Z), Z), _NEAR_M)
+    uv = np.empty(X.shape + (2,))
+    uv[..., 0] = camera.fx * X / Z + camera.cx
+    uv[..., 1] = camera.fy * Y / Z + camera.cy
     return uv, ok
 
 
@@ -42,18 +55,24 @@ def distance_and_overlap(camera: Camera, poses: np.ndarray, segments: np.ndarray
     end points to the projected segment's line, and the length along the
     image line shared with the projected segment (negative: a gap)."""
     uv, ok = project_segments(camera, poses, segments)
+    return projected_distance_and_overlap(uv, ok, lines)
+
+
+def projected_distance_and_overlap(uv: np.ndarray, ok: np.ndarray, lines: np.ndarray):
+    """:func:`distance_and_overlap` for segments already projected
+    (:func:`project_segments`' ``uv`` (T, 2, 2) and ``ok`` (T,))."""
     p, q = uv[:, 0], uv[:, 1]
     dq = q - p
-    lq = np.linalg.norm(dq, axis=1)
-    nrm = np.stack([-dq[:, 1], dq[:, 0]], axis=1) / np.maximum(lq, 1e-9)[:, None]
-    dist = np.abs(np.einsum("tei,ti->te", lines - p[:, None, :], nrm)).max(axis=1)
-    a, b = lines[:, 0], lines[:, 1]
-    dl = b - a
-    L = np.linalg.norm(dl, axis=1)
-    u = dl / np.maximum(L, 1e-9)[:, None]
-    s0, s1 = np.einsum("ti,ti->t", p - a, u), np.einsum("ti,ti->t", q - a, u)
-    lo, hi = np.minimum(s0, s1), np.maximum(s0, s1)
-    overlap = np.minimum(hi, L) - np.maximum(lo, 0.0)
+    lq = np.hypot(dq[:, 0], dq[:, 1])
+    nx, ny = -dq[:, 1] / np.maximum(lq, 1e-9), dq[:, 0] / np.maximum(lq, 1e-9)
+    rel = lines - p[:, None, :]  # (T, 2, 2)
+    dist = np.abs(rel[..., 0] * nx[:, None] + rel[..., 1] * ny[:, None]).max(axis=1)
+    dl = lines[:, 1] - lines[:, 0]
+    L = np.hypot(dl[:, 0], dl[:, 1])
+    ux, uy = dl[:, 0] / np.maximum(L, 1e-9), dl[:, 1] / np.maximum(L, 1e-9)
+    # Positions of the projected end points along the image line, from its first end.
+    along = (uv[..., 0] - lines[:, None, 0, 0]) * ux[:, None] + (uv[..., 1] - lines[:, None, 0, 1]) * uy[:, None]
+    overlap = np.minimum(along.max(axis=1), L) - np.maximum(along.min(axis=1), 0.0)
     dist = np.where(ok & (lq > 1e-6), dist, np.inf)
     overlap = np.where(ok, overlap, -np.inf)
     return dist, overlap

@@ -27,7 +27,7 @@ import numpy as np
 from matcher import verify
 from matcher.constraints import wrap
 from matcher.occlusion import sight_clear
-from matcher.overlap import distance_and_overlap
+from matcher.overlap import distance_and_overlap, project_segments, projected_distance_and_overlap
 
 #: Stage 2's visibility test ignores wall crossings this close to the
 #: segment, metres (the segment lies on a wall face; the pose is refined):
@@ -177,9 +177,15 @@ def fits(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
 def fits_and_distance(camera, img, poses, segments, line_ids, tol):
     """:func:`fits` (T,) and the lines' distances (T,), pixels, to the
     projected segments."""
+    return _fits_projected(img, *project_segments(camera, poses, segments), line_ids, tol)
+
+
+def _fits_projected(img, uv, in_front, line_ids, tol):
+    """:func:`fits_and_distance` on segments already projected
+    (:func:`~matcher.overlap.project_segments`)."""
     lines = img.lines[line_ids]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
-    dist, ov = distance_and_overlap(camera, poses, segments, lines)
+    dist, ov = projected_distance_and_overlap(uv, in_front, lines)
     return (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0), dist
 
 
@@ -213,24 +219,28 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     ``hyp, local, line_ids`` (T,)."""
     usable = np.nonzero(img.usable)[0]
     N = len(segs)
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(hyps) or not len(usable):
+        return empty, empty, empty
+    # Every candidate segment projected once per hypothesis (C, N, 2, 2),
+    # then each (hypothesis, free line, free segment) pair looks it up.
+    uv, in_front = project_segments(camera, poses[hyps][:, None, :], np.broadcast_to(segs, (len(hyps),) + segs.shape))
     ph, pl, ps = [], [], []
-    for h in hyps:
+    for c, h in enumerate(hyps.tolist()):
         sel = hyp == h
         lines_free = np.ones(len(img.usable), dtype=bool)
         lines_free[line_ids[sel]] = False
         segs_free = np.ones(N, dtype=bool)
         segs_free[local[sel]] = False
-        fl, fs = usable[lines_free[usable]], np.nonzero(segs_free)[0]
-        ph.append(np.full(len(fl) * len(fs), h))
+        fl, fs = usable[lines_free[usable]], segs_free.nonzero()[0]
+        ph.append(np.full(len(fl) * len(fs), c))
         pl.append(np.repeat(fl, len(fs)))
         ps.append(np.tile(fs, len(fl)))
-    empty = np.zeros(0, dtype=np.int64)
-    if not ph:
+    pc, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
+    if not len(pc):  # no usable line or segment left free
         return empty, empty, empty
-    ph, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
-    if not len(ph):  # no usable line or segment left free
-        return empty, empty, empty
-    ok, dist = fits_and_distance(camera, img, poses[ph], segs[si], li, tol)
+    ph = hyps[pc]
+    ok, dist = _fits_projected(img, uv[pc, si], in_front[pc, si], li, tol)
     if ok.any():
         sel = np.nonzero(ok)[0]
         ok[sel] = visible(poses[ph[sel]], segs[si[sel]], walls)

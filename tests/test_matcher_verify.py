@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from matcher import verify
-from matcher.camera import world2cam_rotation
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+
+from matcher import verify  # noqa: E402
+from matcher.camera import world2cam_rotation  # noqa: E402
+from matcher.overlap import _NEAR_M, project_segments  # noqa: E402
+from simulate import paper_camera  # noqa: E402
 
 PITCH, HEIGHT = math.radians(12.0), 1.2
 
@@ -74,3 +80,18 @@ def test_refine_recovers_each_pose_from_exact_rays():
     got = verify.refine(start, np.array(hyp), np.array(seg_a), np.array(seg_b), np.array(ray_a), np.array(ray_b),
                         PITCH, HEIGHT)
     assert got == pytest.approx(truth, abs=1e-7)
+
+
+def test_projection_cuts_either_end_behind_the_camera_at_the_near_plane():
+    """A floor segment running from behind the camera to 4 m ahead projects
+    the same whichever end comes first; the cut end lands on the near plane."""
+    cam = paper_camera(1.2, 0.0)
+    pose = np.array([[0.0, 0.0, 0.0]])
+    seg = np.array([[[-2.0, 0.3, 0.0], [4.0, 0.3, 0.0]]])
+    uv, ok = project_segments(cam, pose, seg)
+    uv_r, ok_r = project_segments(cam, pose, seg[:, ::-1])
+    assert ok[0] and ok_r[0]
+    assert uv[0] == pytest.approx(uv_r[0, ::-1])
+    # The cut end: the floor point at depth _NEAR_M (level camera: depth is x).
+    near = np.array([[[_NEAR_M, 0.3, 0.0], [4.0, 0.3, 0.0]]])
+    assert uv[0] == pytest.approx(project_segments(cam, pose, near)[0][0])
