@@ -63,6 +63,9 @@ _REGION_MAX = 16
 #: Share of the node budget the passes that aim at large sets may spend
 #: without finding one (see :func:`search`).
 _AIM_HIGH_SHARE = 0.05
+#: Up to this many lines (levels), the lines a candidate reaches are the
+#: bits of one int64 (sign bit spared); past it, a one-hot matrix product.
+_BIT_LEVELS = 63
 #: A sort key above every real one.
 _NEVER = np.iinfo(np.int64).max
 
@@ -241,14 +244,22 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         if len(sets) >= tol.max_sets:
             state["truncated"] = True
 
-    level_hot = np.eye(L, dtype=np.int32)  # row l: one-hot of level l
     strong_level = np.array([(~weak[c]).any() for c in cands], dtype=bool)
+    if L <= _BIT_LEVELS:
+        # compat_bits[u, v]: the bit of v's level where u and v are
+        # compatible, else 0; OR-ed over a pool, the lines u can still reach.
+        compat_bits = np.where(compat, (np.int64(1) << level_of)[None, :], np.int64(0))
+    else:
+        level_hot = np.eye(L, dtype=np.int32)  # row l: one-hot of level l
 
     def lines_reached(cand: np.ndarray, pool: np.ndarray) -> np.ndarray:
         """(C,) for each of ``cand``: how many lines hold a candidate of
-        ``pool`` compatible with it (one boolean matrix product)."""
+        ``pool`` compatible with it (a bitwise OR and a bit count; a matrix
+        product of one-hot levels past _BIT_LEVELS lines)."""
         if not pool.size:
             return np.zeros(len(cand), dtype=np.int64)
+        if L <= _BIT_LEVELS:
+            return np.bitwise_count(np.bitwise_or.reduce(compat_bits[cand][:, pool], axis=1)).astype(np.int64)
         return (compat[cand[:, None], pool].astype(np.int32) @ level_hot[level_of[pool]] > 0).sum(axis=1)
 
     def well_supported(n_members: int, ahead: np.ndarray) -> np.ndarray:

@@ -374,3 +374,31 @@ def test_sight_clear_against_shapely(flat, monkeypatch, box_filter):
             assert clear == (not blocked), (cam, p)
             n_blocked += blocked
     assert 100 < n_blocked < 1100  # both outcomes well represented
+
+
+def test_lines_reached_as_bits_equals_the_matrix_product(flat, monkeypatch):
+    """The look-ahead counts the lines a candidate still reaches as bits of
+    one integer (up to 63 lines) or by a one-hot matrix product (more): both
+    give the same search, set for set and node for node."""
+    import matcher.generate as generate
+    import matcher.tree as tree
+
+    cam = paper_camera(1.2, 0.0)
+    rng = np.random.default_rng([1, 5])
+    inputs = []
+
+    def capture(inp, tol, eager=False):
+        inputs.append(inp)
+        return tree.search(inp, tol, eager)
+
+    monkeypatch.setattr(generate, "search", capture)
+    for _ in range(6):
+        fr = make_frame(flat, cam, rng, 5, 1.0, 1.0, clutter=3)
+        matcher.localize(flat, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+    bits = [tree.search(inp, DEFAULT) for inp in inputs]
+    monkeypatch.setattr(tree, "_BIT_LEVELS", 0)
+    product = [tree.search(inp, DEFAULT) for inp in inputs]
+    assert sum(b[3] for b in bits) > 50  # the searches did some work
+    for b, p in zip(bits, product):
+        assert [s.tolist() for s in b[0]] == [s.tolist() for s in p[0]]
+        assert b[3] == p[3]
