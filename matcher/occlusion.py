@@ -10,12 +10,39 @@ from __future__ import annotations
 import numpy as np
 
 
-def wall_edges(linemap) -> tuple[np.ndarray, np.ndarray] | None:
+class WallEdges(tuple):
+    """Wall edges ``(a (E, 2), b (E, 2))``, a plain pair to unpack, that also
+    carries the homogeneous forms :func:`sight_clear` multiplies with, made
+    once per map: ``ends`` (3, 2E) the end points ``(x, y, 1)``, a then b,
+    and ``lines`` (3, E) each edge's line ``(n_x, n_y, -n . a)``, normal
+    ``(-s_y, s_x)`` for ``s = b - a``."""
+
+    def __new__(cls, a: np.ndarray, b: np.ndarray):
+        self = super().__new__(cls, (a, b))
+        self.ends, self.lines = _homogeneous(a, b)
+        return self
+
+
+def _homogeneous(ea: np.ndarray, eb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:class:`WallEdges`' ``ends`` and ``lines`` of edges ``ea, eb`` (E, 2)."""
+    E = len(ea)
+    ends = np.ones((3, 2 * E))
+    ends[:2, :E] = ea.T
+    ends[:2, E:] = eb.T
+    s = eb - ea
+    lines = np.empty((3, E))
+    lines[0] = -s[:, 1]
+    lines[1] = s[:, 0]
+    lines[2] = s[:, 1] * ea[:, 0] - s[:, 0] * ea[:, 1]
+    return ends, lines
+
+
+def wall_edges(linemap) -> WallEdges | None:
     """The map's wall outlines as edges ``(a (E, 2), b (E, 2))``, or None."""
     rings = linemap.wall_rings()
     if not rings:
         return None
-    return np.concatenate(rings), np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    return WallEdges(np.concatenate(rings), np.concatenate([np.roll(r, -1, axis=0) for r in rings]))
 
 
 def inside_walls(points: np.ndarray, walls) -> np.ndarray:
@@ -135,40 +162,31 @@ def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -
     matrix product of homogeneous points ``(x, y, 1)`` and lines
     ``(n_x, n_y, -n . p)``: a handful of numpy calls, this runs at every
     leaf of the tree."""
-    if walls is None or len(walls[0]) == 0:
+    if walls is None or len(walls[0]) == 0 or len(points) == 0:
         return np.ones(len(points), dtype=bool)
     ea, eb = walls
-    cam = np.broadcast_to(np.asarray(cam, dtype=float), points.shape)
-    if len(points) == 0:
-        return np.ones(0, dtype=bool)
+    cam = np.asarray(cam, dtype=float)  # (2,) or (Q, 2): broadcast in every use below
+    ends, lines = (walls.ends, walls.lines) if isinstance(walls, WallEdges) else _homogeneous(ea, eb)
     if len(ea) > _BOX_FILTER_EDGES:
-        lo = np.minimum(points.min(axis=0), cam.min(axis=0))
-        hi = np.maximum(points.max(axis=0), cam.max(axis=0))
+        lo = np.minimum(points.min(axis=0), cam.reshape(-1, 2).min(axis=0))
+        hi = np.maximum(points.max(axis=0), cam.reshape(-1, 2).max(axis=0))
         near = (np.maximum(ea, eb) >= lo).all(axis=1) & (np.minimum(ea, eb) <= hi).all(axis=1)
         if not near.any():
             return np.ones(len(points), dtype=bool)
-        ea, eb = ea[near], eb[near]
-    Q, E = len(points), len(ea)
+        ends, lines = ends[:, np.concatenate([near, near])], lines[:, near]
+    Q, E = len(points), lines.shape[1]
     r = points - cam
     length = np.hypot(r[:, 0], r[:, 1])
     trim = r * (end_margin / np.maximum(length, 1e-12))[:, None]
     sight = np.empty((Q, 3))  # the sight lines, normal (-r_y, r_x)
     sight[:, 0] = -r[:, 1]
     sight[:, 1] = r[:, 0]
-    sight[:, 2] = r[:, 1] * cam[:, 0] - r[:, 0] * cam[:, 1]
-    ends = np.ones((3, 2 * E))  # the edges' ends, a then b
-    ends[:2, :E] = ea.T
-    ends[:2, E:] = eb.T
+    sight[:, 2] = r[:, 1] * cam[..., 0] - r[:, 0] * cam[..., 1]
     side = sight @ ends  # (Q, 2E)
-    s = eb - ea
-    edge = np.empty((3, E))  # the edges' lines, normal (-s_y, s_x)
-    edge[0] = -s[:, 1]
-    edge[1] = s[:, 0]
-    edge[2] = s[:, 1] * ea[:, 0] - s[:, 0] * ea[:, 1]
     tips = np.ones((2 * Q, 3))  # the trimmed sight lines' ends, near then far
     tips[:Q, :2] = cam + trim
     tips[Q:, :2] = points - trim
-    across = tips @ edge  # (2Q, E)
+    across = tips @ lines  # (2Q, E)
     hit = (side[:, :E] * side[:, E:] < 0) & (across[:Q] * across[Q:] < 0)
     # A sight line shorter than both margins has nothing left to cross.
     return ~hit.any(axis=1) | (length <= 2 * end_margin)
