@@ -36,6 +36,7 @@ class FreeSpace:
         if len(ring_points) == 0:
             self.origin = np.zeros(2)
             self.dist = np.full((1, 1), np.inf)
+            self._last = np.zeros(2, dtype=np.int64)
             return
         lo = ring_points.min(axis=0) - _BORDER_M
         hi = ring_points.max(axis=0) + _BORDER_M
@@ -49,15 +50,14 @@ class FreeSpace:
             self.dist = np.where(inside, 0.0, np.maximum(d - 0.5 * self.cell, 0.0))
         else:
             self.dist = np.full((ny, nx), np.inf)
+        self._last = np.array([nx - 1, ny - 1])  # the last cell (x, y): farther points read as the border
 
     def distance(self, xy: np.ndarray) -> np.ndarray:
         """(...) distance, metres, from points ``xy`` (..., 2) to the nearest
         region cell; points off the raster get the raster's border value."""
-        xy = np.asarray(xy, dtype=float)
-        ny, nx = self.dist.shape
-        ix = np.clip(np.floor((xy[..., 0] - self.origin[0]) / self.cell).astype(np.int64), 0, nx - 1)
-        iy = np.clip(np.floor((xy[..., 1] - self.origin[1]) / self.cell).astype(np.int64), 0, ny - 1)
-        return self.dist[iy, ix]
+        cell = np.floor((np.asarray(xy, dtype=float) - self.origin) / self.cell).astype(np.int64)  # (..., 2)
+        np.clip(cell, 0, self._last, out=cell)
+        return self.dist[cell[..., 1], cell[..., 0]]
 
 
 def _even_odd_raster(points, offsets, origin, cell, nx, ny) -> np.ndarray:

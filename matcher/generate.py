@@ -514,8 +514,8 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
     if len(e):
         ell = posegrid.feasible_ellipse(qs[e], pval[e], zx[e], zy[e], 2, tol.q_max, dt)
         ge = g[e]
-        for k in (iu[p[e]], ju[p[e]]):
-            ok[e] &= posegrid.ellipse_reaches(ell, front_c[k, ge], front_b[k, ge], dt)
+        for k in (iu[p[e]], ju[p[e]]):  # (no disk test: both masks were cut by it)
+            ok[e] &= posegrid.ellipse_reaches(ell, front_c[k, ge], front_b[k, ge], None)
     pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):

@@ -144,15 +144,20 @@ def feasible_ellipse(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndar
     return zx, zy, ayy * k, -axy * k, axx * k
 
 
-def ellipse_reaches(ell: tuple[np.ndarray, ...], c: np.ndarray, b: np.ndarray, dt: float) -> np.ndarray:
+def ellipse_reaches(ell: tuple[np.ndarray, ...], c: np.ndarray, b: np.ndarray, dt: float | None) -> np.ndarray:
     """(...) bool: does the ellipse of :func:`feasible_ellipse` (or the disk
     of radius ``dt``, whichever is smaller there) reach ``c . z <= b``? c
-    (..., 2) and b (...) broadcast against the ellipse's shape."""
+    (..., 2) and b (...) broadcast against the ellipse's shape. ``dt`` None
+    leaves the disk out, for entries known to pass it: a yaw mask that
+    :func:`halfplane_reachable` has cut (stage 1 does so for every
+    correspondence) holds only where its half-plane meets the disk."""
     zx, zy, sxx, sxy, syy = ell
     cx, cy = c[..., 0], c[..., 1]
     spread = np.sqrt(np.maximum(cx * (sxx * cx + sxy * cy) + cy * (sxy * cx + syy * cy), 0.0))
-    lo_disk = np.hypot(cx, cy) * -dt
-    return np.maximum(cx * zx + cy * zy - spread, lo_disk) <= b
+    low = cx * zx + cy * zy - spread
+    if dt is not None:
+        low = np.maximum(low, np.hypot(cx, cy) * -dt)
+    return low <= b
 
 
 def evaluate_at(q: np.ndarray, phi: np.ndarray) -> np.ndarray:
@@ -165,7 +170,14 @@ def evaluate_at(q: np.ndarray, phi: np.ndarray) -> np.ndarray:
 def monomials(zx: np.ndarray, zy: np.ndarray) -> np.ndarray:
     """(..., 6) ``[x^2, 2xy, y^2, -2x, -2y, 1]`` at points ``(zx, zy)`` (...):
     a quadratic's value there is its dot product with these."""
-    return np.stack([zx * zx, 2 * zx * zy, zy * zy, -2 * zx, -2 * zy, np.ones_like(zx)], axis=-1)
+    phi = np.empty(np.shape(zx) + (6,))
+    phi[..., 0] = zx * zx
+    phi[..., 1] = 2 * zx * zy
+    phi[..., 2] = zy * zy
+    phi[..., 3] = -2 * zx
+    phi[..., 4] = -2 * zy
+    phi[..., 5] = 1.0
+    return phi
 
 
 def weak_axis(q: np.ndarray) -> tuple[tuple[float, float], float, float]:

@@ -170,7 +170,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
     def feasible_with(R: list[int], Qsum: np.ndarray, mR: np.ndarray, cand: np.ndarray, fit: bool = False):
         """(C,) bool: is R + {u} feasible, for each u in cand; with ``fit``
         also (C,) the best summed quadratic of R + {u} (inf if infeasible)."""
-        G = np.nonzero(mR)[0]
+        G = mR.nonzero()[0]
         if len(G) == 0:
             no = np.zeros(len(cand), dtype=bool)
             return (no, np.full(len(cand), np.inf)) if fit else no
@@ -198,7 +198,8 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
                 rows = np.empty((len(hp) + 1, len(cand), 1), dtype=np.int64)
                 rows[0, :, 0] = cand
                 rows[1:] = np.array(hp, dtype=np.int64)[:, None, None]
-                ok &= posegrid.ellipse_reaches(ell, inp.front_c[rows, G], inp.front_b[rows, G], dt).all(axis=0)
+                # (The disk is left out: every mask here was cut by it in stage 1.)
+                ok &= posegrid.ellipse_reaches(ell, inp.front_c[rows, G], inp.front_b[rows, G], None).all(axis=0)
         if fit:
             best = np.where(ok, val, np.inf).min(axis=1)
             return np.isfinite(best), best
@@ -227,9 +228,9 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
             # geometry holds; visibility, the dearer test, runs at the end on
             # the sets that could become hypotheses (inner nodes tested it
             # once the pose was pinned). Here only the best grid pose.
-            G = np.nonzero(mR)[0]
+            G = mR.nonzero()[0]
             val, zx, zy = posegrid.minimise(Qsum[G], dt)
-            g = int(np.argmin(val))
+            g = int(val.argmin())
             res = (np.array(sorted(R)), (float(inp.centre[0] + zx[g]), float(inp.centre[1] + zy[g]),
                                           float(inp.yaws[G[g]]), float(val[g]) / len(R)))
         if res is None or len(res[0]) < state["bound"]:
@@ -268,9 +269,9 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         candidates of enough other lines of ``ahead`` (repeated until no more
         go: each removal lowers the others' counts). Pairwise only, so cheap
         next to a feasibility pass, which it spares those candidates."""
-        keep = np.ones(len(ahead), dtype=bool)
+        keep = np.full(len(ahead), True)
         while keep.any():
-            idx = np.nonzero(keep)[0]
+            idx = keep.nonzero()[0]
             ok = n_members + 1 + lines_reached(ahead[idx], ahead[idx]) >= state["bound"]
             if ok.all():
                 break
@@ -322,7 +323,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         # Fail first: decide next the line with the fewest candidates left
         # (lines with a non-vertical candidate first among equals).
         key = np.where(counts > 0, counts * 2 - strong_level, _NEVER)
-        level = int(np.argmin(key))
+        level = int(key.argmin())
         here = level_of[ahead] == level
         c = ahead[here]
         # Best fitting first once the pose is pinned by a few members, else
@@ -428,11 +429,11 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, q
     position is pinned when the set's feasible points at that yaw (every
     member's term <= ``q_max``) reach less than _PINNED_M along the
     direction the strips fix least."""
-    G = np.nonzero(mR)[0]
+    G = mR.nonzero()[0]
     if len(G) == 0:
         return False, None, None
     val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
-    i = int(np.argmin(val))
+    i = int(val.argmin())
     g = int(G[i])
     z = (float(zx[i]), float(zy[i]))
     cam = inp.centre[:2] + z
@@ -478,7 +479,7 @@ def _edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: n
     sight line per sample decides. Only yaws where a leaf of at most
     ``most`` members could stand count: adding members only raises the
     summed quadratic's minimum, and a leaf's must stay <= its size + 1."""
-    G = np.nonzero(mR)[0]
+    G = mR.nonzero()[0]
     val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
     near = val <= most + 1.0
     G, zx, zy = G[near], zx[near], zy[near]
@@ -528,28 +529,31 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dic
     member."""
     ce, yaws = inp.centre, inp.yaws
     while len(members) >= tol.min_matches:
-        q = inp.quad[members]  # (S, Y, 6)
-        allm = inp.mask[members].all(axis=0)
+        # Only the yaws every member's mask holds can qualify.
+        G = inp.mask[members].all(axis=0).nonzero()[0]
+        if not len(G):  # no common yaw: drop the member agreeing least with the others
+            m = inp.mask[members].astype(int)
+            members = np.delete(members, int(np.argmin(m @ m.sum(axis=0))))
+            continue
+        q = inp.quad[members[:, None], G]  # (S, G, 6)
         val, zx, zy = posegrid.minimise(q.sum(axis=0), inp.dt)
-        each = posegrid.evaluate(q, zx, zy)  # (S, Y)
-        good = allm & (val <= len(members) + 1.0) & (each <= tol.q_max).all(axis=0)
-        good &= inp.in_free_space(ce[:2] + np.stack([zx, zy], axis=-1))
+        each = posegrid.evaluate(q, zx, zy)  # (S, G)
+        good = (val <= len(members) + 1.0) & (each <= tol.q_max).all(axis=0)
+        at = good.nonzero()[0]  # free space only where the rest holds
+        good[at] = inp.in_free_space(ce[:2] + np.stack([zx[at], zy[at]], axis=-1))
         if not good.any():
-            if allm.any():
-                g = int(np.argmin(np.where(allm, val, np.inf)))
-                worst = int(np.argmax(each[:, g]))
-            else:  # no common yaw: drop the member agreeing least with the others
-                m = inp.mask[members].astype(int)
-                worst = int(np.argmin(m @ m.sum(axis=0)))
+            worst = int(each[:, val.argmin()].argmax())
             members = np.delete(members, worst)
             continue
-        g = int(np.argmin(np.where(good, val, np.inf)))
-        cam = ce[:2] + np.array([zx[g], zy[g]])
+        i = int(np.where(good, val, np.inf).argmin())
+        g = int(G[i])
+        cam = ce[:2] + np.array([zx[i], zy[i]])
+        fit = float(val[i]) / len(members)
         if not visibility:
-            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
+            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), fit)
         seen = _seen_cached(inp, members, cam, g, cache)
         if seen.all():
-            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), float(val[g]) / len(members))
+            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), fit)
         members = members[seen]
     return None
 
@@ -581,12 +585,12 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
     # Seen from the point or from any of four points around it
     # (_CAMERA_JITTER): first from the point itself, then, for members not
     # yet seen, from the four others in one batch.
-    todo_s, todo_p = np.nonzero(front)
+    todo_s, todo_p = front.nonzero()
     seen = np.zeros(S, dtype=bool)
     if len(todo_s) == 0:
         return seen
     seen[todo_s[sight_clear(cam, flat[todo_s, todo_p], inp.walls, _OCCLUSION_END_M)]] = True
-    todo_s, todo_p = np.nonzero(front & ~seen[:, None])
+    todo_s, todo_p = (front & ~seen[:, None]).nonzero()
     if len(todo_s):
         J = len(_CAMERA_JITTER) - 1
         cams = (cam + _CAMERA_JITTER[1:])[np.tile(np.arange(J), len(todo_s))]
