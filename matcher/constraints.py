@@ -208,13 +208,6 @@ def unary_constraint(
 # --------------------------------------------------------------------------
 # Binary constraint (vertical segments), method.md section 6
 
-#: Samples on the uncertainty circle for the range of the viewing angle; the
-#: angle is harmonic in the camera position, so its extremes over the disk
-#: lie on the circle. 72 samples: 5 degree steps, far finer than the angle
-#: varies for corners more than dt away.
-_CIRCLE_SAMPLES = 72
-
-
 def binary_constraint(
     points_i: np.ndarray,
     points_k: np.ndarray,
@@ -234,24 +227,24 @@ def binary_constraint(
     on the side that keeps the left/right order. The couple is acceptable if
     that arc, widened by ``tol`` (C,) radians, meets the disk of radius
     ``dt`` around ``centre``. Returns (C,) bool.
+
+    In closed form: with floor points as complex numbers relative to the
+    centre (``a = P_i - c``, ``b = P_k - c``, camera ``z``), the angle is
+    ``arg w`` with ``w = (b - z) / (a - z)``. That Moebius map takes the
+    disk's circle to a circle of centre ``w0`` (the image of the point
+    mirroring ``a`` in the circle, ``dt^2 / conj(a)``) and radius ``r``; when
+    neither point is in the disk the angle is continuous there and harmonic,
+    so over the disk it spans ``arg w0 +- asin(r / |w0|)``, the args of that
+    image circle.
     """
-    c = np.asarray(centre, dtype=float)
+    c = complex(centre[0], centre[1])
+    a = points_i[:, 0] + 1j * points_i[:, 1] - c
+    b = points_k[:, 0] + 1j * points_k[:, 1] - c
     rho = alpha_i - alpha_k
-    th = np.linspace(0, 2 * np.pi, _CIRCLE_SAMPLES, endpoint=False)
-    ring = c + dt * np.stack([np.cos(th), np.sin(th)], 1)  # (S, 2)
-    # Bearings from the ring samples to each distinct point, once: couples
-    # share their points (a few dozen edges make hundreds of couples).
-    C = len(points_i)
-    both = np.concatenate([points_i, points_k])
-    first, inv = distinct_points(both)
-    d = both[first][:, None, :] - ring[None]
-    bearing = np.arctan2(d[..., 1], d[..., 0])  # (U, S)
-    g = bearing[inv[C:]] - bearing[inv[:C]]
-    h = wrap(g - rho[:, None])  # (C, S): zero on the arc
-    # Sampling slack: between samples the angle moves by at most the step
-    # times dt over the distance to the nearer point.
-    dmin = np.minimum(np.linalg.norm(points_i - c, axis=1), np.linalg.norm(points_k - c, axis=1))
-    inside = dmin <= dt * 1.0001
-    step = 2 * np.pi / _CIRCLE_SAMPLES * dt / np.maximum(dmin, 1e-9)
-    t = tol + step
-    return inside | ((h.min(axis=1) <= t) & (h.max(axis=1) >= -t))
+    inside = np.minimum(np.abs(a), np.abs(b)) <= dt * 1.0001  # a point in the disk: every angle occurs
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mirror = dt * dt / np.conj(a)
+        w0 = (b - mirror) / (a - mirror)
+        r = np.abs((b - dt) / (a - dt) - w0)  # dt: any point of the circle
+        half = np.arcsin(np.clip(r / np.abs(w0), 0.0, 1.0))
+    return inside | (np.abs(wrap(np.angle(w0) - rho)) <= half + tol)

@@ -157,6 +157,36 @@ def test_binary_constraint_hand_worked():
     assert binary_constraint(Pi, Pk, np.array([-b]), np.array([b]), (0.0, 0.0), 2.0, tol)[0]
 
 
+def test_binary_constraint_closed_form_against_dense_sampling():
+    """The closed-form angle range over the disk against the angle sampled
+    at 3600 points of its circle (the extremes lie there: the angle is
+    harmonic), on random couples, about half of them rejected."""
+    rng = np.random.default_rng(5)
+    C = 400
+    centre = np.array([0.3, -0.2])
+    dt = 0.8
+    pi = centre + rng.uniform(-6, 6, (C, 2))
+    pk = centre + rng.uniform(-6, 6, (C, 2))
+    # Bearings as seen from a point near the disk's edge, give or take 9 deg.
+    heading = rng.uniform(-np.pi, np.pi, C)
+    cam = centre + (dt + rng.uniform(-0.2, 0.2, (C, 1))) * np.stack([np.cos(heading), np.sin(heading)], 1)
+    alpha_i = -np.arctan2(pi[:, 1] - cam[:, 1], pi[:, 0] - cam[:, 0]) + rng.uniform(-0.15, 0.15, C)
+    alpha_k = -np.arctan2(pk[:, 1] - cam[:, 1], pk[:, 0] - cam[:, 0])
+    tol = np.full(C, math.radians(1.0))
+    got = binary_constraint(pi, pk, alpha_i, alpha_k, tuple(centre), dt, tol)
+    th = np.linspace(0, 2 * np.pi, 3600, endpoint=False)
+    ring = centre + dt * np.stack([np.cos(th), np.sin(th)], 1)
+    angle = (np.arctan2(pk[:, None, 1] - ring[:, 1], pk[:, None, 0] - ring[:, 0])
+             - np.arctan2(pi[:, None, 1] - ring[:, 1], pi[:, None, 0] - ring[:, 0]))
+    off = np.abs(wrap(angle - (alpha_i - alpha_k)[:, None])).min(axis=1)
+    inside = np.minimum(np.linalg.norm(pi - centre, axis=1), np.linalg.norm(pk - centre, axis=1)) <= dt
+    # Sampling misses at most a step's worth of angle: decide only the clear cases.
+    clear = inside | (off <= tol - 1e-3) | (off >= tol + 1e-3)
+    assert clear.sum() > 0.95 * C
+    assert 0.25 * C < got.sum() < 0.75 * C
+    assert (got[clear] == (inside | (off <= tol))[clear]).all()
+
+
 def test_binary_constraint_random_true_couples_always_pass():
     rng = np.random.default_rng(3)
     for _ in range(200):
