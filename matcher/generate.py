@@ -412,9 +412,10 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce
         half = np.where(dist <= dt, np.pi, half) + img.alpha_eps[line_k[is_v]] + 0.5 * step
         mask[is_v] = np.abs(wrap(yaws[None, :] - img.alpha[line_k[is_v]][:, None] - beta[:, None])) <= half[:, None]
     # The entries (correspondence k, grid yaw g) left.
-    k, g = np.nonzero(mask)
+    at = np.flatnonzero(mask)  # flat (correspondence, yaw) indices: cheaper than 2-D ones here
+    k, g = np.divmod(at, Y)
     lk, sk = line_k[k], seg_k[k]
-    Wk = W[lk, g]  # (E, 3)
+    Wk = np.take(W.reshape(-1, 3), lk * Y + g, axis=0)  # (E, 3)
     # Position strips (relative to the disk centre). The point of each model
     # line used is the one nearest the ray of the image line's midpoint (from
     # the disk centre, at each grid yaw). The line's orientation noise turns
@@ -446,7 +447,7 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce
     dr_dyaw = np.abs(Wk[:, 0] * rel[:, 1] - Wk[:, 1] * rel[:, 0]) + a_len * dt
     t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
     quad = np.zeros((K, Y, 6))
-    quad[k, g] = posegrid.strip_quadratics(Wk[:, :2], d, t)
+    quad.reshape(-1, 6)[at] = posegrid.strip_quadratics(Wk[:, :2], d, t)
     if is_v.any() and sight is not None:
         ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
         ev = np.nonzero(is_v[k])[0]
@@ -454,7 +455,7 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce
         row = np.cumsum(is_v) - 1
         seen = _vertical_sight(near[seg_k[is_v], :2], row[k[ev]], img.alpha[lk[ev]], yaws[g[ev]], ce[:2], dt,
                                t[ev] / np.maximum(a_len[ev], 1e-9), step, sight, ext)
-        mask[k[ev[~seen]], g[ev[~seen]]] = False
+        mask.reshape(-1)[at[ev[~seen]]] = False
     return mask, quad
 
 
@@ -501,8 +502,14 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
     iu, ju = np.triu_indices(K, 1)
     distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
     iu, ju = iu[distinct], ju[distinct]
-    p, g = np.nonzero(mask[iu] & mask[ju])
-    qi, qj = quad[iu[p], g], quad[ju[p], g]
+    # (pair, yaw) entries where both masks hold. (np.nonzero on the 2-D
+    # array, and fancy indexing of quad by two arrays, cost several times
+    # the flat forms on these sizes.)
+    Y = mask.shape[1]
+    p, g = np.divmod(np.flatnonzero(mask[iu] & mask[ju]), Y)
+    at_i, at_j = iu[p] * Y + g, ju[p] * Y + g  # flat (correspondence, yaw) indices
+    flat = quad.reshape(-1, 6)
+    qi, qj = np.take(flat, at_i, axis=0), np.take(flat, at_j, axis=0)
     qs = qi + qj
     pval, zx, zy = posegrid.minimise(qs, dt)
     ok = (pval <= 3.0) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
@@ -513,9 +520,9 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
     e = np.nonzero(ok & (has_plane[iu[p]] | has_plane[ju[p]]))[0]
     if len(e):
         ell = posegrid.feasible_ellipse(qs[e], pval[e], zx[e], zy[e], 2, tol.q_max, dt)
-        ge = g[e]
-        for k in (iu[p[e]], ju[p[e]]):  # (no disk test: both masks were cut by it)
-            ok[e] &= posegrid.ellipse_reaches(ell, front_c[k, ge], front_b[k, ge], None)
+        for at in (at_i[e], at_j[e]):  # (no disk test: both masks were cut by it)
+            ok[e] &= posegrid.ellipse_reaches(ell, np.take(front_c.reshape(-1, 2), at, axis=0),
+                                              np.take(front_b.reshape(-1), at), None)
     pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):
