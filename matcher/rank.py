@@ -220,7 +220,7 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     usable = np.nonzero(img.usable)[0]
     N = len(segs)
     empty = np.zeros(0, dtype=np.int64)
-    if not len(hyps) or not len(usable):
+    if not len(hyps):
         return empty, empty, empty
     # Every candidate segment projected once per hypothesis (C, N, 2, 2),
     # then each (hypothesis, free line, free segment) pair looks it up.
