@@ -146,18 +146,19 @@ def unary_yaws(normals: np.ndarray, directions: np.ndarray, pitch: float):
 
 
 def world_normals(normals: np.ndarray, yaw: np.ndarray, pitch: float) -> np.ndarray:
-    """(..., M, 3) world normals ``R^T n`` of camera-frame normals (M, 3) at
-    yaws (..., M), written out from R's rows r, d, f of method.md section 2
+    """(..., 3) world directions ``R^T n`` of camera-frame vectors (..., 3)
+    (plane normals, rays) at yaws (...), broadcast together, written out from R's rows r, d, f of method.md section 2
     (no (..., 3, 3) rotations: cheaper on these arrays). With ``f_h = n_z
     cos p - n_y sin p``: ``(f_h cos y + n_x sin y, f_h sin y - n_x cos y,
     -n_y cos p - n_z sin p)``."""
     cp, sp = math.cos(pitch), math.sin(pitch)
     c, s = np.cos(yaw), np.sin(yaw)
-    ahead = normals[:, 2] * cp - normals[:, 1] * sp
-    w = np.empty(np.shape(yaw) + (3,))
-    w[..., 0] = ahead * c + normals[:, 0] * s
-    w[..., 1] = ahead * s - normals[:, 0] * c
-    w[..., 2] = -normals[:, 1] * cp - normals[:, 2] * sp
+    nx, ny, nz = normals[..., 0], normals[..., 1], normals[..., 2]
+    ahead = nz * cp - ny * sp
+    w = np.empty(np.broadcast_shapes(np.shape(yaw), nx.shape) + (3,))
+    w[..., 0] = ahead * c + nx * s
+    w[..., 1] = ahead * s - nx * c
+    w[..., 2] = -ny * cp - nz * sp
     return w
 
 

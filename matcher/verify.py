@@ -16,11 +16,10 @@ with ``n`` the image line's plane normal, ``v`` the segment's direction and
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from matcher.camera import world2cam_rotation
+from matcher.constraints import world_normals
 
 #: Gauss-Newton iterations: from the grid start (within half a yaw step and a
 #: few centimetres) the fit converges in 3 to 4.
@@ -66,11 +65,10 @@ class MatchTerms:
         self.idz = 1j * d[:, 2]
         rays = np.empty((len(d), 2, 3))
         rays[:, 0], rays[:, 1] = ray_a, ray_b
-        cp, sp = math.cos(pitch), math.sin(pitch)
-        # R^T ray with R's rows r, d, f of method.md section 2: horizontal
-        # part (ahead - i * right) e^{i yaw}, ahead = f_z-free part of the ray.
-        self.w_h = (rays[..., 2] * cp - rays[..., 1] * sp) - 1j * rays[..., 0]  # (T, 2)
-        self.w_z = -rays[..., 1] * cp - rays[..., 2] * sp  # (T, 2)
+        # R^T ray at yaw 0; a yaw turns its horizontal part by e^{i yaw}.
+        w = world_normals(rays, np.zeros(rays.shape[:2]), pitch)  # (T, 2, 3)
+        self.w_h = w[..., 0] + 1j * w[..., 1]  # (T, 2)
+        self.w_z = w[..., 2]
 
 
 def residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
