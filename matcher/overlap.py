@@ -76,3 +76,35 @@ def projected_distance_and_overlap(uv: np.ndarray, ok: np.ndarray, lines: np.nda
     dist = np.where(ok & (lq > 1e-6), dist, np.inf)
     overlap = np.where(ok, overlap, -np.inf)
     return dist, overlap
+
+
+def covered_span(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """(T, 2) sorted parameters in [0, 1] along each segment (T, 2, 3) of the
+    part its image line (T, 2, 2) shows at poses (T, 3): for each end point
+    of the line, the point of the segment's 3D line closest to its sight
+    ray, clipped to the segment. A line that shows a sliver of a long
+    segment (the rest hidden by a wall or out of the image) covers that
+    sliver only: visibility is tested there (rank.visible)."""
+    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
+    X = (lines[..., 0] - camera.cx) / camera.fx  # (T, 2) camera-frame rays (X, Y, 1)
+    Y = (lines[..., 1] - camera.cy) / camera.fy
+    # World directions X r + Y d + f with the rows r, d, f of method.md section 2.
+    d = np.empty(lines.shape[:2] + (3,))
+    d[..., 0] = X * s[:, None] - Y * (sp * c)[:, None] + (cp * c)[:, None]
+    d[..., 1] = -X * c[:, None] - Y * (sp * s)[:, None] + (cp * s)[:, None]
+    d[..., 2] = -Y * cp - sp
+    C = np.stack([poses[:, 0], poses[:, 1], np.full(len(poses), camera.height_m)], axis=1)
+    v = segments[:, 1] - segments[:, 0]  # (T, 3)
+    w = segments[:, 0] - C
+    # Closest points of the lines A + t v and C + u d: t = (b e - c0 f) / (a c0 - b^2).
+    a = np.einsum("ti,ti->t", v, v)[:, None]
+    b = np.einsum("ti,tki->tk", v, d)
+    c0 = np.einsum("tki,tki->tk", d, d)
+    f = np.einsum("ti,ti->t", v, w)[:, None]
+    e = np.einsum("tki,ti->tk", d, w)
+    den = a * c0 - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(den > 1e-12 * a * c0, (b * e - c0 * f) / den, 0.5)
+    return np.sort(np.clip(t, 0.0, 1.0), axis=1)
+

@@ -27,12 +27,15 @@ import numpy as np
 from matcher import verify
 from matcher.constraints import wrap
 from matcher.occlusion import sight_clear
-from matcher.overlap import distance_and_overlap, project_segments, projected_distance_and_overlap
+from matcher.overlap import covered_span, distance_and_overlap, project_segments, projected_distance_and_overlap
 
 #: Stage 2's visibility test ignores wall crossings this close to the
 #: segment, metres (the segment lies on a wall face; the pose is refined):
 #: it tells the near and far faces of a door jamb apart.
 _VISIBLE_END_M = 0.02
+#: Points tested for visibility along the part of a segment a line shows
+#: (fractions of that part, its ends moved in a little: they are the least sure).
+_SPAN_SAMPLES = np.array([0.05, 0.275, 0.5, 0.725, 0.95])
 #: A refined pose may leave the prior bounds by this much (metres, degrees)
 #: before the hypothesis is dropped: noise on a pose at the border.
 _PRIOR_SLACK_M = 0.1
@@ -72,7 +75,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     poses = verify.refine(hyps.init, hyp, reps[cls, 0], reps[cls, 1], rays[:, 0], rays[:, 1],
                           camera.pitch, camera.height_m, robust_scale=scale)
     local = resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
-    inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol) & visible(poses[hyp], segs[local], walls)
+    inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol) & visible(camera, poses[hyp], segs[local], img.lines[line_ids], walls)
     n_in = np.bincount(hyp, inl, minlength=n_h)
     keep = inl & (n_in[hyp] >= tol.min_matches)
     hyp, line_ids, local = hyp[keep], line_ids[keep], local[keep]
@@ -189,16 +192,22 @@ def _fits_projected(img, uv, in_front, line_ids, tol):
     return (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0), dist
 
 
-def visible(poses, segments, walls) -> np.ndarray:
-    """(T,) bool: some point of each segment (T, 2, 3) is in plain sight from
-    the camera at poses (T, 3), walls as occluders. At a refined pose (a
-    centimetre off) a sight line that cuts a wall 2 cm or more from the
-    segment is blocked: it tells the near and far faces of a door jamb apart."""
+def visible(camera, poses, segments, lines, walls) -> np.ndarray:
+    """(T,) bool: some point of the part of each segment (T, 2, 3) that its
+    image line (T, 2, 2) shows (:func:`~matcher.overlap.covered_span`) is in
+    plain sight from the camera at poses (T, 3), walls as occluders. (Points
+    spread over the whole segment would miss a sliver seen past a jamb, and
+    would let a line showing the hidden part of a segment pass on another
+    part's visibility.) At a refined pose (a centimetre off) a sight line
+    that cuts a wall 2 cm or more from the segment is blocked: it tells the
+    near and far faces of a door jamb apart."""
     if walls is None:
         return np.ones(len(poses), dtype=bool)
-    t = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
-    pts = segments[:, None, 0, :2] + t[None, :, None] * (segments[:, None, 1, :2] - segments[:, None, 0, :2])
-    cams = np.repeat(poses[:, :2], len(t), axis=0)
+    span = covered_span(camera, poses, segments, lines)  # (T, 2)
+    t = span[:, :1] + _SPAN_SAMPLES[None, :] * (span[:, 1:] - span[:, :1])  # (T, n)
+    a, b = segments[:, None, 0, :2], segments[:, None, 1, :2]
+    pts = a + t[..., None] * (b - a)
+    cams = np.repeat(poses[:, :2], len(_SPAN_SAMPLES), axis=0)
     clear = sight_clear(cams, pts.reshape(-1, 2), walls, _VISIBLE_END_M)
     return clear.reshape(len(poses), -1).any(axis=1)
 
@@ -243,7 +252,7 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     ok, dist = _fits_projected(img, uv[pc, si], in_front[pc, si], li, tol)
     if ok.any():
         sel = np.nonzero(ok)[0]
-        ok[sel] = visible(poses[ph[sel]], segs[si[sel]], walls)
+        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], img.lines[li[sel]], walls)
     out_h, out_l, out_s = [], [], []
     segs_taken, lines_taken = set(), set()  # (hypothesis, segment), (hypothesis, line)
     # Closest first within each hypothesis; a segment or line is added once.

@@ -95,3 +95,46 @@ def test_projection_cuts_either_end_behind_the_camera_at_the_near_plane():
     # The cut end: the floor point at depth _NEAR_M (level camera: depth is x).
     near = np.array([[[_NEAR_M, 0.3, 0.0], [4.0, 0.3, 0.0]]])
     assert uv[0] == pytest.approx(project_segments(cam, pose, near)[0][0])
+
+
+def test_covered_span_recovers_the_shown_part_of_a_segment():
+    """Each image line shows a random sub-segment at a random pose (pitched
+    camera): covered_span gives back its parameters along the segment."""
+    from matcher.overlap import covered_span
+
+    rng = np.random.default_rng(3)
+    cam = paper_camera(HEIGHT, math.degrees(PITCH))
+    T = 200
+    poses = np.c_[rng.uniform(-1, 1, (T, 2)), rng.uniform(-math.pi, math.pi, T)]
+    ahead = np.c_[np.cos(poses[:, 2]), np.sin(poses[:, 2])]
+    side = np.c_[-ahead[:, 1], ahead[:, 0]]
+    centre = poses[:, :2] + rng.uniform(3, 6, (T, 1)) * ahead + rng.uniform(-1, 1, (T, 1)) * side
+    d = rng.normal(size=(T, 3))
+    d[:, :2] *= 2.0
+    mid = np.c_[centre, rng.uniform(0.3, 2.2, T)]
+    segs = np.stack([mid - 0.5 * d, mid + 0.5 * d], axis=1)
+    t = np.sort(rng.uniform(0, 1, (T, 2)), axis=1)
+    sub = segs[:, :1] + t[..., None] * (segs[:, 1:] - segs[:, :1])
+    uv, ok = project_segments(cam, poses, sub)
+    assert ok.all()
+    span = covered_span(cam, poses, segs, uv)
+    assert np.allclose(span, t, atol=1e-6)
+
+
+def test_visibility_is_tested_on_the_part_the_line_shows():
+    """A floor line across the view, its left part hidden by a wall: a line
+    showing the right end is seen, one showing the hidden middle is not,
+    though both belong to a segment that has a visible point."""
+    from matcher.rank import visible
+
+    cam = paper_camera(HEIGHT, 0.0)
+    pose = np.array([[0.0, 0.0, 0.0]])  # at the origin, looking along +x
+    seg = np.array([[[5.0, 2.0, 0.0], [5.0, -2.0, 0.0]]])  # y from +2 (left) to -2 (right)
+    walls = (np.array([[2.5, -0.5]]), np.array([[2.5, 3.0]]))  # hides y > -1 on the segment
+
+    def line_showing(t0, t1):
+        sub = seg[:, :1] + np.array([t0, t1])[None, :, None] * (seg[:, 1:] - seg[:, :1])
+        return project_segments(cam, pose, sub)[0]
+
+    assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls).all()  # y in [-1.8, -1.4]
+    assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls).any()  # y in [-0.4, 1.2]

@@ -74,7 +74,7 @@ def indistinguishable(linemap, camera, frame) -> set:
     from matcher.occlusion import wall_edges
 
     walls = wall_edges(linemap)
-    ok[sel] &= visible(poses[sel], linemap.segments[si[sel]], walls)
+    ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls)
     return {(int(a), int(b)) for a, b in zip(si[ok], li[ok])}
 
 
