@@ -32,6 +32,7 @@ from matcher.camera import Camera
 from matcher.camera import world2cam_rotation
 from matcher.constraints import binary_constraint, distinct_points, unary_constraint, wrap
 from matcher.occlusion import SightRays
+from matcher.overlap import ShownSpans
 from matcher.tolerances import VERTICAL_AXIS_DEG, Tolerances
 from matcher.tree import TreeInput, search
 
@@ -376,7 +377,7 @@ def generate(
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
                     None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m,
-                    front_c, front_b, single_fit, sight)
+                    front_c, front_b, single_fit, sight, ShownSpans(camera, segments[seg_k], img.lines[line_k]))
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)

@@ -84,27 +84,74 @@ def covered_span(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines:
     of the line, the point of the segment's 3D line closest to its sight
     ray, clipped to the segment. A line that shows a sliver of a long
     segment (the rest hidden by a wall or out of the image) covers that
-    sliver only: visibility is tested there (rank.visible)."""
-    c, s = np.cos(poses[:, 2]), np.sin(poses[:, 2])
+    sliver only: visibility is tested there (rank.visible). (For many calls
+    on the same pairs, :class:`ShownSpans`.)"""
+    c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
     cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
     X = (lines[..., 0] - camera.cx) / camera.fx  # (T, 2) camera-frame rays (X, Y, 1)
     Y = (lines[..., 1] - camera.cy) / camera.fy
     # World directions X r + Y d + f with the rows r, d, f of method.md section 2.
-    d = np.empty(lines.shape[:2] + (3,))
-    d[..., 0] = X * s[:, None] - Y * (sp * c)[:, None] + (cp * c)[:, None]
-    d[..., 1] = -X * c[:, None] - Y * (sp * s)[:, None] + (cp * s)[:, None]
-    d[..., 2] = -Y * cp - sp
-    C = np.stack([poses[:, 0], poses[:, 1], np.full(len(poses), camera.height_m)], axis=1)
+    p, q = cp - sp * Y, -X  # at yaw 0, then turned by the yaw
+    dx, dy, dz = c * p - s * q, s * p + c * q, -cp * Y - sp
     v = segments[:, 1] - segments[:, 0]  # (T, 3)
-    w = segments[:, 0] - C
+    wx, wy = segments[:, 0, 0:1] - poses[:, 0:1], segments[:, 0, 1:2] - poses[:, 1:2]
+    wz = segments[:, 0, 2:3] - camera.height_m
+    vx, vy, vz = v[:, 0:1], v[:, 1:2], v[:, 2:3]
     # Closest points of the lines A + t v and C + u d: t = (b e - c0 f) / (a c0 - b^2).
-    a = np.einsum("ti,ti->t", v, v)[:, None]
-    b = np.einsum("ti,tki->tk", v, d)
-    c0 = np.einsum("tki,tki->tk", d, d)
-    f = np.einsum("ti,ti->t", v, w)[:, None]
-    e = np.einsum("tki,ti->tk", d, w)
+    a = vx * vx + vy * vy + vz * vz
+    b = vx * dx + vy * dy + vz * dz
+    c0 = dx * dx + dy * dy + dz * dz
+    e = wx * dx + wy * dy + wz * dz
+    f = vx * wx + vy * wy + vz * wz
     den = a * c0 - b * b
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(den > 1e-12 * a * c0, (b * e - c0 * f) / den, 0.5)
+    ok = den > 1e-12 * a * c0  # else the ray runs along the segment: its middle
+    t = np.where(ok, (b * e - c0 * f) / np.where(ok, den, 1.0), 0.5)
     return np.sort(np.clip(t, 0.0, 1.0), axis=1)
 
+
+class ShownSpans:
+    """:func:`covered_span` of fixed pairs t of (segment (T, 2, 3), image
+    line (T, 2, 2)) at any one pose, made fast for the tree's many small
+    calls on a few pairs each.
+
+    With the camera centre C = (x, y, h), the sight ray of a line end point
+    at yaw ``psi`` has the direction d = Rz(psi) d0 (d0 at yaw 0, the pitch
+    applied). The closest point of the segment's line A + t v to the ray is
+    t = (b e - c f) / (a c - b^2) with a = v.v, c = d.d (pose-free),
+    b = v.d, e = (A - C).d, f = v.(A - C): all three are linear in
+    phi = (cos, sin, 1, x cos, x sin, y cos, y sin, x, y), so one matrix
+    product per call gives them for every pair and both ends."""
+
+    def __init__(self, camera: Camera, segments: np.ndarray, lines: np.ndarray):
+        cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
+        X = (lines[..., 0] - camera.cx) / camera.fx  # (T, 2) camera-frame rays (X, Y, 1)
+        Y = (lines[..., 1] - camera.cy) / camera.fy
+        # d0 = X r + Y d + f with the rows r, d, f of method.md section 2 at yaw 0.
+        p, q, r = cp - sp * Y, -X, -cp * Y - sp
+        A = segments[:, 0]
+        v = segments[:, 1] - A
+        ax, ay, az = A[:, 0:1], A[:, 1:2], A[:, 2:3] - camera.height_m
+        vx, vy, vz = v[:, 0:1], v[:, 1:2], v[:, 2:3]
+        T = len(segments)
+        z = np.zeros((T, 2))
+        coef = np.empty((T, 5, 9))
+        # Rows b (2 ends), e (2 ends), f; columns the terms of phi.
+        coef[:, 0:2] = np.stack([vx * p + vy * q, vy * p - vx * q, vz * r, z, z, z, z, z, z], axis=-1)
+        coef[:, 2:4] = np.stack([ax * p + ay * q, ay * p - ax * q, az * r, -p, q, -q, -p, z, z], axis=-1)
+        zz = np.zeros(T)
+        coef[:, 4] = np.stack([zz, zz, (v[:, 0] * A[:, 0] + v[:, 1] * A[:, 1] + v[:, 2] * az[:, 0]), zz, zz, zz, zz,
+                               -v[:, 0], -v[:, 1]], axis=-1)
+        self.coef = coef
+        self.a = (v * v).sum(axis=1)[:, None]  # (T, 1)
+        self.c = p * p + q * q + r * r  # (T, 2)
+
+    def at(self, idx: np.ndarray, x: float, y: float, yaw: float) -> np.ndarray:
+        """(S, 2) sorted spans of pairs ``idx`` (S,) at the pose ``(x, y, yaw)``."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        m = self.coef[idx] @ np.array([c, s, 1.0, x * c, x * s, y * c, y * s, x, y])  # (S, 5)
+        b, e, f = m[:, 0:2], m[:, 2:4], m[:, 4:5]
+        a, cc = self.a[idx], self.c[idx]
+        den = a * cc - b * b
+        ok = den > 1e-12 * a * cc  # else the ray runs along the segment: its middle
+        t = np.where(ok, (b * e - cc * f) / np.where(ok, den, 1.0), 0.5)
+        return np.sort(np.clip(t, 0.0, 1.0), axis=1)

@@ -36,8 +36,14 @@ from matcher.tolerances import Tolerances
 #: far from both its ends, metres: the segment itself lies on a wall face,
 #: and the pose from the grid is a few centimetres off.
 _OCCLUSION_END_M = 0.05
-#: Points of a segment tested for visibility (fractions of its length).
+#: Points of a segment tested for visibility (fractions of its length, or
+#: of the part its image line shows).
 _SAMPLES = np.array([0.02, 0.26, 0.5, 0.74, 0.98])
+#: The part of a segment its image line shows at a set's grid pose is
+#: widened by this much at both ends before visibility is tested, metres.
+_SHOWN_WIDEN_M = 0.1
+#: Points of that part tested (fractions of it): it is short, three do.
+_SHOWN_SAMPLES = np.array([0.05, 0.5, 0.95])
 #: A segment counts as seen if it is seen from the set's best point or from
 #: one of these four around it, metres: that point is a few centimetres off,
 #: and a sight line through a doorway swings onto a jamb over that distance.
@@ -93,7 +99,11 @@ class TreeInput:
     quadratic's minimum over the yaws where it passes every test of the
     look-ahead, inf where none), or None to compute it at the root; ``sight``
     the walls' :class:`~matcher.occlusion.SightRays` (how far one sees from a
-    vertical edge, per bearing), or None to cast sight lines."""
+    vertical edge, per bearing), or None to cast sight lines; ``shown`` the
+    :class:`~matcher.overlap.ShownSpans` of the correspondences (``segments``
+    with their image lines), or None: with it, visibility is tested on the
+    part of the segment the line shows at the set's pose (else on
+    ``samples``)."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -114,6 +124,10 @@ class TreeInput:
     front_b: np.ndarray | None = None
     single_fit: np.ndarray | None = None
     sight: object | None = None
+    shown: object | None = None
+
+    def __post_init__(self):
+        self.seg_length = np.maximum(np.linalg.norm(self.segments[:, 1] - self.segments[:, 0], axis=1), 1e-9)
 
     def in_free_space(self, xy: np.ndarray) -> np.ndarray:
         """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
@@ -562,22 +576,26 @@ def _seen_cached(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, c
     """:func:`_seen` remembered per (members, grid yaw, centimetre of
     position): a leaf repeats the test its last node made."""
     if cache is None:
-        return _seen(inp, members, cam, inp.forward[g])
+        return _seen(inp, members, cam, g)
     key = (members.tobytes(), g, int(round(cam[0] * 100)), int(round(cam[1] * 100)))
     hit = cache.get(key)
     if hit is None:
-        hit = cache[key] = _seen(inp, members, cam, inp.forward[g])
+        hit = cache[key] = _seen(inp, members, cam, g)
     return hit
 
 
-def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndarray) -> np.ndarray:
+def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int) -> np.ndarray:
     """(S,) bool: the member's segment has a sample point in front of the
-    camera at ``cam`` (2,) and, with walls, with a clear sight line."""
-    if inp.samples is not None:
+    camera at ``cam`` (2,) and grid yaw index ``g`` and, with walls, with a
+    clear sight line."""
+    if inp.shown is not None:
+        pts = _shown_points(inp, members, cam, float(inp.yaws[g]))
+    elif inp.samples is not None:
         pts = inp.samples[members]  # (S, n, 3)
     else:
         segs = inp.segments[members]  # (S, 2, 3)
         pts = segs[:, None, 0] + _SAMPLES[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])
+    forward = inp.forward[g]
     C = np.array([cam[0], cam[1], inp.centre[2]])
     S, n = pts.shape[:2]
     front = (pts - C) @ forward > 0.05  # (S, n)
@@ -598,6 +616,19 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, forward: np.ndar
         clear = sight_clear(cams, pts, inp.walls, _OCCLUSION_END_M)
         seen[np.repeat(todo_s, J)[clear]] = True
     return seen
+
+
+def _shown_points(inp: TreeInput, members: np.ndarray, cam: np.ndarray, yaw: float) -> np.ndarray:
+    """(S, n, 3) points of the part of each member's segment that its image
+    line shows at the pose (cam, yaw) (:func:`~matcher.overlap.covered_span`),
+    that part widened by _SHOWN_WIDEN_M at both ends: the grid pose is a few
+    centimetres and up to half a yaw step off."""
+    segs = inp.segments[members]  # (S, 2, 3)
+    span = inp.shown.at(members, float(cam[0]), float(cam[1]), yaw)  # (S, 2)
+    widen = _SHOWN_WIDEN_M / inp.seg_length[members]
+    lo = np.maximum(span[:, 0] - widen, 0.0)
+    t = lo[:, None] + _SHOWN_SAMPLES[None, :] * (np.minimum(span[:, 1] + widen, 1.0) - lo)[:, None]  # (S, n)
+    return segs[:, None, 0] + t[..., None] * (segs[:, None, 1] - segs[:, None, 0])
 
 
 def _drop_duplicates(sets, inits):

@@ -138,3 +138,17 @@ def test_visibility_is_tested_on_the_part_the_line_shows():
 
     assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls).all()  # y in [-1.8, -1.4]
     assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls).any()  # y in [-0.4, 1.2]
+
+
+def test_shown_spans_agree_with_covered_span():
+    from matcher.overlap import ShownSpans, covered_span
+
+    rng = np.random.default_rng(4)
+    cam = paper_camera(HEIGHT, math.degrees(PITCH))
+    segs = np.c_[rng.uniform(-4, 4, (30, 2, 2)), rng.uniform(0, 2.5, (30, 2, 1))]
+    lines = rng.uniform([0, 0], [640, 480], (30, 2, 2))
+    spans = ShownSpans(cam, segs, lines)
+    for x, y, yaw in rng.uniform([-1, -1, -math.pi], [1, 1, math.pi], (5, 3)):
+        idx = rng.choice(30, 7, replace=False)
+        want = covered_span(cam, np.tile([x, y, yaw], (7, 1)), segs[idx], lines[idx])
+        assert np.allclose(spans.at(idx, x, y, yaw), want, atol=1e-9)
