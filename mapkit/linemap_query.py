@@ -8,7 +8,18 @@ its edges). Everything per query is a few array operations.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+
+def concat_ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """``np.concatenate([np.arange(s, s + n) for s, n in zip(starts, lengths)])``
+    without the Python loop: the index runs of a few regions' edges or lists."""
+    lengths = np.asarray(lengths, dtype=np.int64)
+    firsts = np.cumsum(lengths) - lengths  # where each run starts in the output
+    return np.arange(int(lengths.sum()), dtype=np.int64) + np.repeat(np.asarray(starts, dtype=np.int64) - firsts,
+                                                                     lengths)
 
 
 class RegionLookup:
@@ -79,35 +90,33 @@ class RegionLookup:
         starts, ends = m.grid_offsets[cells], m.grid_offsets[cells + 1]
         if (ends - starts).sum() == 0:
             return np.zeros(0, dtype=np.int64)
-        take = np.concatenate([np.arange(s, e) for s, e in zip(starts, ends)])
-        return np.unique(m.grid_regions[take])
+        return np.unique(m.grid_regions[concat_ranges(starts, ends - starts)])
 
     def regions_near(self, x: float, y: float, radius: float) -> np.ndarray:
         """Sorted ids of regions meeting the closed disk (radius 0: containing the point)."""
-        if not (np.isfinite(x) and np.isfinite(y) and np.isfinite(radius)) or radius < 0:
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(radius)) or radius < 0:
             raise ValueError(f"query needs finite x, y and radius >= 0, got ({x}, {y}, {radius})")
         cand = self.candidate_regions(x, y, radius)
+        starts = self.region_edge_start[cand]
+        lengths = self.region_edge_start[cand + 1] - starts
+        cand, starts, lengths = cand[lengths > 0], starts[lengths > 0], lengths[lengths > 0]  # no edges: never met
         if cand.size == 0:
             return cand
-        starts, ends = self.region_edge_start[cand], self.region_edge_start[cand + 1]
-        edges = np.concatenate([np.arange(s, e) for s, e in zip(starts, ends)])
+        edges = concat_ranges(starts, lengths)
+        runs = np.cumsum(lengths) - lengths  # each candidate's first edge in ``edges``
         a, b = self.a[edges], self.b[edges]
-        reg = self.edge_region[edges]
         # Even-odd crossing test of a ray towards +x.
         straddle = (a[:, 1] > y) != (b[:, 1] > y)
         with np.errstate(divide="ignore", invalid="ignore"):  # horizontal edges never straddle
             t = (y - a[:, 1]) / (b[:, 1] - a[:, 1])
             xcross = a[:, 0] + t * (b[:, 0] - a[:, 0])
-        crossings = np.bincount(reg, weights=(straddle & (xcross > x)).astype(float), minlength=self.m.n_regions)
-        inside = (crossings[cand] % 2) == 1
+        inside = np.add.reduceat((straddle & (xcross > x)).astype(np.int64), runs) % 2 == 1
         # Distance from the centre to each edge.
         ab = b - a
-        denom = np.einsum("ij,ij->i", ab, ab)
+        denom = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
         with np.errstate(divide="ignore", invalid="ignore"):
-            u = np.clip(np.einsum("ij,ij->i", np.array([x, y]) - a, ab) / denom, 0.0, 1.0)
+            u = np.clip(((x - a[:, 0]) * ab[:, 0] + (y - a[:, 1]) * ab[:, 1]) / denom, 0.0, 1.0)
         u = np.where(denom > 0, u, 0.0)
         d = np.hypot(a[:, 0] + u * ab[:, 0] - x, a[:, 1] + u * ab[:, 1] - y)
-        dmin = np.full(self.m.n_regions, np.inf)
-        np.minimum.at(dmin, reg, d)
-        near = dmin[cand] <= radius
+        near = np.minimum.reduceat(d, runs) <= radius
         return cand[inside | near]

@@ -32,6 +32,7 @@ from typing import Any, Callable
 import numpy as np
 
 from mapkit.atomic import write_atomic
+from mapkit.linemap_query import concat_ranges
 
 MAGIC = b"\x89LMP\r\n\x1a\n"  # PNG-style: catches text-mode and 7-bit mangling
 FORMAT_MAJOR = 1  # bump when an old reader cannot read the new file
@@ -171,8 +172,9 @@ class LineMap:
         regions = np.asarray(regions, dtype=np.int64)
         if regions.size == 0:
             return np.zeros(0, dtype=np.int64)
-        parts = [self.region_list(int(r)) for r in regions]
-        return np.unique(np.concatenate(parts))
+        starts = self.list_offsets[regions]
+        take = self.list_indices[concat_ranges(starts, self.list_offsets[regions + 1] - starts)]
+        return np.unique(take)
 
     def candidate_segments(self, x: float, y: float, radius: float) -> np.ndarray:
         """Segments visible from somewhere in the disk: method.md section 3's set L."""
