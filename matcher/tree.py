@@ -421,19 +421,19 @@ def _visible_best(inp: TreeInput, sets, inits, tol: Tolerances, cache):
     heapq.heapify(heap)
     out, out_init, seen_keys, n = [], [], set(), len(heap)
     while heap and len(out) < tol.max_hypotheses:
-        neg, _, _, m = heapq.heappop(heap)
+        neg, fit, _, m = heapq.heappop(heap)
         if out and -neg < len(out[0]) - tol.match_slack:
             break
-        res = final_check(inp, m, tol, cache)
-        if res is None or res[0].tobytes() in seen_keys:
+        if m.tobytes() in seen_keys:
             continue
-        if len(res[0]) == len(m):
+        passed, smaller, init = check_once(inp, m, tol, cache)
+        if passed:
             seen_keys.add(m.tobytes())
             out.append(m)
-            out_init.append(res[1])
-        else:  # repaired: back in the queue at its new size
+            out_init.append(init)
+        elif smaller is not None:  # repaired by one step: back in the queue at its new size
             n += 1
-            heapq.heappush(heap, (-len(res[0]), res[1][3], n, res[0]))
+            heapq.heappush(heap, (-len(smaller), fit if init is None else init[3], n, smaller))
     return _drop_dominated(out, out_init)
 
 
@@ -541,35 +541,47 @@ def final_check(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dic
     the camera and, with walls, a part not hidden by a wall (unless
     ``visibility`` is False). ``fit`` is the summed quadratic's minimum per
     member."""
+    while True:
+        passed, members, init = check_once(inp, members, tol, cache, visibility)
+        if passed or members is None:
+            return None if members is None else (members, init)
+
+
+def check_once(inp: TreeInput, members: np.ndarray, tol: Tolerances, cache: dict | None = None,
+               visibility: bool = True):
+    """One step of :func:`final_check`: ``(True, members, (x, y, yaw, fit))``
+    if the set passes; else ``(False, smaller, (x, y, yaw, fit))`` with the
+    members that failed dropped (the pose where the set was tested, None
+    when no yaw was left to test), or ``(False, None, None)`` once it falls
+    below ``min_matches``. Repairing one step at a time lets the caller
+    test the other large sets before it finishes repairing this one."""
+    if len(members) < tol.min_matches:
+        return False, None, None
     ce, yaws = inp.centre, inp.yaws
-    while len(members) >= tol.min_matches:
-        # Only the yaws every member's mask holds can qualify.
-        G = inp.mask[members].all(axis=0).nonzero()[0]
-        if not len(G):  # no common yaw: drop the member agreeing least with the others
-            m = inp.mask[members].astype(int)
-            members = np.delete(members, int(np.argmin(m @ m.sum(axis=0))))
-            continue
-        q = inp.quad[members[:, None], G]  # (S, G, 6)
-        val, zx, zy = posegrid.minimise(q.sum(axis=0), inp.dt)
-        each = posegrid.evaluate(q, zx, zy)  # (S, G)
-        good = (val <= len(members) + 1.0) & (each <= tol.q_max).all(axis=0)
-        at = good.nonzero()[0]  # free space only where the rest holds
-        good[at] = inp.in_free_space(ce[:2] + np.stack([zx[at], zy[at]], axis=-1))
-        if not good.any():
-            worst = int(each[:, val.argmin()].argmax())
-            members = np.delete(members, worst)
-            continue
-        i = int(np.where(good, val, np.inf).argmin())
-        g = int(G[i])
-        cam = ce[:2] + np.array([zx[i], zy[i]])
-        fit = float(val[i]) / len(members)
-        if not visibility:
-            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), fit)
-        seen = _seen_cached(inp, members, cam, g, cache)
-        if seen.all():
-            return members, (float(cam[0]), float(cam[1]), float(yaws[g]), fit)
-        members = members[seen]
-    return None
+    # Only the yaws every member's mask holds can qualify.
+    G = inp.mask[members].all(axis=0).nonzero()[0]
+    if not len(G):  # no common yaw: drop the member agreeing least with the others
+        m = inp.mask[members].astype(int)
+        return False, np.delete(members, int(np.argmin(m @ m.sum(axis=0)))), None
+    q = inp.quad[members[:, None], G]  # (S, G, 6)
+    val, zx, zy = posegrid.minimise(q.sum(axis=0), inp.dt)
+    each = posegrid.evaluate(q, zx, zy)  # (S, G)
+    good = (val <= len(members) + 1.0) & (each <= tol.q_max).all(axis=0)
+    at = good.nonzero()[0]  # free space only where the rest holds
+    good[at] = inp.in_free_space(ce[:2] + np.stack([zx[at], zy[at]], axis=-1))
+    if not good.any():
+        i = int(val.argmin())
+        init = (float(ce[0] + zx[i]), float(ce[1] + zy[i]), float(yaws[G[i]]), float(val[i]) / len(members))
+        return False, np.delete(members, int(each[:, i].argmax())), init
+    i = int(np.where(good, val, np.inf).argmin())
+    g = int(G[i])
+    init = (float(ce[0] + zx[i]), float(ce[1] + zy[i]), float(yaws[g]), float(val[i]) / len(members))
+    if not visibility:
+        return True, members, init
+    seen = _seen_cached(inp, members, np.array(init[:2]), g, cache)
+    if seen.all():
+        return True, members, init
+    return False, members[seen], init
 
 
 def _seen_cached(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, cache: dict | None) -> np.ndarray:
