@@ -61,21 +61,28 @@ def distance_and_overlap(camera: Camera, poses: np.ndarray, segments: np.ndarray
 def projected_distance_and_overlap(uv: np.ndarray, ok: np.ndarray, lines: np.ndarray):
     """:func:`distance_and_overlap` for segments already projected
     (:func:`project_segments`' ``uv`` (T, 2, 2) and ``ok`` (T,))."""
-    p, q = uv[:, 0], uv[:, 1]
-    dq = q - p
-    lq = np.hypot(dq[:, 0], dq[:, 1])
-    nx, ny = -dq[:, 1] / np.maximum(lq, 1e-9), dq[:, 0] / np.maximum(lq, 1e-9)
-    rel = lines - p[:, None, :]  # (T, 2, 2)
-    dist = np.abs(rel[..., 0] * nx[:, None] + rel[..., 1] * ny[:, None]).max(axis=1)
+    dist = projected_end_distances(uv, ok, lines).max(axis=1)
     dl = lines[:, 1] - lines[:, 0]
     L = np.hypot(dl[:, 0], dl[:, 1])
     ux, uy = dl[:, 0] / np.maximum(L, 1e-9), dl[:, 1] / np.maximum(L, 1e-9)
     # Positions of the projected end points along the image line, from its first end.
     along = (uv[..., 0] - lines[:, None, 0, 0]) * ux[:, None] + (uv[..., 1] - lines[:, None, 0, 1]) * uy[:, None]
     overlap = np.minimum(along.max(axis=1), L) - np.maximum(along.min(axis=1), 0.0)
-    dist = np.where(ok & (lq > 1e-6), dist, np.inf)
     overlap = np.where(ok, overlap, -np.inf)
     return dist, overlap
+
+
+def projected_end_distances(uv: np.ndarray, ok: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """(T, 2) distances, pixels, of each image line's (T, 2, 2) end points to
+    the line through its projected segment (``uv`` (T, 2, 2), ``ok`` (T,) as
+    :func:`project_segments` gives them); inf where nothing is in front."""
+    p, q = uv[:, 0], uv[:, 1]
+    dq = q - p
+    lq = np.hypot(dq[:, 0], dq[:, 1])
+    nx, ny = -dq[:, 1] / np.maximum(lq, 1e-9), dq[:, 0] / np.maximum(lq, 1e-9)
+    rel = lines - p[:, None, :]  # (T, 2, 2)
+    dist = np.abs(rel[..., 0] * nx[:, None] + rel[..., 1] * ny[:, None])
+    return np.where((ok & (lq > 1e-6))[:, None], dist, np.inf)
 
 
 def covered_span(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines: np.ndarray) -> np.ndarray:

@@ -14,7 +14,10 @@ For each hypothesis, all at once where the arrays allow:
    other visible segments that fit at the pose are added and the pose
    refitted: a hypothesis that lost a true line to a clutter line in
    stage 1 gets it back;
-5. the paper's score E. Hypotheses are ranked by number of matches, then E.
+5. the paper's score E. Hypotheses are ranked by number of matches, then
+   by the reprojection error (the lines' end points' pixel distances to the
+   projected segments, each over its line's noise bound), then E; E is what
+   the acceptance threshold tests.
 """
 
 from __future__ import annotations
@@ -27,7 +30,8 @@ import numpy as np
 from matcher import verify
 from matcher.constraints import wrap
 from matcher.occlusion import sight_clear
-from matcher.overlap import covered_span, distance_and_overlap, project_segments, projected_distance_and_overlap
+from matcher.overlap import (covered_span, distance_and_overlap, project_segments, projected_distance_and_overlap,
+                             projected_end_distances)
 
 #: Stage 2's visibility test ignores wall crossings this close to the
 #: segment, metres (the segment lies on a wall face; the pose is refined):
@@ -103,11 +107,20 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     if len(hyp):
         E = verify.score_e(poses, hyp, img.normals[line_ids], segs[local, 0], segs[local, 1], camera.pitch,
                            camera.height_m)
-    # Ranked by E among the hypotheses that explain the most lines: a
-    # hypothesis trimmed down to a few lines fits them well but explains less.
+    # Ranked among the hypotheses that explain the most lines (a hypothesis
+    # trimmed down to a few lines fits them well but explains less) by the
+    # reprojection error: the end points' distances to their projected
+    # segments, each over its line's noise bound, in the image space the
+    # detector's noise is stated in. E, the paper's score, mixes radians and
+    # metres and weighs a segment's midpoint however little of it is seen:
+    # two aliases (the near and far faces of a jamb, 20 cm and 3 degrees
+    # apart) often score E alike while their reprojection errors differ
+    # threefold (docs/matcher.md). E breaks ties, is reported, and is what
+    # the acceptance threshold applies to.
+    cost = reprojection_cost(camera, img, poses, hyp, segs[local], line_ids, tol, n_h)
     best_n = int(n_fin[alive].max()) if alive.any() else 0
     E = np.where(alive & (n_fin >= max(best_n, tol.min_matches)) & np.isfinite(E), E, np.inf)
-    order = np.lexsort((E, -n_fin * alive))
+    order = np.lexsort((E, cost, -n_fin * alive))
     # Hypotheses that ended with the same matches are one: only the best
     # ranked keeps its score (so the runner-up is a different match).
     keys = {}
@@ -117,12 +130,28 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
         if key in keys and np.isfinite(E[h]):
             E[h] = np.inf
         keys.setdefault(key, h)
-    order = np.lexsort((E, -n_fin * (alive & np.isfinite(E))))
+    order = np.lexsort((E, cost, -n_fin * (alive & np.isfinite(E))))
     why = ""
     if not np.isfinite(E).any():
         why = ("no hypothesis kept its pose inside the prior bounds and the map's free space" if (n_in >= tol.min_matches).any()
                else f"no hypothesis kept {tol.min_matches} matches that fit at its pose")
     return Ranked(hyp, local, line_ids, poses, E, order, why)
+
+
+def reprojection_cost(camera, img, poses, hyp, segments, line_ids, tol, n_h) -> np.ndarray:
+    """(H,) per hypothesis: the sum over its matches t (``hyp`` (T,),
+    ``segments`` (T, 2, 3), ``line_ids`` (T,)) and both end points of the
+    line of (d / s)^2, d the end point's distance, pixels, to the line of
+    the segment projected at the hypothesis' pose (``poses`` (H, 3)) and s
+    the line's noise bound (``line_px`` plus ``line_deg`` over half its
+    length); inf for a segment behind the camera."""
+    if not len(hyp):
+        return np.full(n_h, np.inf)
+    lines = img.lines[line_ids]
+    d = projected_end_distances(*project_segments(camera, poses[hyp], segments), lines)  # (T, 2)
+    length = np.hypot(*(lines[:, 1] - lines[:, 0]).T)
+    noise = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length
+    return np.bincount(hyp, ((d / noise[:, None]) ** 2).sum(axis=1), minlength=n_h)
 
 
 def _refit(camera, img, segs, poses, hyp, local, line_ids):

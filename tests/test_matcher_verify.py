@@ -152,3 +152,36 @@ def test_shown_spans_agree_with_covered_span():
         idx = rng.choice(30, 7, replace=False)
         want = covered_span(cam, np.tile([x, y, yaw], (7, 1)), segs[idx], lines[idx])
         assert np.allclose(spans.at(idx, x, y, yaw), want, atol=1e-9)
+
+
+def test_reprojection_cost_sums_end_point_errors_over_noise():
+    """Lines drawn exactly cost 0; moved sideways by 1 px, each line costs
+    2 (1 / s)^2 with s its noise bound; a segment behind the camera, inf."""
+    from types import SimpleNamespace
+
+    from matcher.rank import reprojection_cost
+    from matcher.tolerances import Tolerances
+
+    cam = paper_camera(HEIGHT, math.degrees(PITCH))
+    tol = Tolerances()
+    poses = np.array([[0.0, 0.0, 0.3], [1.0, -1.0, -0.5]])
+    rng = np.random.default_rng(5)
+    hyp = np.array([0, 0, 0, 1, 1, 1])
+    ahead = np.c_[np.cos(poses[hyp, 2]), np.sin(poses[hyp, 2])]
+    base = poses[hyp, :2] + 4.0 * ahead
+    segs = np.stack([np.c_[base + rng.normal(0, 0.5, (6, 2)), rng.uniform(0, 2.5, 6)],
+                     np.c_[base + rng.normal(0, 0.5, (6, 2)), rng.uniform(0, 2.5, 6)]], axis=1)
+    uv, ok = project_segments(cam, poses[hyp], segs)
+    assert ok.all()
+    img = SimpleNamespace(lines=uv)
+    exact = reprojection_cost(cam, img, poses, hyp, segs, np.arange(6), tol, 2)
+    assert np.allclose(exact, 0.0, atol=1e-12)
+    d = uv[:, 1] - uv[:, 0]
+    normal = np.c_[-d[:, 1], d[:, 0]] / np.linalg.norm(d, axis=1, keepdims=True)
+    img.lines = uv + normal[:, None, :]  # every end point 1 px off
+    s = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * np.linalg.norm(d, axis=1)
+    want = np.bincount(hyp, 2.0 / s**2)
+    assert np.allclose(reprojection_cost(cam, img, poses, hyp, segs, np.arange(6), tol, 2), want)
+    behind = poses.copy()
+    behind[0, 2] += math.pi
+    assert np.isinf(reprojection_cost(cam, img, behind, hyp, segs, np.arange(6), tol, 2)[0])
