@@ -115,6 +115,7 @@ class SightRays:
         self.step = 2 * np.pi / self.bins
         self.skip = float(skip)
         self._rows: dict[tuple[float, float], np.ndarray] = {}
+        self._wide: dict[tuple[float, float], np.ndarray] = {}
         bear = np.arange(self.bins) * self.step - np.pi
         self._dirs = np.stack([np.cos(bear), np.sin(bear)], axis=1)
 
@@ -124,6 +125,18 @@ class SightRays:
 
     def reach(self, points: np.ndarray) -> np.ndarray:
         """(U, bins) distances from ``points`` (U, 2) along each bearing."""
+        return self._table(points, self._rows)
+
+    def reach_along(self, points: np.ndarray, rows: np.ndarray, bearings: np.ndarray) -> np.ndarray:
+        """(...) how far one sees from ``points[rows]`` (points (U, 2), rows
+        (...) int) along world ``bearings`` (...): the longest reach among the
+        bearing's bin and its two neighbours (a ray that just grazes a door
+        jamb is blocked in one bin and clear in the next)."""
+        return self._table(points, self._wide)[rows, self.bin_of(bearings)]
+
+    def _table(self, points: np.ndarray, table: dict) -> np.ndarray:
+        """(U, bins) rows of ``table`` (raw or widened reaches) for ``points``
+        (U, 2), casting the rays of points not seen before."""
         keys = [(round(float(x), 6), round(float(y), 6)) for x, y in points]
         todo = [i for i, k in enumerate(keys) if k not in self._rows]
         if todo:
@@ -132,16 +145,11 @@ class SightRays:
             got = ray_cast(o, d, self.walls, self.skip).reshape(len(todo), self.bins)
             for i, row in zip(todo, got):
                 self._rows[keys[i]] = row
-        return np.array([self._rows[k] for k in keys]).reshape(len(keys), self.bins)
-
-    def reach_along(self, points: np.ndarray, rows: np.ndarray, bearings: np.ndarray) -> np.ndarray:
-        """(...) how far one sees from ``points[rows]`` (points (U, 2), rows
-        (...) int) along world ``bearings`` (...): the longest reach among the
-        bearing's bin and its two neighbours (a ray that just grazes a door
-        jamb is blocked in one bin and clear in the next)."""
-        reach = self.reach(points)  # (U, B)
-        j = self.bin_of(bearings)
-        return np.maximum.reduce([reach[rows, (j + o) % self.bins] for o in (-1, 0, 1)])
+                # The widened row: each bin the longest of itself and its neighbours.
+                self._wide[keys[i]] = np.maximum(np.maximum(row, np.roll(row, 1)), np.roll(row, -1))
+        if len(keys) == 1:
+            return table[keys[0]][None]
+        return np.stack([table[k] for k in keys]) if keys else np.zeros((0, self.bins))
 
 
 #: Above this many wall edges the sight lines are first tested against the
