@@ -130,6 +130,12 @@ class ShownSpans:
     product per call gives them for every pair and both ends."""
 
     def __init__(self, camera: Camera, segments: np.ndarray, lines: np.ndarray):
+        # Made on the first call: many frames never test visibility in the tree.
+        self._inputs = (camera, segments, lines)
+        self.coef = None
+
+    def _build(self) -> None:
+        camera, segments, lines = self._inputs
         cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
         X = (lines[..., 0] - camera.cx) / camera.fx  # (T, 2) camera-frame rays (X, Y, 1)
         Y = (lines[..., 1] - camera.cy) / camera.fy
@@ -154,6 +160,8 @@ class ShownSpans:
 
     def at(self, idx: np.ndarray, x: float, y: float, yaw: float) -> np.ndarray:
         """(S, 2) sorted spans of pairs ``idx`` (S,) at the pose ``(x, y, yaw)``."""
+        if self.coef is None:
+            self._build()
         c, s = math.cos(yaw), math.sin(yaw)
         m = self.coef[idx] @ np.array([c, s, 1.0, x * c, x * s, y * c, y * s, x, y])  # (S, 5)
         b, e, f = m[:, 0:2], m[:, 2:4], m[:, 4:5]
