@@ -79,7 +79,9 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     poses = verify.refine(hyps.init, hyp, reps[cls, 0], reps[cls, 1], rays[:, 0], rays[:, 1],
                           camera.pitch, camera.height_m, robust_scale=scale)
     local = resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
-    inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol) & visible(camera, poses[hyp], segs[local], img.lines[line_ids], walls)
+    inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol)
+    at = inl.nonzero()[0]  # visibility only where the line fits
+    inl[at] = visible(camera, poses[hyp[at]], segs[local[at]], img.lines[line_ids[at]], walls)
     n_in = np.bincount(hyp, inl, minlength=n_h)
     keep = inl & (n_in[hyp] >= tol.min_matches)
     hyp, line_ids, local = hyp[keep], line_ids[keep], local[keep]
@@ -230,7 +232,7 @@ def visible(camera, poses, segments, lines, walls) -> np.ndarray:
     part's visibility.) At a refined pose (a centimetre off) a sight line
     that cuts a wall 2 cm or more from the segment is blocked: it tells the
     near and far faces of a door jamb apart."""
-    if walls is None:
+    if walls is None or not len(poses):
         return np.ones(len(poses), dtype=bool)
     span = covered_span(camera, poses, segments, lines)  # (T, 2)
     t = span[:, :1] + _SPAN_SAMPLES[None, :] * (span[:, 1:] - span[:, :1])  # (T, n)

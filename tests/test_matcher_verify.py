@@ -138,6 +138,7 @@ def test_visibility_is_tested_on_the_part_the_line_shows():
 
     assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls).all()  # y in [-1.8, -1.4]
     assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls).any()  # y in [-0.4, 1.2]
+    assert visible(cam, pose[:0], seg[:0], line_showing(0.2, 0.6)[:0], walls).shape == (0,)
 
 
 def test_shown_spans_agree_with_covered_span():
