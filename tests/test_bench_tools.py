@@ -1,0 +1,30 @@
+"""tools/bench_paper.py end to end on a few frames: the table, the JSON
+rows and the figures (the full run is the README's benchmark)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+
+import bench_paper  # noqa: E402
+
+
+def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
+    out = tmp_path / "figs"
+    js = tmp_path / "rows.json"
+    code = bench_paper.main(["--poses", "3", "--peq", "1", "5", "--repeat", "2", "--baseline-poses", "1",
+                             "--baseline-limit", "0.2", "--out", str(out), "--json", str(js)])
+    assert code == 0
+    table = capsys.readouterr().out
+    assert "| 1 |" in table and "| 5 |" in table
+    data = json.loads(js.read_text())
+    for peq in ("1", "5"):
+        rows = data["rows"][peq]
+        assert len(rows) == 3
+        assert all(r["ms"] > 0 for r in rows)
+        assert "base_ms" in rows[0] and "base_ms" not in rows[1]
+        assert data["summary"][peq]["n"] == 3
+    assert sorted(p.name for p in out.iterdir()) == ["paper_fig5.png", "paper_fig6.png"]
