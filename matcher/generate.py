@@ -245,28 +245,6 @@ def collinear_labels(segments: np.ndarray, angle_deg: float = 0.5, dist_m: float
     return label
 
 
-def class_samples(segments: np.ndarray, label: np.ndarray, per_piece: int = 5) -> np.ndarray:
-    """(G, n, 3) points spread over the member segments of each collinear
-    group (``per_piece`` per member), so that a visibility test sees a
-    narrow visible piece of a long group. Groups with fewer members are
-    padded with NaN points, which no test counts as seen (most groups are
-    single segments: repeating their points would test each one again)."""
-    t = np.linspace(0.02, 0.98, per_piece)
-    G = int(label.max()) + 1 if len(label) else 0
-    if G == 0:
-        return np.empty((0, per_piece, 3))
-    order = np.argsort(label, kind="stable")
-    pts = segments[order, None, 0] + t[None, :, None] * (segments[order, None, 1] - segments[order, None, 0])
-    pts = pts.reshape(-1, 3)  # members' points, group after group
-    size = np.bincount(label, minlength=G) * per_piece  # points per group
-    start = np.concatenate([[0], np.cumsum(size)[:-1]])
-    n = int(size.max())
-    k = np.arange(n)[None, :]
-    out = pts[start[:, None] + k % size[:, None]]
-    out[np.broadcast_to(k >= size[:, None], (G, n))] = np.nan
-    return out
-
-
 def yaw_grid(yaw_e: float, dyaw: float, step: float) -> np.ndarray:
     """(Y,) yaws covering the interval with spacing at most ``step`` (radians)."""
     if dyaw >= math.pi:
@@ -286,7 +264,6 @@ def generate(
     dyaw: float,
     tol: Tolerances,
     walls: tuple[np.ndarray, np.ndarray] | None = None,
-    samples: np.ndarray | None = None,
     debug: dict | None = None,
     free=None,
     sight=None,
@@ -295,9 +272,7 @@ def generate(
     """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
 
     ``walls``: wall edges ``(a (E, 2), b (E, 2))`` for the visibility check
-    of the tree's final test, or None; ``samples`` (N, n, 3) points of each
-    candidate tested for visibility (spread over the pieces of a collinear
-    group, see :func:`collinear_classes`); ``free`` the map's
+    of the tree's final test, or None; ``free`` the map's
     :class:`~matcher.freespace.FreeSpace`, or None to allow any position;
     ``sight`` the walls' :class:`~matcher.occlusion.SightRays` (kept with the
     map by the pipeline; made here from ``walls`` if None); ``faces`` (N, 2)
@@ -375,9 +350,9 @@ def generate(
 
     # ---- interpretation tree -------------------------------------------
     t_tree = time.perf_counter()
-    inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, is_v,
-                    None if samples is None else samples[seg_k], line_k, seg_k, free, tol.free_space_m,
-                    front_c, front_b, single_fit, sight, ShownSpans(camera, segments[seg_k], img.lines[line_k]))
+    inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, vertical=is_v, line=line_k,
+                    seg=seg_k, free=free, free_m=tol.free_space_m, front_c=front_c, front_b=front_b,
+                    single_fit=single_fit, sight=sight, shown=ShownSpans(camera, segments[seg_k], img.lines[line_k]))
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)

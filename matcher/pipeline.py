@@ -12,7 +12,7 @@ from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
 from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
 from matcher.freespace import free_space
-from matcher.generate import (ImageLines, class_samples, collinear_classes, collinear_labels, generate,
+from matcher.generate import (ImageLines, collinear_classes, collinear_labels, generate,
                               in_field_of_view)
 from matcher.occlusion import SightRays, face_normals, wall_edges
 from matcher.rank import verify_hypotheses
@@ -94,9 +94,8 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     free = free_space(linemap)
     sight = linemap.cached("matcher.sight", lambda: SightRays(walls)) if walls is not None else None
     faces = _class_faces(linemap.cached("matcher.faces", lambda: face_normals(linemap.segments, walls))[ids], label)
-    samples = class_samples(segs, label)
     hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
-                    samples, free=free, sight=sight, faces=faces)
+                    free=free, sight=sight, faces=faces)
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
     if n_h == 0:
@@ -114,7 +113,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         t3 = time.perf_counter()
         tol1 = replace(tol, match_slack=1)
         hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol1, walls,
-                        samples, free=free, sight=sight, faces=faces)
+                        free=free, sight=sight, faces=faces)
         n_h = len(hyps.sets)
         ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
                                      free)

@@ -87,9 +87,7 @@ class TreeInput:
     at each grid yaw; ``walls`` a pair of (E, 2) arrays, the wall edges' end
     points, or None; ``vertical`` (K,) bool, correspondences of vertical
     segments (explored last: each fixes only a bearing, so they are compatible
-    with much and prune little); ``samples`` (K, n, 3) points of the matched
-    model segments tested for visibility (by default 5 along ``segments``);
-    ``line`` and ``seg`` (K,) the image line and model segment (group) of each
+    with much and prune little); ``line`` and ``seg`` (K,) the image line and model segment (group) of each
     correspondence; ``free`` the map's :class:`~matcher.freespace.FreeSpace`
     (or None) and ``free_m`` how far outside it the camera may stand;
     ``front_c`` (K, Y, 2) and ``front_b`` (K, Y) half-planes ``c . z <= b`` on
@@ -102,8 +100,8 @@ class TreeInput:
     vertical edge, per bearing), or None to cast sight lines; ``shown`` the
     :class:`~matcher.overlap.ShownSpans` of the correspondences (``segments``
     with their image lines), or None: with it, visibility is tested on the
-    part of the segment the line shows at the set's pose (else on
-    ``samples``)."""
+    part of the segment the line shows at the set's pose (else on points
+    spread over the whole segment)."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -115,7 +113,6 @@ class TreeInput:
     forward: np.ndarray
     walls: tuple[np.ndarray, np.ndarray] | None
     vertical: np.ndarray | None = None
-    samples: np.ndarray | None = None
     line: np.ndarray | None = None
     seg: np.ndarray | None = None
     free: object | None = None
@@ -602,8 +599,6 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int) -> np.nd
     clear sight line."""
     if inp.shown is not None:
         pts = _shown_points(inp, members, cam, float(inp.yaws[g]))
-    elif inp.samples is not None:
-        pts = inp.samples[members]  # (S, n, 3)
     else:
         segs = inp.segments[members]  # (S, 2, 3)
         pts = segs[:, None, 0] + _SAMPLES[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])

@@ -207,7 +207,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
 
 
 def test_collinear_groups_hand_worked_and_from_map_labels(flat):
-    from matcher.generate import class_samples, collinear_classes, collinear_labels
+    from matcher.generate import collinear_classes, collinear_labels
 
     segs = np.array([
         [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],  # a wall's floor line, split by a door...
@@ -219,9 +219,6 @@ def test_collinear_groups_hand_worked_and_from_map_labels(flat):
     label, reps = collinear_classes(segs)
     assert label.tolist() == [0, 0, 1, 0, 2]
     assert np.allclose(reps[0], [[0, 0, 0], [3, 0, 0]], atol=1e-2)
-    samples = class_samples(segs, label, per_piece=5)
-    assert samples.shape == (3, 15, 3)
-    assert np.isnan(samples[2, 5:]).all() and np.isfinite(samples[0]).all()  # a lone piece is padded
     # Map-wide labels restricted to a subset give the same groups and spans.
     rng = np.random.default_rng(2)
     all_labels = collinear_labels(flat.segments, chunk=64)
