@@ -87,8 +87,8 @@ class TreeInput:
     at each grid yaw; ``walls`` a pair of (E, 2) arrays, the wall edges' end
     points, or None; ``vertical`` (K,) bool, correspondences of vertical
     segments (explored last: each fixes only a bearing, so they are compatible
-    with much and prune little); ``line`` and ``seg`` (K,) the image line and model segment (group) of each
-    correspondence; ``free`` the map's :class:`~matcher.freespace.FreeSpace`
+    with much and prune little); ``line`` and ``seg`` (K,) the image line
+    and model segment (group) of each correspondence; ``free`` the map's :class:`~matcher.freespace.FreeSpace`
     (or None) and ``free_m`` how far outside it the camera may stand;
     ``front_c`` (K, Y, 2) and ``front_b`` (K, Y) half-planes ``c . z <= b`` on
     the camera position relative to the centre that keep a vertical edge ahead
