@@ -94,25 +94,38 @@ def covered_span(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines:
     sliver only: visibility is tested there (rank.visible). (For many calls
     on the same pairs, :class:`ShownSpans`.)"""
     c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
-    cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
-    X = (lines[..., 0] - camera.cx) / camera.fx  # (T, 2) camera-frame rays (X, Y, 1)
-    Y = (lines[..., 1] - camera.cy) / camera.fy
-    # World directions X r + Y d + f with the rows r, d, f of method.md section 2.
-    p, q = cp - sp * Y, -X  # at yaw 0, then turned by the yaw
-    dx, dy, dz = c * p - s * q, s * p + c * q, -cp * Y - sp
+    p, q, dz = _level_rays(camera, lines)  # turned by the yaw below
+    dx, dy = c * p - s * q, s * p + c * q
     v = segments[:, 1] - segments[:, 0]  # (T, 3)
     wx, wy = segments[:, 0, 0:1] - poses[:, 0:1], segments[:, 0, 1:2] - poses[:, 1:2]
     wz = segments[:, 0, 2:3] - camera.height_m
     vx, vy, vz = v[:, 0:1], v[:, 1:2], v[:, 2:3]
-    # Closest points of the lines A + t v and C + u d: t = (b e - c0 f) / (a c0 - b^2).
     a = vx * vx + vy * vy + vz * vz
     b = vx * dx + vy * dy + vz * dz
     c0 = dx * dx + dy * dy + dz * dz
     e = wx * dx + wy * dy + wz * dz
     f = vx * wx + vy * wy + vz * wz
-    den = a * c0 - b * b
-    ok = den > 1e-12 * a * c0  # else the ray runs along the segment: its middle
-    t = np.where(ok, (b * e - c0 * f) / np.where(ok, den, 1.0), 0.5)
+    return _span(a, b, c0, e, f)
+
+
+def _level_rays(camera: Camera, lines: np.ndarray):
+    """``(p, q, r)``, each (T, 2): the world directions of the sight rays of
+    lines' (T, 2, 2) end points for a camera at yaw 0 (``X r + Y d + f``
+    with the rows r, d, f of method.md section 2); a yaw turns (p, q)."""
+    cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
+    X = (lines[..., 0] - camera.cx) / camera.fx  # camera-frame rays (X, Y, 1)
+    Y = (lines[..., 1] - camera.cy) / camera.fy
+    return cp - sp * Y, -X, -cp * Y - sp
+
+
+def _span(a, b, c, e, f) -> np.ndarray:
+    """(T, 2) sorted parameters in [0, 1] of the points of the lines
+    A + t v nearest the rays C + u d: ``t = (b e - c f) / (a c - b^2)`` with
+    a = v.v, b = v.d, c = d.d, e = (A - C).d, f = v.(A - C); a ray running
+    along its segment gives the middle."""
+    den = a * c - b * b
+    ok = den > 1e-12 * a * c
+    t = np.where(ok, (b * e - c * f) / np.where(ok, den, 1.0), 0.5)
     return np.sort(np.clip(t, 0.0, 1.0), axis=1)
 
 
@@ -136,11 +149,7 @@ class ShownSpans:
 
     def _build(self) -> None:
         camera, segments, lines = self._inputs
-        cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
-        X = (lines[..., 0] - camera.cx) / camera.fx  # (T, 2) camera-frame rays (X, Y, 1)
-        Y = (lines[..., 1] - camera.cy) / camera.fy
-        # d0 = X r + Y d + f with the rows r, d, f of method.md section 2 at yaw 0.
-        p, q, r = cp - sp * Y, -X, -cp * Y - sp
+        p, q, r = _level_rays(camera, lines)  # d0
         A = segments[:, 0]
         v = segments[:, 1] - A
         ax, ay, az = A[:, 0:1], A[:, 1:2], A[:, 2:3] - camera.height_m
@@ -164,9 +173,4 @@ class ShownSpans:
             self._build()
         c, s = math.cos(yaw), math.sin(yaw)
         m = self.coef[idx] @ np.array([c, s, 1.0, x * c, x * s, y * c, y * s, x, y])  # (S, 5)
-        b, e, f = m[:, 0:2], m[:, 2:4], m[:, 4:5]
-        a, cc = self.a[idx], self.c[idx]
-        den = a * cc - b * b
-        ok = den > 1e-12 * a * cc  # else the ray runs along the segment: its middle
-        t = np.where(ok, (b * e - cc * f) / np.where(ok, den, 1.0), 0.5)
-        return np.sort(np.clip(t, 0.0, 1.0), axis=1)
+        return _span(self.a[idx], m[:, 0:2], self.c[idx], m[:, 2:4], m[:, 4:5])
