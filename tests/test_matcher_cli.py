@@ -30,7 +30,7 @@ def files(tmp_path_factory):
     fr = make_frame(m, cam, np.random.default_rng(11), 2)
     (d / "lines.json").write_text(json.dumps({"lines": fr.lines.reshape(-1, 4).tolist()}))
     prior = ",".join(f"{v:.4f}" for v in fr.prior)
-    return {"dir": d, "frame": fr, "prior": prior, "dt": str(fr.dt), "dyaw": str(fr.dyaw)}
+    return {"dir": d, "frame": fr, "prior": prior, "dt": str(fr.dt), "dyaw": str(fr.dyaw), "map": m, "camera": cam}
 
 
 def args(files, *extra, lines=True):
@@ -67,15 +67,18 @@ def test_not_localised_exits_1_with_reason(files, capsys):
 
 
 def test_image_input(files, capsys, tmp_path):
-    img = np.zeros((480, 640), np.uint8)
-    for (u1, v1), (u2, v2) in files["frame"].lines:
-        cv2.line(img, (int(round(u1)), int(round(v1))), (int(round(u2)), int(round(v2))), 255, 2)
+    """--image: the frame rendered (tools/render.py), lines found by LSD."""
+    from render import render_view
+
+    fr = files["frame"]
     p = tmp_path / "frame.png"
-    cv2.imwrite(str(p), img)
+    cv2.imwrite(str(p), render_view(files["map"], files["camera"], fr.pose, supersample=2))
     a = args(files, "--json", lines=False) + ["--image", str(p)]
-    code = main(a)
+    assert main(a) == 0
     d = json.loads(capsys.readouterr().out)
-    assert code in (0, 1) and "hypotheses" in d
+    x, y, yaw = fr.pose
+    assert abs(d["pose"]["x"] - x) < 0.03 and abs(d["pose"]["y"] - y) < 0.03
+    assert abs((d["pose"]["yaw_deg"] - yaw + 180) % 360 - 180) < 0.5
 
 
 @pytest.mark.parametrize(

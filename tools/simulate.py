@@ -315,7 +315,8 @@ def main(argv=None) -> int:
     ap.add_argument("--noise-deg", type=float, default=1.0)
     ap.add_argument("--clutter", type=int, default=3)
     ap.add_argument("--out", metavar="DIR",
-                    help="write camera.json, lines.json and truth.json there (for 'matcher localize')")
+                    help="write camera.json, lines.json, truth.json and frame.png (the view rendered by "
+                         "tools/render.py) there, for 'matcher localize'")
     args = ap.parse_args(argv)
     import matcher
 
@@ -336,11 +337,18 @@ def main(argv=None) -> int:
         truth = {"pose": {"x": fr.pose[0], "y": fr.pose[1], "yaw_deg": fr.pose[2]},
                  "prior": list(fr.prior), "dt": fr.dt, "dyaw": fr.dyaw, "matches": fr.true_matches()}
         (out / "truth.json").write_text(json.dumps(truth))
-        print(f"wrote {out}/camera.json, lines.json, truth.json; try:")
+        # The same view as an image (walls, floor and ceiling shaded), for --image.
+        import cv2
+        from render import render_view
+
+        cv2.imwrite(str(out / "frame.png"), render_view(m, cam, fr.pose, rng=np.random.default_rng(args.seed)))
+        print(f"wrote {out}/camera.json, lines.json, truth.json, frame.png; try:")
         import os
 
-        print(f"  matcher localize --map {os.path.relpath(args.map)} --camera {out}/camera.json "
-              f"--lines {out}/lines.json --prior {x:.3f},{y:.3f},{yaw:.2f} --dt {fr.dt:g} --dyaw {fr.dyaw:g}")
+        common = (f"matcher localize --map {os.path.relpath(args.map)} --camera {out}/camera.json "
+                  f"--prior {x:.3f},{y:.3f},{yaw:.2f} --dt {fr.dt:g} --dyaw {fr.dyaw:g}")
+        print(f"  {common} --lines {out}/lines.json")
+        print(f"  {common} --image {out}/frame.png")
     else:
         res = matcher.localize(m, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
         print(res.to_dict())
