@@ -89,6 +89,33 @@ def vertical_candidates(camera: Camera, normals: np.ndarray, eps: np.ndarray) ->
     return vertical_residual(camera, normals) <= eps
 
 
+def line_pieces(lines: np.ndarray, normals: np.ndarray, eps: np.ndarray, gap_px: float) -> np.ndarray:
+    """(M, M) bool: may lines i and j (M, 2, 2) pixels be pieces of one line,
+    broken where its contrast fades or something stands in front? Their
+    interpretation planes (unit ``normals`` (M, 3)) agree within the sum of
+    their noise bounds ``eps`` (M,) radians, and they do not overlap along
+    the line by more than ``gap_px`` (the end points' noise). Such lines may
+    show one model segment together; the diagonal is False."""
+    M = len(lines)
+    out = np.zeros((M, M), dtype=bool)
+    if M < 2:
+        return out
+    # Planes within the noise: |cos| of the angle between the normals.
+    bound = np.cos(np.minimum(eps[:, None] + eps[None, :], 0.5 * np.pi))
+    i, j = np.nonzero(np.triu(np.abs(normals @ normals.T) >= bound, 1))
+    if not len(i):
+        return out
+    # Line j's span along line i, from i's first end point; i's own is [0, L].
+    d = lines[i, 1] - lines[i, 0]
+    length = np.hypot(d[:, 0], d[:, 1])
+    d = d / np.maximum(length, 1e-12)[:, None]
+    t = np.einsum("pek,pk->pe", lines[j] - lines[i, None, 0], d)  # (pairs, 2)
+    overlap = np.minimum(t.max(axis=1), length) - np.maximum(t.min(axis=1), 0.0)
+    keep = overlap <= gap_px
+    out[i[keep], j[keep]] = True
+    return out | out.T
+
+
 def vertical_bearing(camera: Camera, lines: np.ndarray) -> np.ndarray:
     """(M,) bearing alpha, radians, of the vertical edge imaged by each line,
     positive to the right of the optical axis (horizon correction of

@@ -47,7 +47,8 @@ class ImageLines:
     offset noise); ``mid_rays`` (M, 3) unit rays of the midpoints; ``vertical`` (M,) bool vertical
     candidates; ``alpha`` (M,) bearings of vertical candidates, radians, to
     the right; ``alpha_eps`` (M,) their noise bound; ``usable`` (M,) bool long
-    enough to use."""
+    enough to use; ``pieces`` (M, M) bool, couples that may be pieces of one
+    broken line (:func:`~matcher.constraints.line_pieces`), or None: none."""
 
     lines: np.ndarray
     normals: np.ndarray
@@ -59,6 +60,7 @@ class ImageLines:
     eps_rot: np.ndarray
     eps_off: np.ndarray
     mid_rays: np.ndarray
+    pieces: np.ndarray | None = None
 
 
 @dataclass
@@ -470,13 +472,17 @@ def _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces):
 
 
 def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, front_c, front_b) -> np.ndarray:
-    """(K, K) bool pairwise compatibility: one-to-one, a common pose of the
-    two in the prior set at one grid yaw (within both half-planes, see
-    :func:`_half_planes`), and the paper's binary constraint for two
-    vertical correspondences."""
+    """(K, K) bool pairwise compatibility: one-to-one (two lines share a
+    segment only if they may be pieces of one line, ``img.pieces``), a
+    common pose of the two in the prior set at one grid yaw (within both
+    half-planes, see :func:`_half_planes`), and the paper's binary
+    constraint for two vertical correspondences."""
     K = len(seg_k)
     iu, ju = np.triu_indices(K, 1)
-    distinct = (seg_k[iu] != seg_k[ju]) & (line_k[iu] != line_k[ju])
+    distinct = seg_k[iu] != seg_k[ju]
+    if img.pieces is not None:
+        distinct |= img.pieces[line_k[iu], line_k[ju]]
+    distinct &= line_k[iu] != line_k[ju]
     iu, ju = iu[distinct], ju[distinct]
     # (pair, yaw) entries where both masks hold. (np.nonzero on the 2-D
     # array, and fancy indexing of quad by two arrays, cost several times

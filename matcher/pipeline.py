@@ -10,7 +10,8 @@ import numpy as np
 
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
-from matcher.constraints import bearing_noise, plane_noises, vertical_bearing, vertical_candidates, wrap
+from matcher.constraints import (bearing_noise, line_pieces, plane_noises, vertical_bearing, vertical_candidates,
+                                 wrap)
 from matcher.freespace import free_space
 from matcher.generate import (ImageLines, collinear_classes, collinear_labels, generate,
                               in_field_of_view)
@@ -33,7 +34,8 @@ def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLi
     usable = np.linalg.norm(und[:, 1] - und[:, 0], axis=1) >= tol.min_line_px
     mid = camera.pixel_rays(0.5 * (und[:, 0] + und[:, 1]))
     mid /= np.linalg.norm(mid, axis=1, keepdims=True)
-    return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid)
+    pieces = line_pieces(und, normals, eps, 2.0 * tol.line_end_px)
+    return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid, pieces)
 
 
 def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):

@@ -6,7 +6,9 @@ vertical tests) and "unmatched" (clutter, or a segment not in the lists).
 A node is a set R of correspondences whose feasible pose set is non-empty:
 a child adds a candidate that is pairwise compatible with every member and
 keeps the whole set feasible (:mod:`matcher.posegrid`, checked for all the
-line's candidates at once); a segment is matched once. A branch is cut when
+line's candidates at once). Pairwise compatibility holds matching one to
+one: two lines share a segment only when they are pieces of one broken
+line (:func:`matcher.constraints.line_pieces`). A branch is cut when
 it cannot reach the minimum number of matches, which rises to the largest
 set found minus ``match_slack``. A leaf is reported if it is maximal (no
 skipped line could join). The tree is searched first in passes that aim at
@@ -81,7 +83,9 @@ class TreeInput:
     """Per correspondence k: strip quadratics ``quad`` (K, Y, 6) and yaw masks
     ``mask`` (K, Y) on the grid ``yaws`` (Y,); ``compat`` (K, K) bool pairwise
     compatibility (the tree relies on it: a pair in compat is taken as
-    feasible, as :func:`matcher.generate._pair_compat` tests it); ``segments``
+    feasible, as :func:`matcher.generate._pair_compat` tests it, and two
+    correspondences on one segment are in compat only if their lines may be
+    pieces of one line); ``segments``
     (K, 2, 3) the matched model segment (world); ``centre`` (3,) the prior
     camera centre, ``dt`` the disk radius; ``forward`` (Y, 3) the optical axis
     at each grid yaw; ``walls`` a pair of (E, 2) arrays, the wall edges' end
@@ -176,7 +180,6 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         level_of[c] = lv
     order_rank = np.empty(K, dtype=np.int64)
     order_rank[np.concatenate(cands)] = np.arange(K)
-    seg_of = np.asarray(inp.seg, dtype=np.int64)
 
     def feasible_with(R: list[int], Qsum: np.ndarray, mR: np.ndarray, cand: np.ndarray, fit: bool = False):
         """(C,) bool: is R + {u} feasible, for each u in cand; with ``fit``
@@ -216,18 +219,18 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
             return np.isfinite(best), best
         return ok.any(axis=1)
 
-    def open_candidates(level: int, R: list[int], used: frozenset) -> np.ndarray:
-        """Candidates of the line at ``level`` not using a matched segment and
-        pairwise compatible with every member of R."""
+    def open_candidates(level: int, R: list[int]) -> np.ndarray:
+        """Candidates of the line at ``level`` pairwise compatible with every
+        member of R (so not using a matched segment, but for pieces of one
+        broken line)."""
         c = cands[level]
-        c = c[~used[seg_of[c]]]
         if R and c.size:
             c = c[compat[np.array(R)[:, None], c].all(axis=0)]
         return c
 
-    def maximal(R: list[int], Qsum, mR, used, skipped: list[int]) -> bool:
+    def maximal(R: list[int], Qsum, mR, skipped: list[int]) -> bool:
         """No skipped line can take a candidate consistent with all of R."""
-        extra = [open_candidates(lv, R, used) for lv in skipped]
+        extra = [open_candidates(lv, R) for lv in skipped]
         extra = np.concatenate(extra) if extra else np.zeros(0, dtype=np.int64)
         return not (extra.size and feasible_with(R, Qsum, mR, extra).any())
 
@@ -289,7 +292,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
             keep[idx[~ok]] = False
         return keep
 
-    def rec(R: list[int], Qsum, mR, used: np.ndarray, skipped: list[int], pool: np.ndarray,
+    def rec(R: list[int], Qsum, mR, skipped: list[int], pool: np.ndarray,
             fit: np.ndarray | None) -> None:
         """``pool``: candidates of the lines not yet decided. With ``fit``
         None, R just grew and the pool is filtered against it (consistency
@@ -310,7 +313,6 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
             ahead = ahead[well_supported(0, ahead)]
             fit = inp.single_fit[ahead]
         elif fit is None:
-            ahead = ahead[~used[seg_of[ahead]]]
             if R and ahead.size:
                 ahead = ahead[compat[R[-1], ahead]]
             ahead = ahead[well_supported(len(R), ahead)]
@@ -328,7 +330,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         if len(R) + reachable < state["bound"]:
             return
         if reachable == 0:
-            if maximal(R, Qsum, mR, used, skipped):
+            if maximal(R, Qsum, mR, skipped):
                 emit(R, Qsum, mR)
             return
         # Fail first: decide next the line with the fewest candidates left
@@ -354,14 +356,12 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
             loose = len(R2) + reach_v if state["nodes"] > _LOOSE_TEST_AFTER * tol.max_nodes else 0
             if len(R2) >= tol.min_matches and not _visible_at_best(inp, R2, Q2, m2, tol.q_max, cache, loose):
                 continue
-            used2 = used.copy()
-            used2[seg_of[v]] = True
-            rec(R2, Q2, m2, used2, skipped, rest, None)
+            rec(R2, Q2, m2, skipped, rest, None)
             if state["truncated"]:
                 return
         if len(R) + reachable - 1 >= state["bound"]:
             # The line left unmatched: R is unchanged, so is its filtered pool.
-            rec(R, Qsum, mR, used, skipped + [level], rest, fit[~here])
+            rec(R, Qsum, mR, skipped + [level], rest, fit[~here])
 
     def run(target: int, allowance: float = np.inf) -> bool:
         """One pass of the tree for the sets of at least ``target`` members;
@@ -369,8 +369,7 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         more nodes."""
         state["bound"] = target
         state["give_up_at"] = state["nodes"] + allowance
-        rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), np.zeros(int(seg_of.max()) + 1, dtype=bool), [],
-            np.arange(K), None)
+        rec([], np.zeros((Y, 6)), np.ones(Y, dtype=bool), [], np.arange(K), None)
         given_up = state["truncated"] and not sets and state["nodes"] > state["give_up_at"]
         if given_up:
             state["truncated"] = False

@@ -10,6 +10,7 @@ import pytest
 from matcher.camera import Camera, world2cam_rotation
 from matcher.constraints import (
     binary_constraint,
+    line_pieces,
     unary_constraint,
     unary_yaws,
     vertical_bearing,
@@ -198,3 +199,29 @@ def test_binary_constraint_random_true_couples_always_pass():
         alpha = wrap(yaw - bear)  # positive to the right
         centre = cam_xy + rng.uniform(-0.2, 0.2, 2)
         assert binary_constraint(pts[:1], pts[1:], alpha[:1], alpha[1:], tuple(centre), 0.3, np.array([1e-3]))[0]
+
+
+def test_line_pieces_hand_worked():
+    """Pieces of one line: collinear (within the planes' noise) and apart
+    along it; overlapping or merely parallel lines are not."""
+    cam = camera()
+    lines = np.array([
+        [[100.0, 200.0], [200.0, 200.0]],  # 0
+        [[260.0, 200.0], [400.0, 200.0]],  # 1: further along 0's line, 60 px gap
+        [[190.0, 200.0], [300.0, 200.0]],  # 2: on the same line, overlaps 0 by 10 px and 1 by 40 px
+        [[260.0, 205.0], [400.0, 205.0]],  # 3: parallel to 0, 5 px below
+        [[196.0, 200.2], [250.0, 200.2]],  # 4: in the gap, 0.2 px off the line, overlapping 0 by 4 px
+    ])
+    normals = cam.interpretation_normals(lines)
+    eps = np.full(len(lines), math.radians(0.1))
+    got = line_pieces(lines, normals, eps, gap_px=8.0)
+    want = np.zeros((5, 5), dtype=bool)
+    for i, j in [(0, 1), (0, 4), (1, 4)]:
+        want[i, j] = want[j, i] = True
+    assert (got == want).all()
+    # A wider noise bound takes the parallel line in too; an overlap
+    # allowance under 4 px drops the couple (0, 4).
+    assert line_pieces(lines, normals, np.full(5, math.radians(2.0)), 8.0)[0, 3]
+    tight = line_pieces(lines, normals, eps, 2.0)
+    assert not tight[0, 4] and tight[0, 1] and tight[1, 4]
+    assert line_pieces(lines[:1], normals[:1], eps[:1], 8.0).shape == (1, 1)
