@@ -107,8 +107,15 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     n_fin = np.bincount(hyp, minlength=n_h)
     E = np.full(n_h, np.inf)
     if len(hyp):
+        # E's position term at the middle of the part of each segment that
+        # its line shows, not of the whole segment: a short line on a long,
+        # partly hidden segment turns its plane about its own middle by its
+        # orientation noise, and that turn, times the distance to a far
+        # midpoint, would swamp E (the two agree for a segment seen whole).
+        span = covered_span(camera, poses[hyp], segs[local], img.lines[line_ids])  # (T, 2)
+        shown_mid = segs[local, 0] + span.mean(axis=1)[:, None] * (segs[local, 1] - segs[local, 0])
         E = verify.score_e(poses, hyp, img.normals[line_ids], segs[local, 0], segs[local, 1], camera.pitch,
-                           camera.height_m)
+                           camera.height_m, mid=shown_mid)
     # Ranked among the hypotheses that explain the most lines (a hypothesis
     # trimmed down to a few lines fits them well but explains less) by the
     # reprojection error: the end points' distances to their projected

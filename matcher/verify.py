@@ -11,7 +11,9 @@ points and the plane through the optical centre and the model segment
     E = 1/N sum (n . R v)^2 + 1/N sum (n . R (P_mid - C))^2
 
 with ``n`` the image line's plane normal, ``v`` the segment's direction and
-``P_mid`` its midpoint.
+``P_mid`` its midpoint (the paper's; :mod:`matcher.rank` scores the middle
+of the part of the segment that the line shows, the same point for a
+segment seen whole).
 """
 
 from __future__ import annotations
@@ -141,15 +143,17 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
     return params
 
 
-def score_e(params, hyp, normals, seg_a, seg_b, pitch, height):
+def score_e(params, hyp, normals, seg_a, seg_b, pitch, height, mid=None):
     """The paper's E (H,) for poses (H, 3); per match t: image plane normals
-    ``normals`` (T, 3) camera frame, segment end points ``seg_a, seg_b`` (T, 3)."""
+    ``normals`` (T, 3) camera frame, segment end points ``seg_a, seg_b`` (T,
+    3), and ``mid`` (T, 3) the point of the segment whose distance to the
+    plane is scored (the paper's: the segment's midpoint, the default)."""
     p = params[hyp]
     R = world2cam_rotation(p[:, 2], pitch)
     C = np.stack([p[:, 0], p[:, 1], np.full(len(p), height)], axis=1)
     v = seg_b - seg_a
     v /= np.linalg.norm(v, axis=1, keepdims=True)
-    mid = 0.5 * (seg_a + seg_b)
+    mid = 0.5 * (seg_a + seg_b) if mid is None else mid
     e_dir = np.einsum("ti,tij,tj->t", normals, R, v)
     e_pos = np.einsum("ti,tij,tj->t", normals, R, mid - C)
     H = len(params)

@@ -83,6 +83,23 @@ def test_localises_from_rendered_images(small_flat, views):
         assert dist < 0.02 and dyaw < 0.3
 
 
+@pytest.mark.parametrize("pitch_deg", [10.0, -5.0])
+def test_localises_from_rendered_images_of_pitched_cameras(small_flat, pitch_deg):
+    """A camera 1 m up, pitched down or up, PEQ 3. (Pitched up, the second
+    frame sees a floor-to-ceiling corner only as a 41 px piece at the top
+    border: E taken at the whole segment's midpoint was 7e-3, over the
+    acceptance threshold, for the right pose.)"""
+    cam = paper_camera(1.0, pitch_deg)
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        fr = make_frame(small_flat, cam, rng, 3)
+        img = render_view(small_flat, cam, fr.pose, supersample=2, rng=rng)
+        res = matcher.localize(small_flat, cam, matcher.detect_lines(img, cam), fr.prior, fr.dt, fr.dyaw)
+        assert res, res.reason
+        dist, dyaw = pose_error(res.pose, fr.pose)
+        assert dist < 0.02 and dyaw < 0.3
+
+
 def test_pieces_of_one_broken_line_are_all_matched_to_its_segment(small_flat):
     """A detector breaks a line where its contrast fades or something stands
     in front of it: the pieces show one segment, and the pose that matches
