@@ -1,5 +1,6 @@
-"""tools/bench_paper.py end to end on a few frames: the table, the JSON
-rows and the figures (the full run is the README's benchmark)."""
+"""tools/bench_paper.py and tools/bench_images.py end to end on a few
+frames: the tables, the JSON rows and the figures (the full runs are the
+README's benchmarks)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
+import bench_images  # noqa: E402
 import bench_paper  # noqa: E402
 
 
@@ -28,3 +30,12 @@ def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
         assert "base_ms" in rows[0] and "base_ms" not in rows[1]
         assert data["summary"][peq]["n"] == 3
     assert sorted(p.name for p in out.iterdir()) == ["paper_fig5.png", "paper_fig6.png"]
+
+
+def test_bench_images_table(capsys):
+    assert bench_images.main(["--frames", "1", "--peq", "1", "--supersample", "1"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1].startswith("| PEQ |") and out[3].startswith("| 1 |")
+    assert out[3].count("|") == 7
+    assert bench_images.main(["--frames", "0"]) == 2
+    assert capsys.readouterr().err.strip() == "error: --frames, --supersample and --repeat must be at least 1"
