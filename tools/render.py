@@ -1,17 +1,18 @@
 """Grey images of a map seen from a pose, for testing the image path end to end.
 
-The scene is the simulator's (:mod:`simulate`): the map's wall outlines
-extruded from the floor (z = 0) to ``meta["wall_height"]``, a flat floor and
-a flat ceiling. Each pixel's ray is cast against the walls in the floor
-plane and against the floor and ceiling; the nearest surface gives its grey
-level. Wall faces are shaded by their orientation (a light from one side),
-so two walls meeting at a corner differ and the corner shows as an edge, as
-do the wall/floor and wall/ceiling junctions; a ray that leaves the
-building through an open doorway meets a plain grey background. Rendered
-``supersample`` times larger and averaged down (anti-aliased edges),
-lightly blurred, with seeded Gaussian noise: the edges LSD meets in a real
-frame, at known geometry. Door lintels and windows are not modelled (walls are full height),
-so their lines are missing from the image as a detector would miss them.
+The scene: the map's wall outlines extruded from the floor (z = 0) to
+``meta["wall_height"]`` (the simulator's occluders, :mod:`simulate`), a flat
+floor and a flat ceiling, and across the door and window openings the walls
+above their heads and below their sills, with the slabs between the wall's
+two faces (from the map's LINTEL and WINDOW segments). Each pixel's ray is
+cast against all of them; the nearest surface gives its grey level. Wall
+faces are shaded by their orientation (a light from one side), so two walls
+meeting at a corner differ and the corner shows as an edge, as do the
+wall/floor and wall/ceiling junctions; a ray that leaves the building
+through an opening meets a plain grey background. Rendered ``supersample``
+times larger and averaged down (anti-aliased edges), lightly blurred, with
+seeded Gaussian noise: the edges LSD meets in a real frame, at known
+geometry.
 
     python tools/render.py --pose 2.0,1.5,30 -o view.png
 """
@@ -28,12 +29,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from mapkit.lmap import SegmentKind  # noqa: E402
 from matcher.camera import Camera  # noqa: E402
 from matcher.freespace import free_space  # noqa: E402
 from matcher.generate import in_field_of_view  # noqa: E402
 from matcher.occlusion import inside_walls, wall_edges  # noqa: E402
 
-LINTEL, WINDOW = 4, 5  # mapkit.lmap.SegmentKind (not imported: the matcher side stays light)
+LINTEL, WINDOW = SegmentKind.LINTEL, SegmentKind.WINDOW
 
 #: Grey levels: floor, ceiling, and the range of wall shades.
 FLOOR_GREY = 45.0
