@@ -353,7 +353,7 @@ def generate(
     # ---- interpretation tree -------------------------------------------
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, vertical=is_v, line=line_k,
-                    seg=seg_k, free=free, free_m=tol.free_space_m, front_c=front_c, front_b=front_b,
+                    free=free, free_m=tol.free_space_m, front_c=front_c, front_b=front_b,
                     single_fit=single_fit, sight=sight, shown=ShownSpans(camera, segments[seg_k], img.lines[line_k]))
     if debug is not None:
         debug["tree_input"] = inp

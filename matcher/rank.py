@@ -121,11 +121,10 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     # reprojection error: the end points' distances to their projected
     # segments, each over its line's noise bound, in the image space the
     # detector's noise is stated in. E, the paper's score, mixes radians and
-    # metres and weighs a segment's midpoint however little of it is seen:
-    # two aliases (the near and far faces of a jamb, 20 cm and 3 degrees
-    # apart) often score E alike while their reprojection errors differ
-    # threefold (docs/matcher.md). E breaks ties, is reported, and is what
-    # the acceptance threshold applies to.
+    # metres: two aliases (the near and far faces of a jamb, 20 cm and 3
+    # degrees apart) often score E alike while their reprojection errors
+    # differ threefold (docs/matcher.md). E breaks ties, is reported, and is
+    # what the acceptance threshold applies to.
     cost = reprojection_cost(camera, img, poses, hyp, segs[local], line_ids, tol, n_h)
     best_n = int(n_fin[alive].max()) if alive.any() else 0
     E = np.where(alive & (n_fin >= max(best_n, tol.min_matches)) & np.isfinite(E), E, np.inf)

@@ -91,8 +91,8 @@ class TreeInput:
     at each grid yaw; ``walls`` a pair of (E, 2) arrays, the wall edges' end
     points, or None; ``vertical`` (K,) bool, correspondences of vertical
     segments (explored last: each fixes only a bearing, so they are compatible
-    with much and prune little); ``line`` and ``seg`` (K,) the image line
-    and model segment (group) of each correspondence; ``free`` the map's :class:`~matcher.freespace.FreeSpace`
+    with much and prune little); ``line`` (K,) the image line of each
+    correspondence; ``free`` the map's :class:`~matcher.freespace.FreeSpace`
     (or None) and ``free_m`` how far outside it the camera may stand;
     ``front_c`` (K, Y, 2) and ``front_b`` (K, Y) half-planes ``c . z <= b`` on
     the camera position relative to the centre that keep a vertical edge ahead
@@ -118,7 +118,6 @@ class TreeInput:
     walls: tuple[np.ndarray, np.ndarray] | None
     vertical: np.ndarray | None = None
     line: np.ndarray | None = None
-    seg: np.ndarray | None = None
     free: object | None = None
     free_m: float = 0.0
     front_c: np.ndarray | None = None

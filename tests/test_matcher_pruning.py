@@ -258,7 +258,7 @@ def _loose_set_facing_an_edge(walls):
                          [[3.0, 0.0, 0.0], [3.0, 0.0, 2.1]]])
     return TreeInput(quad, np.ones((3, 1), dtype=bool), np.zeros(1), np.ones((3, 3), dtype=bool), segments,
                      np.array([0.0, 0.0, 1.2]), 1.0, np.array([[1.0, 0.0, 0.0]]), walls,
-                     vertical=np.array([False, False, True]), line=np.arange(3), seg=np.arange(3))
+                     vertical=np.array([False, False, True]), line=np.arange(3))
 
 
 def test_edge_seen_from_a_loose_region_hand_worked():
