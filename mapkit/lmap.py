@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import zlib
 from dataclasses import dataclass, field
@@ -328,24 +329,30 @@ def decode(data: bytes, name: str = "<bytes>") -> LineMap:
         ch = np.frombuffer(data, dtype=_CHUNK, count=1, offset=pos)[0]
         pos += _CHUNK.itemsize
         size = int(ch["stored_size"])
+        tag = bytes(ch["tag"])
+        label = tag.decode("ascii", "replace")
         if pos + size > len(data):
-            raise LmapError(f"{name} is truncated (chunk {ch['tag']!r} cut short); rebuild or re-copy it")
+            raise LmapError(f"{name} is truncated (chunk {label} cut short); rebuild or re-copy it")
         stored = data[pos : pos + size]
         pos += size
-        tag = bytes(ch["tag"])
         if zlib.crc32(stored) != int(ch["crc32"]):
-            raise LmapError(f"{name} is corrupt: checksum mismatch in chunk {tag.decode('ascii', 'replace')}")
+            raise LmapError(f"{name} is corrupt: checksum mismatch in chunk {label}")
+        raw_size = int(ch["raw_size"])
         if int(ch["codec"]) == _ZLIB:
+            # At most one byte past the size the header states: a corrupt or
+            # hostile chunk cannot inflate to gigabytes before it is rejected.
+            inflate = zlib.decompressobj()
             try:
-                payload = zlib.decompress(stored)
+                payload = inflate.decompress(stored, raw_size + 1)
             except zlib.error as exc:
-                raise LmapError(f"{name} is corrupt: chunk {tag!r} does not decompress ({exc})") from None
+                raise LmapError(f"{name} is corrupt: chunk {label} does not decompress ({exc})") from None
+            complete = inflate.eof
         elif int(ch["codec"]) == _RAW:
-            payload = stored
+            payload, complete = stored, True
         else:
-            raise LmapError(f"{name} uses unknown codec {int(ch['codec'])} in chunk {tag!r}")
-        if len(payload) != int(ch["raw_size"]):
-            raise LmapError(f"{name} is corrupt: chunk {tag!r} has the wrong size")
+            raise LmapError(f"{name} uses unknown codec {int(ch['codec'])} in chunk {label}")
+        if len(payload) != raw_size or not complete:
+            raise LmapError(f"{name} is corrupt: chunk {label} has the wrong size")
         raw[tag] = payload
     if pos != len(data):
         raise LmapError(f"{name} has {len(data) - pos} unexpected trailing bytes; re-copy it")
@@ -380,7 +387,7 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
         origin = np.asarray(grid["origin"], dtype=np.float64)
         cell = float(grid["cell"])
         quantum = float(meta["coord_quantum_m"])
-    except (ValueError, KeyError, TypeError) as exc:
+    except (ValueError, KeyError, TypeError, OverflowError) as exc:
         raise LmapError(f"{name} has an unreadable META chunk ({exc}); rebuild it") from None
     if min(n, r, k, p, n_list, n_grid, ny, nx, n_wall_rings, n_wall_points) < 0 or origin.shape != (2,) or not cell > 0:
         raise LmapError(f"{name} has impossible counts in META; rebuild it")
@@ -442,6 +449,8 @@ def validate(m: LineMap, name: str = "map") -> None:
 
     if m.segments.shape != (n, 2, 3) or not np.isfinite(m.segments).all():
         raise bad("segments must be a finite (N, 2, 3) array")
+    if n and (np.linalg.norm(m.segments[:, 1] - m.segments[:, 0], axis=1) < 1e-9).any():
+        raise bad("a segment has zero length")
     if m.kinds.shape != (n,) or (n and int(m.kinds.max()) >= len(SegmentKind)):
         raise bad("segment kinds out of range")
     k = len(m.ring_region)
@@ -462,6 +471,10 @@ def validate(m: LineMap, name: str = "map") -> None:
     if len(m.list_indices) and (m.list_indices.min() < 0 or m.list_indices.max() >= n):
         raise bad("a visibility list names a segment that does not exist")
     ny, nx = m.grid_shape
+    if np.shape(m.grid_origin) != (2,) or not np.isfinite(m.grid_origin).all():
+        raise bad("the lookup grid's origin must be two finite numbers")
+    if not (math.isfinite(m.grid_cell) and m.grid_cell > 0):
+        raise bad("the lookup grid's cell must be a positive number of metres")
     go = m.grid_offsets
     if go.shape != (ny * nx + 1,) or go[0] != 0 or go[-1] != len(m.grid_regions) or (np.diff(go) < 0).any():
         raise bad("lookup grid offsets are malformed")

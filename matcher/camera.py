@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -56,23 +57,15 @@ class Camera:
         missing = [k for k in REQUIRED_FIELDS if k not in d]
         if missing:
             raise CameraError(f"camera description lacks {', '.join(missing)} (needs {', '.join(REQUIRED_FIELDS)})")
-        try:
-            dist = tuple(float(v) for v in d.get("distortion", ()) or ())
-            return cls(
-                width=int(d["width"]),
-                height=int(d["height"]),
-                fx=float(d["fx"]),
-                fy=float(d["fy"]),
-                cx=float(d["cx"]),
-                cy=float(d["cy"]),
-                height_m=float(d["height_m"]),
-                pitch_deg=float(d["pitch_deg"]),
-                distortion=dist,
-            )
-        except (TypeError, ValueError) as exc:
-            if isinstance(exc, CameraError):
-                raise
-            raise CameraError(f"camera description has a non-numeric field: {exc}") from None
+        vals = {k: _number(f"camera {k}", d[k]) for k in REQUIRED_FIELDS}
+        dist = d.get("distortion") or ()
+        if not isinstance(dist, (list, tuple)):
+            raise CameraError(f"camera distortion must be a list of numbers, got {dist!r}")
+        vals["distortion"] = tuple(_number("camera distortion", v) for v in dist)
+        for k in ("width", "height"):
+            if math.isfinite(vals[k]) and vals[k] == int(vals[k]):
+                vals[k] = int(vals[k])
+        return cls(**vals)
 
     @classmethod
     def load(cls, path: str | Path) -> "Camera":
@@ -82,8 +75,13 @@ class Camera:
             d = json.loads(path.read_text())
         except FileNotFoundError:
             raise CameraError(f"camera file {path} not found") from None
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise CameraError(f"camera file {path} is not valid JSON ({exc})") from None
+        except IsADirectoryError:
+            raise CameraError(f"camera file {path} is a directory; give the camera.json file in it") from None
+        except OSError as exc:
+            raise CameraError(f"camera file {path} could not be read ({exc.strerror or exc})") from None
+        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+            why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+            raise CameraError(f"camera file {path} is not valid JSON ({why})") from None
         return cls.from_dict(d)
 
     @classmethod
@@ -198,6 +196,24 @@ class Camera:
         return self._half_fov
 
     @cached_property
+    def ideal_bounds(self) -> tuple[float, float, float, float]:
+        """``(u_min, u_max, v_min, v_max)``: where the image's pixels land on
+        the ideal pinhole (the frame of the lines :func:`matcher.localize`
+        takes). The image itself without distortion; with it, the box around
+        the undistorted border as well (barrel distortion moves the corners
+        outwards). Computed once per camera (it is immutable)."""
+        w, h = float(self.width), float(self.height)
+        if not self.distortion:
+            return 0.0, w, 0.0, h
+        t = np.linspace(0.0, 1.0, 65)
+        zero, one = np.zeros_like(t), np.ones_like(t)
+        border = np.concatenate([np.stack([t * w, zero], 1), np.stack([t * w, one * h], 1),
+                                 np.stack([zero, t * h], 1), np.stack([one * w, t * h], 1)])
+        ideal = self.undistort_pixels(border)
+        lo, hi = ideal.min(axis=0), ideal.max(axis=0)
+        return min(0.0, float(lo[0])), max(w, float(hi[0])), min(0.0, float(lo[1])), max(h, float(hi[1]))
+
+    @cached_property
     def _half_fov(self) -> float:
         """:meth:`horizontal_half_fov`, computed once per camera (it is immutable)."""
         w, h = self.width, self.height
@@ -221,12 +237,29 @@ def world2cam_rotation(yaw, pitch: float) -> np.ndarray:
     return np.stack([r, d, f], -2)
 
 
+def _number(what: str, v) -> float:
+    """``v`` as a float if it is a real number (not a bool, not a string);
+    else CameraError naming ``what``."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+        raise CameraError(f"{what} must be a number, got {v!r}")
+    try:
+        return float(v)
+    except OverflowError:
+        raise CameraError(f"{what} is out of range, got {v!r}") from None
+
+
 def check_camera(cam: Camera) -> None:
     """Validate a camera; raise CameraError naming the field and its valid range."""
-    vals = {k: getattr(cam, k) for k in REQUIRED_FIELDS}
+    vals = {k: _number(f"camera {k}", getattr(cam, k)) for k in REQUIRED_FIELDS}
     for k, v in vals.items():
         if not math.isfinite(v):
             raise CameraError(f"camera {k} must be finite, got {v}")
+    if vals["width"] != int(vals["width"]) or vals["height"] != int(vals["height"]):
+        raise CameraError(f"camera width and height must be whole pixels, got {cam.width}x{cam.height}")
+    if not isinstance(cam.distortion, tuple):
+        raise CameraError(f"camera distortion must be a tuple of numbers, got {cam.distortion!r}")
+    for v in cam.distortion:
+        _number("camera distortion", v)
     if cam.width <= 0 or cam.height <= 0:
         raise CameraError(f"camera width and height must be positive pixels, got {cam.width}x{cam.height}")
     if cam.fx <= 0 or cam.fy <= 0:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -58,16 +59,31 @@ def _parse_prior(text: str) -> tuple[float, float, float]:
     return vals[0], vals[1], vals[2]
 
 
-def _read_lines(path: str):
+def _input_file(path: str, what: str, hint: str = "check the path") -> Path:
+    """``path`` as a Path if it is a readable file; else UsageError."""
     p = Path(path)
+    if p.is_dir():
+        raise UsageError(f"{what} {path} is a directory; give the file")
     if not p.is_file():
-        raise UsageError(f"lines file {path} not found; check the path")
+        raise UsageError(f"{what} {path} not found; {hint}")
+    if not os.access(p, os.R_OK):
+        raise UsageError(f"{what} {path} is not readable (permission denied)")
+    return p
+
+
+def _read_lines(path: str):
+    p = _input_file(path, "lines file")
     try:
-        data = json.loads(p.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise UsageError(f"lines file {path} is not valid JSON ({exc})") from None
+        data = json.loads(p.read_bytes())
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+        why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise UsageError(f"lines file {path} is not valid JSON ({why})") from None
+    except OSError as exc:
+        raise UsageError(f"lines file {path} could not be read ({exc.strerror or exc})") from None
     if not isinstance(data, dict) or "lines" not in data or not isinstance(data["lines"], list):
         raise UsageError(f'lines file {path} must hold {{"lines": [[u1, v1, u2, v2], ...]}}')
+    if any(isinstance(v, bool) for row in data["lines"] if isinstance(row, list) for v in row):
+        raise UsageError(f"lines file {path} holds true/false where pixel coordinates belong")
     return data["lines"]
 
 
@@ -76,8 +92,7 @@ def _read_image(path: str, camera):
 
     from matcher.lines import detect_lines
 
-    if not Path(path).is_file():
-        raise UsageError(f"image file {path} not found; check the path")
+    _input_file(path, "image file")
     img = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
     if img is None:
         raise UsageError(f"image file {path} could not be read (PNG, JPEG, ... expected)")
@@ -105,10 +120,8 @@ def run_localize(args) -> int:
     from matcher.camera import Camera
 
     prior = _parse_prior(args.prior)
-    if not Path(args.map).is_file():
-        raise UsageError(f"map file {args.map} not found; build one with 'mapkit build'")
-    if not Path(args.camera).is_file():
-        raise UsageError(f"camera file {args.camera} not found; check the path")
+    _input_file(args.map, "map file", "build one with 'mapkit build'")
+    _input_file(args.camera, "camera file")
     camera = Camera.load(args.camera)
     linemap = matcher.load_map(args.map)
     lines = _read_lines(args.lines) if args.lines else _read_image(args.image, camera)
@@ -120,9 +133,23 @@ def run_localize(args) -> int:
     return EXIT_OK if res else EXIT_NOT_FOUND
 
 
+def _joined_values(argv: list[str]) -> list[str]:
+    """``--prior -1.5,2,30`` as ``--prior=-1.5,2,30``: argparse would take
+    a value starting with '-' for an option (a negative X is common)."""
+    out, i = [], 0
+    while i < len(argv):
+        if argv[i] == "--prior" and i + 1 < len(argv) and argv[i + 1][:1] == "-" and argv[i + 1][1:2] in "0123456789.":
+            out.append(f"--prior={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(argv[i])
+        i += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_joined_values(sys.argv[1:] if argv is None else list(argv)))
     try:
         return run_localize(args)
     except UsageError as exc:

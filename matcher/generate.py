@@ -484,6 +484,30 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
         distinct |= img.pieces[line_k[iu], line_k[ju]]
     distinct &= line_k[iu] != line_k[ju]
     iu, ju = iu[distinct], ju[distinct]
+    # In chunks of pairs, so that a huge prior (lost mode, a large dt with
+    # any heading) does not need gigabytes; a frame's pairs are one chunk.
+    step = max(1, _PAIR_ENTRIES // mask.shape[1])
+    pair_ok = np.concatenate([_share_a_pose(iu[c:c + step], ju[c:c + step], mask, quad, dt, tol, front_c, front_b)
+                              for c in range(0, len(iu), step)]) if len(iu) else np.zeros(0, dtype=bool)
+    sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
+    if len(sel):
+        a_i, a_j = iu[sel], ju[sel]
+        tol_ab = img.alpha_eps[line_k[a_i]] + img.alpha_eps[line_k[a_j]]
+        pair_ok[sel] = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], img.alpha[line_k[a_i]],
+                                         img.alpha[line_k[a_j]], centre, dt, tol_ab)
+    compat = np.zeros((K, K), dtype=bool)
+    compat[iu[pair_ok], ju[pair_ok]] = True
+    return compat | compat.T
+
+
+#: Most (pair, grid yaw) entries :func:`_pair_compat` handles at once: its
+#: arrays then stay under about 15 MB each.
+_PAIR_ENTRIES = 1 << 18
+
+
+def _share_a_pose(iu, ju, mask, quad, dt, tol, front_c, front_b) -> np.ndarray:
+    """(P,) bool: do correspondences ``iu[p]`` and ``ju[p]`` have a common
+    pose in the prior set at one grid yaw, within both their half-planes?"""
     # (pair, yaw) entries where both masks hold. (np.nonzero on the 2-D
     # array, and fancy indexing of quad by two arrays, cost several times
     # the flat forms on these sizes.)
@@ -505,13 +529,4 @@ def _pair_compat(img, near, seg_k, line_k, is_v, mask, quad, centre, dt, tol, fr
         for at in (at_i[e], at_j[e]):  # (no disk test: both masks were cut by it)
             ok[e] &= posegrid.ellipse_reaches(ell, np.take(front_c.reshape(-1, 2), at, axis=0),
                                               np.take(front_b.reshape(-1), at), None)
-    pair_ok = np.bincount(p[ok], minlength=len(iu)) > 0
-    sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
-    if len(sel):
-        a_i, a_j = iu[sel], ju[sel]
-        tol_ab = img.alpha_eps[line_k[a_i]] + img.alpha_eps[line_k[a_j]]
-        pair_ok[sel] = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], img.alpha[line_k[a_i]],
-                                         img.alpha[line_k[a_j]], centre, dt, tol_ab)
-    compat = np.zeros((K, K), dtype=bool)
-    compat[iu[pair_ok], ju[pair_ok]] = True
-    return compat | compat.T
+    return np.bincount(p[ok], minlength=len(iu)) > 0

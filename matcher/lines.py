@@ -14,6 +14,8 @@ import math
 import cv2
 import numpy as np
 
+from matcher.camera import Camera
+
 #: Lines shorter than this many pixels are dropped: their orientation is
 #: too uncertain for the constraints (same default as ``Tolerances.min_line_px``).
 MIN_LENGTH_PX = 15.0
@@ -29,19 +31,33 @@ MERGE_GAP_PX = 10.0
 
 
 def to_grey(image: np.ndarray) -> np.ndarray:
-    """(H, W) uint8 grey image from a grey, BGR or BGRA array (uint8 or float in [0, 1])."""
+    """(H, W) uint8 grey image from a grey, BGR or BGRA array.
+
+    8-bit images are taken as they are. Other integer images whose values
+    exceed 255 (16-bit ones) are scaled by their type's range; booleans and
+    floats in [0, 1] by 255; floats beyond 255 by their maximum."""
     img = np.asarray(image)
     if img.ndim == 3 and img.shape[2] == 1:
         img = img[..., 0]
     if img.ndim == 3 and img.shape[2] in (3, 4):
+        if img.dtype not in (np.uint8, np.uint16, np.float32):  # the types cvtColor takes
+            img = img.astype(np.float32)
         img = cv2.cvtColor(np.ascontiguousarray(img), cv2.COLOR_BGR2GRAY if img.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
     if img.ndim != 2:
         raise ValueError(f"image: Expected shape (H, W), (H, W, 3) or (H, W, 4), got {np.asarray(image).shape}")
+    if img.size == 0:
+        raise ValueError(f"image is empty (shape {np.asarray(image).shape})")
+    if not (img.dtype == np.bool_ or np.issubdtype(img.dtype, np.integer) or np.issubdtype(img.dtype, np.floating)):
+        raise ValueError(f"image must hold numbers, got dtype {img.dtype}")
     if img.dtype != np.uint8:
         f = img.astype(np.float64)
         if not np.isfinite(f).all():
             raise ValueError("image holds non-finite values")
-        scale = 255.0 if f.max() <= 1.0 else 1.0
+        top = float(f.max())
+        if np.issubdtype(img.dtype, np.integer):
+            scale = 255.0 / float(np.iinfo(img.dtype).max) if top > 255.0 else 1.0
+        else:
+            scale = 255.0 if top <= 1.0 else (255.0 / top if top > 255.0 else 1.0)
         img = np.clip(f * scale, 0, 255).astype(np.uint8)
     return np.ascontiguousarray(img)
 
@@ -95,8 +111,11 @@ def detect_lines(image, camera=None, min_length: float = MIN_LENGTH_PX, merge: b
 
     ``camera``: a :class:`matcher.Camera`; with distortion coefficients the
     end points are undistorted; its size must match the image's."""
-    if not (math.isfinite(min_length) and min_length >= 0):
-        raise ValueError(f"min_length must be >= 0 pixels, got {min_length}")
+    if isinstance(min_length, bool) or not isinstance(min_length, (int, float, np.integer, np.floating)) or not (
+            math.isfinite(min_length) and min_length >= 0):
+        raise ValueError(f"min_length must be a number of pixels >= 0, got {min_length!r}")
+    if camera is not None and not isinstance(camera, Camera):
+        raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
     grey = to_grey(image)
     if camera is not None and (grey.shape[1], grey.shape[0]) != (camera.width, camera.height):
         raise ValueError(

@@ -85,11 +85,21 @@ def face_normals(segments: np.ndarray, walls, probe: float = 0.03) -> np.ndarray
     return out
 
 
+#: Most (ray, wall edge) pairs :func:`ray_cast` handles at once (its arrays
+#: then stay under about 10 MB each): the first frame on a map casts the rays
+#: of every vertical edge it meets, 720 each.
+_RAY_PAIRS = 1 << 20
+
+
 def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float) -> np.ndarray:
     """(R,) distance along each ray (origins (R, 2), unit dirs (R, 2)) to the
     first wall edge crossed beyond ``skip`` metres; inf if none."""
     if walls is None or len(walls[0]) == 0:
         return np.full(len(origins), np.inf)
+    step = max(1, _RAY_PAIRS // len(walls[0]))
+    if len(origins) > step:  # in chunks of rays: (rays, edges) arrays stay small
+        return np.concatenate([ray_cast(origins[i:i + step], dirs[i:i + step], walls, skip)
+                               for i in range(0, len(origins), step)])
     ea, eb = walls
     s = eb - ea  # (E, 2)
     den = dirs[:, None, 0] * s[None, :, 1] - dirs[:, None, 1] * s[None, :, 0]

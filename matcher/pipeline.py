@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from mapkit.lmap import LineMap
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
 from matcher.constraints import (bearing_noise, line_pieces, plane_noises, vertical_bearing, vertical_candidates,
@@ -47,18 +48,23 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     and ``dyaw`` degrees of it. Returns a :class:`LocalizeResult`, falsy with
     a ``reason`` when no hypothesis is accepted. Bad input (shapes, NaN,
     ranges) raises ValueError."""
-    tol = tolerances or DEFAULT
     t0 = time.perf_counter()
-    img = _checked_lines(camera, lines, tol)
+    tol = _checked_inputs(linemap, camera, tolerances)
+    img = prepare_lines(camera, check_lines(lines, camera, tol), tol)
     px = check_prior(prior, dt, dyaw)
     return _localize(linemap, camera, img, px, tol, t0)
 
 
-def _checked_lines(camera, lines, tol):
-    """Validate the camera and the lines (ValueError), then prepare the lines."""
+def _checked_inputs(linemap, camera, tolerances) -> Tolerances:
+    """ValueError unless the map, camera and tolerances are of their types;
+    the tolerances to use."""
+    if not isinstance(linemap, LineMap):
+        raise ValueError(f"linemap must be a map from matcher.load_map('map.lmap'), got {type(linemap).__name__}")
     if not isinstance(camera, Camera):
-        raise ValueError(f"camera must be a matcher.Camera, got {type(camera).__name__}")
-    return prepare_lines(camera, check_lines(lines, camera, tol), tol)
+        raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
+    if tolerances is not None and not isinstance(tolerances, Tolerances):
+        raise ValueError(f"tolerances must be a matcher.Tolerances, got {type(tolerances).__name__}")
+    return tolerances or DEFAULT
 
 
 def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
@@ -74,7 +80,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     near = len(linemap.regions_near(xe, ye, dt)) if len(ids) == 0 else 1
     if len(ids) == 0:
         if near == 0:
-            return fail(f"the prior ({xe:.2f}, {ye:.2f}) is farther than dt={dt:g} m from every region of the map; "
+            return fail(f"the prior ({xe:.6g}, {ye:.6g}) is farther than dt={dt:g} m from every region of the map; "
                         "check the prior or use localize_global")
         return fail("no model segment is visible from the regions met by the prior disk")
     segs = linemap.segments[ids]
@@ -83,9 +89,8 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     times["select"] = (time.perf_counter() - t0) * 1e3
     if len(ids) == 0:
         return fail("no candidate segment lies in the field of view for any heading of the prior interval")
-    if int(img.usable.sum()) < tol.min_matches:
-        return fail(f"only {int(img.usable.sum())} usable image lines (need {tol.min_matches} of "
-                    f">= {tol.min_line_px:g} px)")
+    if _too_few_lines(img, tol):
+        return fail(_too_few_lines(img, tol))
 
     # ---- stage 1 ---------------------------------------------------------
     t1 = time.perf_counter()
@@ -147,6 +152,14 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
                           matches=matches_of(best), **common)
 
 
+def _too_few_lines(img: ImageLines, tol: Tolerances) -> str:
+    """Why the image lines cannot give a pose, or "" if they may."""
+    n = int(img.usable.sum())
+    if n >= tol.min_matches:
+        return ""
+    return f"only {n} usable image lines (need {tol.min_matches} of >= {tol.min_line_px:g} px)"
+
+
 def _class_faces(faces: np.ndarray, label: np.ndarray) -> np.ndarray:
     """(G, 2) wall-face normal per collinear group: its members' when they
     all agree, else zeros (no constraint)."""
@@ -189,13 +202,16 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     lines that fit well, the right one explains more of the image.
     ``time_ms['total']`` covers all tries; ``time_ms['regions_tried']``
     counts them. Returns a falsy result if no region gives one."""
-    tol = tolerances or DEFAULT
     t0 = time.perf_counter()
-    img = _checked_lines(camera, lines, tol)
-    # The robot is stopped: a larger search budget per region.
-    tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
+    tol = _checked_inputs(linemap, camera, tolerances)
+    img = prepare_lines(camera, check_lines(lines, camera, tol), tol)
     if linemap.n_regions == 0:
         return LocalizeResult(False, "the map has no regions", time_ms={"total": 0.0, "regions_tried": 0})
+    if _too_few_lines(img, tol):  # the same for every region
+        return LocalizeResult(False, _too_few_lines(img, tol),
+                              time_ms={"total": (time.perf_counter() - t0) * 1e3, "regions_tried": 0})
+    # The robot is stopped: a larger search budget per region.
+    tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
     centres, radii = linemap.region_centres(), linemap.region_radii()
     tried, best = 0, None
     for r in range(linemap.n_regions):

@@ -48,7 +48,7 @@ class LocalizeResult:
             "runner_up_score": num(self.runner_up_score),
             "hypotheses": int(self.hypotheses),
             "matches": [[int(a), int(b)] for a, b in self.matches],
-            "time_ms": {k: round(float(v), 3) for k, v in self.time_ms.items()},
+            "time_ms": {k: v if isinstance(v, int) else round(float(v), 3) for k, v in self.time_ms.items()},
         }
         if not self.ok:
             d["reason"] = self.reason

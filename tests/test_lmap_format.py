@@ -231,6 +231,50 @@ def test_non_finite_segments(blob):
         decode(_replace_chunk(blob, b"SEGM", segs.tobytes()))
 
 
+def test_zero_length_segment(blob):
+    m = grid_map()[0]
+    segs = m.segments.astype("<f8").copy()
+    segs[3, 1] = segs[3, 0]
+    with pytest.raises(LmapError, match="a segment has zero length"):
+        decode(_replace_chunk(blob, b"SEGM", segs.tobytes()))
+
+
+def _meta(blob):
+    _, _, ppos, size = _chunks(blob)[0]
+    return json.loads(zlib.decompress(blob[ppos : ppos + size]))
+
+
+def test_non_finite_grid_origin(blob):
+    meta = _meta(blob)
+    meta["grid"]["origin"] = [float("nan"), 0.0]
+    with pytest.raises(LmapError, match="lookup grid's origin must be two finite numbers"):
+        decode(_replace_chunk(blob, b"META", json.dumps(meta).encode()))
+
+
+def test_infinite_count_in_meta(blob):
+    meta = _meta(blob)
+    meta["counts"]["segments"] = float("inf")
+    with pytest.raises(LmapError, match="unreadable META chunk"):
+        decode(_replace_chunk(blob, b"META", json.dumps(meta).encode()))
+
+
+def test_chunk_inflating_past_its_size_is_stopped(blob):
+    """A chunk whose zlib stream inflates to far more than its header
+    states is rejected without inflating it all."""
+    tag, hpos, ppos, size = _chunks(blob)[1]
+    stored = zlib.compress(b"\0" * (50 << 20))  # 50 MB of zeros in about 50 kB
+    ch = np.frombuffer(blob, _CHUNK, 1, hpos)[0].copy()
+    ch["stored_size"], ch["crc32"] = len(stored), zlib.crc32(stored)
+    with pytest.raises(LmapError, match=f"chunk {tag.decode()} has the wrong size"):
+        decode(blob[:hpos] + ch.tobytes() + stored + blob[ppos + size :])
+
+
+def test_chunk_names_read_as_text(blob):
+    with pytest.raises(LmapError) as e:
+        decode(blob[: _chunks(blob)[2][2] + 3])
+    assert "b'" not in str(e.value) and "cut short" in str(e.value)
+
+
 def test_unknown_codec(blob):
     tag, hpos, ppos, size = _chunks(blob)[1]
     ch = np.frombuffer(blob, _CHUNK, 1, hpos)[0].copy()

@@ -124,6 +124,44 @@ def test_bad_files(files, capsys, tmp_path):
     assert "not a .lmap map" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ('{"lines": [[true, 2, 3, 4], [1, 2, 3, 5], [1, 2, 3, 6]]}', "holds true/false where pixel coordinates"),
+        ('{"lines": [[1' + "0" * 400 + ', 2, 3, 4]]}', "lines must be numbers"),
+        ('{"lines": ' + "[" * 100_000 + "]" * 100_000 + "}", "is not valid JSON (nested too deeply)"),
+        ('{"lines": [[1e308, 1e308, 3, 4]]}', "lies outside the 640x480 image"),
+    ],
+)
+def test_bad_lines_files_one_line(files, capsys, tmp_path, content, message):
+    p = tmp_path / "lines.json"
+    p.write_text(content)
+    a = args(files)
+    a[a.index("--lines") + 1] = str(p)
+    assert main(a) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("matcher: error: ") and message in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("option", ["--map", "--camera", "--lines"])
+def test_a_directory_for_a_file(files, capsys, tmp_path, option):
+    a = args(files)
+    a[a.index(option) + 1] = str(tmp_path)
+    assert main(a) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("matcher: error: ") and "is a directory" in err
+
+
+def test_negative_prior_x_without_equals_sign(files, capsys):
+    """argparse takes '-0.05,...' for an option; the CLI joins it to --prior."""
+    a = args(files, "--json")
+    x, y, yaw = (float(v) for v in files["prior"].split(","))
+    a[a.index("--prior") + 1] = f"-0.05,{y},{yaw}"
+    assert main(a) in (0, 1)
+    out, err = capsys.readouterr()
+    assert err == "" and "ok" in json.loads(out)
+
+
 def test_missing_option_and_both_sources(files, capsys):
     with pytest.raises(SystemExit) as e:
         main(["localize", "--map", "x"])

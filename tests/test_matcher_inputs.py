@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -54,10 +55,20 @@ def test_out_of_image_line_is_rejected(box, cam, good_lines):
         matcher.localize(box, cam, lines, (3, 2.5, 0), 0.5, 20)
 
 
-@pytest.mark.parametrize("bad", [np.zeros((3, 3)), np.zeros((2, 3, 2)), "lines", [[1, 2, 3]]])
+@pytest.mark.parametrize("bad", [np.zeros((3, 3)), np.zeros((2, 3, 2)), "lines", [[1, 2, 3]], np.zeros((5, 0)),
+                                 np.zeros((0, 3))])
 def test_wrong_shape_is_rejected(box, cam, bad):
     with pytest.raises(ValueError, match=r"Expected shape \(M, 2, 2\) or \(M, 4\)"):
         matcher.localize(box, cam, bad, (3, 2.5, 0), 0.5, 20)
+
+
+def test_numbers_beyond_float_are_rejected_in_one_line(box, cam):
+    with pytest.raises(ValueError, match="lines must be numbers"):
+        matcher.localize(box, cam, [[10**400, 1, 2, 3]] * 3, (3, 2.5, 0), 0.5, 20)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow warning on the way to the message
+        with pytest.raises(ValueError, match=r"lines\[0\] = \[1e\+308, .* lies outside"):
+            matcher.localize(box, cam, [[1e308, 1e308, 2, 3]] * 3, (3, 2.5, 0), 0.5, 20)
 
 
 @pytest.mark.parametrize(
@@ -75,6 +86,34 @@ def test_wrong_shape_is_rejected(box, cam, bad):
 def test_bad_prior_is_rejected(box, cam, good_lines, prior, dt, dyaw, msg):
     with pytest.raises(ValueError, match=msg):
         matcher.localize(box, cam, good_lines, prior, dt, dyaw)
+
+
+def test_prior_beyond_any_map_and_headings_of_many_turns(box, cam, good_lines):
+    with pytest.raises(ValueError, match="more than 1000 km out"):
+        matcher.localize(box, cam, good_lines, (1e300, 2.0, 0.0), 0.5, 20)
+    a = matcher.localize(box, cam, good_lines, (3, 2.5, 10.0), 0.5, 20)
+    b = matcher.localize(box, cam, good_lines, (3, 2.5, 10.0 + 360.0 * 10**6), 0.5, 20)
+    assert a.pose == pytest.approx(b.pose)
+
+
+@pytest.mark.parametrize("which, value, msg", [
+    ("linemap", "maps/flat.lmap", r"linemap must be a map from matcher.load_map"),
+    ("camera", {"width": 640}, r"camera must be a matcher.Camera"),
+    ("tolerances", {"line_px": 2}, r"tolerances must be a matcher.Tolerances"),
+])
+def test_arguments_of_the_wrong_type(box, cam, good_lines, which, value, msg):
+    kwargs = {"linemap": box, "camera": cam, "tolerances": None, which: value}
+    with pytest.raises(ValueError, match=msg):
+        matcher.localize(kwargs["linemap"], kwargs["camera"], good_lines, (3, 2.5, 0), 0.5, 20,
+                         tolerances=kwargs["tolerances"])
+    with pytest.raises(ValueError, match=msg):
+        matcher.localize_global(kwargs["linemap"], kwargs["camera"], good_lines, tolerances=kwargs["tolerances"])
+
+
+def test_lost_mode_says_when_the_lines_are_too_few(box, cam, good_lines):
+    res = matcher.localize_global(box, cam, good_lines[:2])
+    assert not res and res.reason.startswith("only 2 usable image lines")
+    assert res.to_dict()["time_ms"]["regions_tried"] == 0 and isinstance(res.to_dict()["time_ms"]["regions_tried"], int)
 
 
 def test_prior_outside_the_map_is_a_falsy_result(box, cam, good_lines):
@@ -137,8 +176,16 @@ def test_camera_file_with_missing_fields(tmp_path):
         ({"fx": -1}, "fx and fy must be positive"),
         ({"height_m": 0}, "height_m must be above the floor"),
         ({"pitch_deg": 95}, r"pitch_deg must be in \[-89, 89\]"),
-        ({"width": "wide"}, "non-numeric field"),
+        ({"width": "wide"}, "camera width must be a number, got 'wide'"),
+        ({"width": "640"}, "camera width must be a number"),
+        ({"width": True}, "camera width must be a number, got True"),
+        ({"width": 640.5}, "width and height must be whole pixels"),
+        ({"width": float("inf")}, "camera width must be finite"),
+        ({"fx": 10**400}, "camera fx is out of range"),
+        ({"fy": None}, "camera fy must be a number, got None"),
         ({"distortion": [0.1, 0.2, 0.3]}, "distortion takes 4, 5, 8, 12 or 14"),
+        ({"distortion": [0.1, "x", 0.0, 0.0]}, "camera distortion must be a number"),
+        ({"distortion": 0.1}, "distortion must be a list of numbers"),
     ],
 )
 def test_camera_bad_values(change, msg):
@@ -152,6 +199,23 @@ def test_camera_round_trip(tmp_path):
     p = tmp_path / "c.json"
     p.write_text(json.dumps(cam.to_dict()))
     assert Camera.load(p) == cam
+
+
+def test_camera_constructor_rejects_wrong_types():
+    with pytest.raises(CameraError, match="camera width must be a number"):
+        Camera("640", 480, 900.0, 900.0, 320.0, 240.0, 1.2, 0.0)
+    with pytest.raises(CameraError, match="whole pixels"):
+        Camera(640.5, 480, 900.0, 900.0, 320.0, 240.0, 1.2, 0.0)
+    assert Camera(np.int64(640), 480, np.float32(900.0), 900.0, 320.0, 240.0, 1.2, 0.0).width == 640
+
+
+def test_camera_file_that_is_a_directory_or_too_deep(tmp_path):
+    with pytest.raises(CameraError, match="is a directory"):
+        Camera.load(tmp_path)
+    p = tmp_path / "deep.json"
+    p.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(CameraError, match="not valid JSON"):
+        Camera.load(p)
 
 
 def test_tolerances_are_validated():

@@ -48,6 +48,50 @@ def test_colour_image_and_float_image():
     assert _match(matcher.detect_lines(f), (50, 50), (50, 400)) is not None
 
 
+def test_sixteen_bit_and_other_types_give_the_same_lines():
+    img = np.full((240, 320), 200, np.uint8)
+    cv2.rectangle(img, (60, 50), (250, 190), 40, -1)
+    ref = matcher.detect_lines(img)
+    assert len(ref) == 4
+    bgr = np.dstack([img] * 3)
+    for other in (img.astype(np.uint16) * 257, img.astype(np.float64) * 257, bgr / 255.0, bgr.astype(np.int64),
+                  img > 100):
+        found = matcher.detect_lines(other)
+        assert len(found) == 4 and all(_match(found, *ln) is not None for ln in ref), other.dtype
+
+
+@pytest.mark.parametrize("bad, msg", [(np.zeros((0, 640), np.uint8), "image is empty"),
+                                      (np.full((4, 4), "a"), "image must hold numbers")])
+def test_unusable_images_are_rejected(bad, msg):
+    with pytest.raises(ValueError, match=msg):
+        matcher.detect_lines(bad)
+
+
+@pytest.mark.parametrize("kwargs, msg", [({"min_length": None}, "min_length must be a number"),
+                                         ({"min_length": "15"}, "min_length must be a number"),
+                                         ({"camera": {"width": 640}}, "camera must be a matcher.Camera")])
+def test_bad_arguments_are_rejected(kwargs, msg):
+    with pytest.raises(ValueError, match=msg):
+        matcher.detect_lines(np.zeros((480, 640), np.uint8), **kwargs)
+
+
+def test_lines_of_a_distorted_image_are_accepted_by_localize():
+    """Barrel distortion moves the image corners outwards on the ideal
+    pinhole: lines along the border, undistorted, lie beyond the image and
+    must still pass localize's input check."""
+    from matcher.checks import check_lines
+
+    cam = Camera(640, 480, 900.0, 900.0, 320.0, 240.0, 1.2, 0.0, (-0.3, 0.1, 0.0, 0.0))
+    img = np.full((480, 640), 200, np.uint8)
+    cv2.rectangle(img, (8, 8), (632, 472), 40, -1)
+    found = matcher.detect_lines(img, cam)
+    u0, u1, v0, v1 = cam.ideal_bounds
+    assert u0 < -5 and u1 > 645 and v0 < -5 and v1 > 485
+    assert (found[..., 0].min() < 0) and len(check_lines(found, cam, matcher.Tolerances())) == len(found)
+    with pytest.raises(ValueError, match="undistorted: u in"):
+        check_lines([[u0 - 20, 240.0, 320.0, 240.0]], cam, matcher.Tolerances())
+
+
 def test_minimum_length_drops_short_lines():
     img = np.zeros((480, 640), np.uint8)
     cv2.line(img, (100, 100), (108, 100), 255, 2)  # 8 px

@@ -1,7 +1,8 @@
 """A synthetic flat as a LineMap, for the matcher's tests, simulator and benchmark.
 
-Until the map builder's ``maps/flat.lmap`` exists, this makes the map the
-paper's protocol runs on: a 12 m x 9 m flat of seven rooms (living room with
+Maps made without the map builder, so that the matcher's results do not
+hang on it: ``bench_paper.py --synthetic`` runs the paper's protocol on
+:func:`make_flat_map`, a 12 m x 9 m flat of seven rooms (living room with
 a pillar and an open kitchen, kitchen, bathroom, corridor, two bedrooms, a
 study), walls 0.1 m thick and ``WALL_HEIGHT`` high, full-height door openings.
 
