@@ -6,10 +6,34 @@ Standard library only (the numpy-only format module uses it too).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import tempfile
 from pathlib import Path
 from typing import IO, Iterator
+
+
+class OutputPathError(OSError):
+    """A file cannot be written at the path given; ``filename`` is that
+    path (or its folder), ``strerror`` says why and what to do."""
+
+
+def check_output_path(path: str | os.PathLike) -> Path:
+    """``path`` as a Path if a file can be written there; else
+    :class:`OutputPathError`. Commands call it before their work, so that a
+    wrong ``-o`` fails at once, and the error names the path asked for, not
+    the temporary file written beside it."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise OutputPathError(errno.EISDIR, "is a directory; give a file name", str(path))
+    if not parent.exists():
+        raise OutputPathError(errno.ENOENT, "output folder does not exist; create it first", str(parent))
+    if not parent.is_dir():
+        raise OutputPathError(errno.ENOTDIR, "is a file, not a folder; choose another output path", str(parent))
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputPathError(errno.EACCES, "output folder is not writable (permission denied)", str(parent))
+    return path
 
 
 @contextlib.contextmanager
@@ -18,11 +42,12 @@ def atomic_output(path: str | os.PathLike, mode: str = "wb") -> Iterator[IO]:
 
     If the body raises, the temporary file is removed and ``path`` is left as
     it was (absent, or the previous version)."""
-    path = Path(path)
+    path = check_output_path(path)
     parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise FileNotFoundError(2, "output folder does not exist", str(parent))
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=parent)
+    except OSError as exc:  # a read-only file system, a special folder, ...
+        raise OutputPathError(exc.errno, f"cannot create a file there ({exc.strerror})", str(path)) from None
     try:
         with os.fdopen(fd, mode) as fh:
             yield fh

@@ -13,6 +13,8 @@ import pkgutil
 import sys
 
 import mapkit.commands
+from mapkit.argv import join_negative_values
+from mapkit.atomic import OutputPathError
 from mapkit.errors import MapkitError
 from mapkit.lmap import LmapError
 
@@ -63,12 +65,15 @@ def _setup_logging() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    # '--at -5,-5': a negative X would read as an option.
+    args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv), ("--at",)))
     _setup_logging()
     try:
         return int(args._run(args) or 0)
     except (MapkitError, LmapError) as exc:
         return _fail(str(exc))
+    except OutputPathError as exc:
+        return _fail(f"{exc.filename}: {exc.strerror}")
     except FileNotFoundError as exc:
         what = (exc.strerror or "no such file").lower().replace("no such file or directory", "no such file")
         return _fail(f"{exc.filename or exc}: {what}; check the path")
@@ -79,6 +84,8 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         # Validation errors of our own types (camera, options) are ValueErrors with clear text.
         return _fail(str(exc))
+    except OSError as exc:  # a full disk, a read-only file system, ...
+        return _fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else f"{exc.strerror or exc}")
     except KeyboardInterrupt:
         print("mapkit: interrupted", file=sys.stderr)
         return 130

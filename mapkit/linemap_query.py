@@ -78,10 +78,11 @@ class RegionLookup:
         ny, nx = m.grid_shape
         ox, oy = m.grid_origin
         c = m.grid_cell
-        ix0 = int(np.floor((x - radius - ox) / c))
-        ix1 = int(np.floor((x + radius - ox) / c))
-        iy0 = int(np.floor((y - radius - oy) / c))
-        iy1 = int(np.floor((y + radius - oy) / c))
+        # Cell indices clipped while still floats: a huge radius or point
+        # (1e308) would overflow an int.
+        with np.errstate(over="ignore"):
+            ix0, ix1 = (int(np.clip(np.floor((v - ox) / c), -1, nx)) for v in (x - radius, x + radius))
+            iy0, iy1 = (int(np.clip(np.floor((v - oy) / c), -1, ny)) for v in (y - radius, y + radius))
         ix0, iy0 = max(ix0, 0), max(iy0, 0)
         ix1, iy1 = min(ix1, nx - 1), min(iy1, ny - 1)
         if ix0 > ix1 or iy0 > iy1:
@@ -107,14 +108,14 @@ class RegionLookup:
         a, b = self.a[edges], self.b[edges]
         # Even-odd crossing test of a ray towards +x.
         straddle = (a[:, 1] > y) != (b[:, 1] > y)
-        with np.errstate(divide="ignore", invalid="ignore"):  # horizontal edges never straddle
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # horizontal edges never straddle
             t = (y - a[:, 1]) / (b[:, 1] - a[:, 1])
             xcross = a[:, 0] + t * (b[:, 0] - a[:, 0])
         inside = np.add.reduceat((straddle & (xcross > x)).astype(np.int64), runs) % 2 == 1
         # Distance from the centre to each edge.
         ab = b - a
         denom = ab[:, 0] * ab[:, 0] + ab[:, 1] * ab[:, 1]
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             u = np.clip(((x - a[:, 0]) * ab[:, 0] + (y - a[:, 1]) * ab[:, 1]) / denom, 0.0, 1.0)
         u = np.where(denom > 0, u, 0.0)
         d = np.hypot(a[:, 0] + u * ab[:, 0] - x, a[:, 1] + u * ab[:, 1] - y)

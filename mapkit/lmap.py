@@ -277,7 +277,8 @@ def _quantize_deltas(points: np.ndarray) -> np.ndarray:
     q = np.round(np.asarray(points, dtype=np.float64).reshape(-1, 2) / COORD_QUANTUM_M).astype(np.int64)
     dq = np.diff(q, axis=0, prepend=np.zeros((1, 2), dtype=np.int64))
     if len(dq) and np.abs(dq).max() >= 2**31:
-        raise LmapError("coordinates exceed the format's range (about 200 km)")
+        raise LmapError("coordinates exceed the format's range (about 200 km from the origin); "
+                        "move the drawing near (0, 0) in the CAD program")
     return dq
 
 

@@ -115,13 +115,16 @@ def _check_options(o: BuildOptions) -> None:
         if not (np.isfinite(v) and v > 0):
             raise MapkitError(f"--{name.replace('_', '-')} must be a positive number, got {v}")
     if not 0 < o.door_height <= o.wall_height:
-        raise MapkitError(f"--door-height must be in (0, wall height {o.wall_height}], got {o.door_height}")
+        raise MapkitError(f"--door-height {o.door_height:g} must be in (0, --wall-height {o.wall_height:g}]; "
+                          "lower --door-height or raise --wall-height")
     if not 0 <= o.window_sill < o.window_head <= o.wall_height:
-        raise MapkitError("window sill and head must satisfy 0 <= sill < head <= wall height")
+        raise MapkitError(f"windows need 0 <= --window-sill < --window-head <= --wall-height, got "
+                          f"{o.window_sill:g}, {o.window_head:g}, {o.wall_height:g}")
     if not 0 <= o.merge_growth <= 10:
         raise MapkitError(f"--merge-growth is a fraction in [0, 10], got {o.merge_growth}")
-    if o.robot_radius < 0 or o.min_edge_length < 0:
-        raise MapkitError("--robot-radius and --min-edge-length must be >= 0")
+    for name in ("robot_radius", "min_edge_length"):
+        if not getattr(o, name) >= 0:
+            raise MapkitError(f"--{name.replace('_', '-')} must be >= 0 metres, got {getattr(o, name)}")
     if o.eps > 0.5:
         raise MapkitError(f"--eps is the lookup tolerance and must be at most 0.5 m, got {o.eps}")
 

@@ -18,6 +18,8 @@ import os
 import sys
 from pathlib import Path
 
+from mapkit.argv import join_negative_values
+
 #: Exit codes: localised, not localised (a valid answer), user error.
 EXIT_OK, EXIT_NOT_FOUND, EXIT_USAGE = 0, 1, 2
 
@@ -133,23 +135,10 @@ def run_localize(args) -> int:
     return EXIT_OK if res else EXIT_NOT_FOUND
 
 
-def _joined_values(argv: list[str]) -> list[str]:
-    """``--prior -1.5,2,30`` as ``--prior=-1.5,2,30``: argparse would take
-    a value starting with '-' for an option (a negative X is common)."""
-    out, i = [], 0
-    while i < len(argv):
-        if argv[i] == "--prior" and i + 1 < len(argv) and argv[i + 1][:1] == "-" and argv[i + 1][1:2] in "0123456789.":
-            out.append(f"--prior={argv[i + 1]}")
-            i += 2
-            continue
-        out.append(argv[i])
-        i += 1
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(_joined_values(sys.argv[1:] if argv is None else list(argv)))
+    # '--prior -1.5,2,30': a negative X would read as an option.
+    args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv), ("--prior",)))
     try:
         return run_localize(args)
     except UsageError as exc:

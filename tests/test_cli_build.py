@@ -67,6 +67,21 @@ def test_missing_output_folder(tmp_path, capsys):
     assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "no" / "o.lmap"), "does not exist")
 
 
+def test_unusable_output_paths_fail_before_the_build(tmp_path, capsys, monkeypatch):
+    import mapkit.pipeline
+
+    def no_build(*a, **k):
+        raise AssertionError("the build ran")
+
+    monkeypatch.setattr(mapkit.pipeline, "build_map", no_build)
+    (tmp_path / "d.lmap").mkdir()
+    (tmp_path / "file").write_text("")
+    plan = ROOT / "maps" / "flat.dxf"
+    assert_one_line_error(*run(capsys, "build", plan, "-o", tmp_path / "d.lmap"), "d.lmap: is a directory")
+    assert_one_line_error(*run(capsys, "build", plan, "-o", tmp_path / "file" / "o.lmap"), "file: is a file, not a folder")
+    assert not list(tmp_path.glob("*.tmp")) and not list(tmp_path.glob(".*"))
+
+
 def test_output_must_be_lmap(tmp_path, capsys):
     assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.txt"), ".lmap")
 
@@ -82,10 +97,16 @@ def test_output_must_be_lmap(tmp_path, capsys):
         (["--pitch", "120"], "pitch"),
         (["--image-size", "big"], "--image-size"),
         (["--hfov", "500"], "field of view"),
+        (["--window-sill", "-1"], "--window-sill must be >= 0"),
+        (["--min-edge-length", "-1"], "--min-edge-length must be >= 0"),
+        (["--wall-height", "1.5"], "--door-height 2.1 must be in (0, --wall-height 1.5]"),
+        (["--window-sill", "1.5", "--window-head", "1.0"], "0 <= --window-sill < --window-head <= --wall-height"),
+        (["--units", "m"], ("plan is 11 km across, not a building", "in mm it is 11 m across")),
     ],
 )
 def test_bad_options(tmp_path, capsys, opts, needle):
-    assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.lmap", *opts), needle)
+    needles = needle if isinstance(needle, tuple) else (needle,)
+    assert_one_line_error(*run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.lmap", *opts), *needles)
     assert_nothing_written(tmp_path)
 
 

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 from cli_helpers import assert_one_line_error, run
+import shapely.geometry.polygon
 from shapely.geometry import box
 
 from mapkit.assemble import assemble_map
@@ -64,6 +65,14 @@ def test_query_json(map_path, capsys, at, radius, regions, segments):
     assert json.loads(out) == {"regions": regions, "segments": segments}
 
 
+def test_query_with_negative_or_huge_numbers(map_path, capsys):
+    code, out, err = run(capsys, "query", map_path, "--at", "-0.1,-0.1", "--radius", "0.5", "--json")
+    assert code == 0 and json.loads(out)["regions"] == [0] and err == ""
+    for at, radius in (("0,0", "1e308"), ("1e308,0", "0"), ("1e308,1e308", "1e308")):
+        code, out, err = run(capsys, "query", map_path, "--at", at, "--radius", radius, "--json")
+        assert code == 0 and err == "" and set(json.loads(out)) == {"regions", "segments"}
+
+
 def test_export_geojson(map_path, tmp_path, capsys):
     out_path = tmp_path / "two.geojson"
     code, _, _ = run(capsys, "export", map_path, "--geojson", out_path)
@@ -76,6 +85,33 @@ def test_export_geojson(map_path, tmp_path, capsys):
     assert len(lines[1]["geometry"]["coordinates"][1]) == 3  # 3D coordinates
     ring = polys[0]["geometry"]["coordinates"][0]
     assert ring[0] == ring[-1]
+
+
+def _signed_area(ring):
+    return 0.5 * sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(ring, ring[1:]))
+
+
+def test_export_geojson_winds_rings_as_rfc_7946_says(tmp_path, capsys):
+    """Outer rings counter-clockwise, holes clockwise, whichever way the
+    map stores them (a room with a pillar: a region with a hole)."""
+    room = box(0, 0, 4, 3).difference(box(1.5, 1, 2, 1.5))
+    segs = np.array([[[0, 0, 0], [4, 0, 0]], [[0, 0, 0], [0, 0, 2.5]]], float)
+    walls = box(-0.2, -0.2, 4.2, 3.2).difference(box(0, 0, 4, 3))
+    for region in (room, shapely.geometry.polygon.orient(room, -1.0)):
+        m = assemble_map(segs, [SegmentKind.FLOOR, SegmentKind.VERTICAL], [region], [[0, 1]], walls,
+                         {"units": "m", "wall_height": 2.5})
+        save_map(tmp_path / "pillar.lmap", m)
+        out_path = tmp_path / "pillar.geojson"
+        assert run(capsys, "export", tmp_path / "pillar.lmap", "--geojson", out_path)[0] == 0
+        _check_winding(out_path)
+
+
+def _check_winding(out_path):
+    polys = [f["geometry"]["coordinates"] for f in json.loads(out_path.read_text())["features"]
+             if f["geometry"]["type"] == "Polygon"]
+    assert all(_signed_area(rings[0]) > 0 for rings in polys)
+    holes = [ring for rings in polys for ring in rings[1:]]
+    assert holes and all(_signed_area(ring) < 0 for ring in holes)
 
 
 

@@ -75,11 +75,13 @@ def test_unitless_imperial_drawing_guesses_inches_or_feet():
     assert decide_units(0, None, 45.0, imperial=True)[0] == "ft"
 
 
-def test_implausible_header_units_warn():
+def test_implausible_units_are_refused_with_the_likely_ones():
     # A house drawn in mm but labelled metres: 27000 "m" is 27 km across.
-    name, factor, warning = decide_units(6, None, 27000.0)
-    assert name == "m" and factor == 1.0
-    assert "27 km" in warning and "--units" in warning
+    with pytest.raises(MapkitError, match=r"units are m but then the plan is 27 km across, not a building "
+                                          r"\(1 m to 2 km\); pass the right --units \(in mm it is 27 m across\)"):
+        decide_units(6, None, 27000.0)
+    with pytest.raises(MapkitError, match=r"--units says mm but then the plan is 0.045 m across.*in m it is 45 m"):
+        decide_units(0, "mm", 45.0)
     assert decide_units(6, None, 27.0)[2] is None
 
 

@@ -109,7 +109,7 @@ def test_preview_replaces_an_existing_file_whole(capsys, tmp_path):
         ([CASES / "empty.dxf"], "drawing is empty"),
         ([CASES / "no_walls.dxf"], "no recognisable walls"),
         ([DATA / "thehouse.dxf", "--walls", "nope*"], "--walls nope* matches no layer"),
-        ([DATA / "thehouse.dxf", "--units", "mm"], "no free space"),
+        ([DATA / "thehouse.dxf", "--units", "mm"], "in m it is 44.7 m across"),
         ([DATA / "thehouse.dxf", "--robot-radius", "-1"], "--robot-radius"),
     ],
 )

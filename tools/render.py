@@ -29,6 +29,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from mapkit.argv import join_negative_values  # noqa: E402
 from mapkit.lmap import SegmentKind  # noqa: E402
 from matcher.camera import Camera  # noqa: E402
 from matcher.freespace import free_space  # noqa: E402
@@ -268,7 +269,7 @@ def main(argv=None) -> int:
     ap.add_argument("--supersample", type=int, default=3)
     ap.add_argument("--noise", type=float, default=2.0, help="grey-level noise sigma")
     ap.add_argument("--seed", type=int, default=0)
-    args = ap.parse_args(argv)
+    args = ap.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv), ("--pose",)))
     import matcher
     from simulate import paper_camera
 

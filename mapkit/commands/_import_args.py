@@ -42,8 +42,9 @@ def import_options_from_args(args) -> BuildOptions:
     for name in ("wall_height", "door_height", "window_head", "max_wall_thickness"):
         if not getattr(args, name) > 0:
             raise MapkitError(f"--{name.replace('_', '-')} must be positive, got {getattr(args, name)}")
-    if args.robot_radius < 0 or args.window_sill < 0:
-        raise MapkitError("--robot-radius and --window-sill must be >= 0")
+    for name in ("robot_radius", "window_sill"):
+        if not getattr(args, name) >= 0:
+            raise MapkitError(f"--{name.replace('_', '-')} must be >= 0 metres, got {getattr(args, name)}")
     return BuildOptions(
         units=args.units,
         scale=args.scale,

@@ -78,15 +78,15 @@ def _image_size(text: str) -> tuple[int, int]:
 def run(args) -> int:
     from pathlib import Path
 
+    from mapkit.atomic import check_output_path
     from mapkit.lmap import save_map
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)
     out = Path(args.output)
-    if not out.parent.exists():
-        raise MapkitError(f"output folder {out.parent} does not exist; create it first")
     if out.suffix.lower() != ".lmap":
         raise MapkitError(f"output must end in .lmap, got '{out.name}'")
+    check_output_path(out)
     linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty())
     size = save_map(out, linemap)
     if not args.quiet:

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
-from mapkit.atomic import write_atomic
+from mapkit.atomic import check_output_path, write_atomic
 
 HELP = "export regions (Polygons) and segments (3D LineStrings) as GeoJSON"
 
@@ -25,7 +24,8 @@ def to_geojson(m) -> dict:
         rings = m.region_rings(r)
         outer = [p for p, hole in rings if not hole]
         holes = [p for p, hole in rings if hole]
-        coords = [_closed(p) for p in outer[:1]] + [_closed(p) for p in holes]
+        # RFC 7946: the outer ring counter-clockwise, holes clockwise.
+        coords = [_closed(p, ccw=True) for p in outer[:1]] + [_closed(p, ccw=False) for p in holes]
         features.append(
             {
                 "type": "Feature",
@@ -44,16 +44,21 @@ def to_geojson(m) -> dict:
     return {"type": "FeatureCollection", "features": features}
 
 
-def _closed(p) -> list[list[float]]:
+def _closed(p, ccw: bool) -> list[list[float]]:
+    """Ring ``p`` (K, 2) closed (first point repeated), turning
+    counter-clockwise if ``ccw`` else clockwise."""
     pts = [[float(x), float(y)] for x, y in p]
+    area2 = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(pts, pts[1:] + pts[:1]))  # shoelace
+    if (area2 > 0) != ccw:
+        pts.reverse()
     return pts + [pts[0]]
 
 
 def run(args) -> int:
     from mapkit.lmap import load_map
 
+    out = check_output_path(args.geojson)
     m = load_map(args.map)
-    out = Path(args.geojson)
     write_atomic(out, json.dumps(to_geojson(m)))
     print(f"wrote {out}: {m.n_regions} regions, {m.n_segments} segments")
     return 0

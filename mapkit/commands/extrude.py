@@ -23,7 +23,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from mapkit.atomic import write_atomic
+    from mapkit.atomic import check_output_path, write_atomic
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.extrude import scene_to_mesh
     from mapkit.importers import load_scene
@@ -32,8 +32,7 @@ def run(args) -> int:
     kind = FORMATS.get(out.suffix.lower())
     if kind is None:
         raise MapkitError(f"output must end in one of {', '.join(FORMATS)}, got '{out.name}'")
-    if not (out.parent if str(out.parent) else Path(".")).is_dir():
-        raise MapkitError(f"output folder {out.parent} does not exist; create it first")
+    check_output_path(out)
     options = import_options_from_args(args)
     scene = load_scene(args.plan, options)
     if scene.walls.is_empty:

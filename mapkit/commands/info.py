@@ -70,7 +70,9 @@ def run(args) -> int:
     ]
     if b:
         size = [hi - lo for lo, hi in zip(b["min"], b["max"])]
-        lines.append(f"  extent     {size[0]:.2f} x {size[1]:.2f} m, walls {s['wall_height']} m high")
+        wh = s["wall_height"]
+        wh = f"{wh:.3g}" if isinstance(wh, (int, float)) else wh
+        lines.append(f"  extent     {size[0]:.2f} x {size[1]:.2f} m, walls {wh} m high")
     cam = s["camera"] or {}
     if cam:
         lines.append(

@@ -17,6 +17,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from pathlib import Path
 
+    from mapkit.atomic import check_output_path
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.errors import MapkitError
     from mapkit.importers import load_scene
@@ -26,8 +27,7 @@ def run(args) -> int:
     out = Path(args.output)
     if out.suffix.lower() != ".png":
         raise MapkitError(f"output must end in .png, got '{out.name}'")
-    if not (out.parent if str(out.parent) else Path(".")).is_dir():
-        raise MapkitError(f"output folder {out.parent} does not exist; create it first")
+    check_output_path(out)
     if not 20 <= args.dpi <= 1200:
         raise MapkitError(f"--dpi must be between 20 and 1200, got {args.dpi}")
     scene = load_scene(args.plan, options)

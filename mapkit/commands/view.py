@@ -29,6 +29,10 @@ def run(args) -> int:
         raise MapkitError("--lines needs --result (the lines are drawn at the result's pose)")
     if not 0 <= args.port <= 65535:
         raise MapkitError(f"--port must be in [0, 65535], got {args.port}")
+    if args.html:
+        from mapkit.atomic import check_output_path
+
+        check_output_path(args.html)
     m = load_map(args.map)
     camera = None
     if args.camera:
@@ -62,8 +66,10 @@ def run(args) -> int:
                               camera=camera)
     except OSError as exc:
         raise MapkitError(f"cannot listen on {args.host}:{args.port} ({exc.strerror or exc}); try --port 0") from None
-    print(f"mapkit view: {args.map} at {inspector.url}  (Ctrl-C to stop)", flush=True)
     try:
+        # Inside the try: a Ctrl-C right after the address is shown must stop
+        # the server too (its threads would keep the process alive).
+        print(f"mapkit view: {args.map} at {inspector.url}  (Ctrl-C to stop)", flush=True)
         threading.Event().wait()  # the server runs on its own threads; wait for Ctrl-C
     except KeyboardInterrupt:
         pass

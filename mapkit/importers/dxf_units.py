@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
 from mapkit.tolerances import PLAUSIBLE_EXTENT
 
@@ -39,19 +40,27 @@ def decide_units(
     ``insunits`` is the header code, ``override`` the user's ``--units`` (or
     None), ``extent`` the largest side of the drawing's bounding box in
     drawing units, ``imperial`` whether ``$MEASUREMENT`` is 0 (English).
-    Returns ``(unit name, metres per unit, warning or None)``.
+    Returns ``(unit name, metres per unit, warning or None)``; raises
+    MapkitError when stated units (header or override) make the plan no
+    building's size.
     """
     if override or insunits in INSUNITS:
         name = canonical_units(override) if override else INSUNITS[insunits]
         factor = UNIT_METRES[name]
-        warning = None
         if extent > 0 and not _plausible(extent * factor):
+            # Not a building: too large a plan would run out of memory, too
+            # small a one holds no free space. Refused before any work.
+            lo, hi = PLAUSIBLE_EXTENT
             said = "--units says" if override else "the drawing says its units are"
-            warning = f"{said} {name} but then the plan is {_fmt(extent * factor)} across; pass the right --units"
-        return name, factor, warning
+            likely = _likely_units(extent, imperial)
+            raise MapkitError(
+                f"{said} {name} but then the plan is {_fmt(extent * factor)} across, not a building "
+                f"({_fmt(lo)} to {_fmt(hi)}); pass the right --units (in {likely} it is "
+                f"{_fmt(extent * UNIT_METRES[likely])} across)"
+            )
+        return name, factor, None
     # No usable units: pick the unit that makes the building a plausible size.
-    guesses = _GUESSES_IMPERIAL if imperial else _GUESSES
-    name = min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
+    name = _likely_units(extent, imperial)
     factor = UNIT_METRES[name]
     code = f"$INSUNITS {insunits}" if insunits else "$INSUNITS 0, unitless"
     warning = (
@@ -59,6 +68,13 @@ def decide_units(
         f"{extent:.4g} units ({_fmt(extent * factor)}); pass --units to override"
     )
     return name, factor, warning
+
+
+def _likely_units(extent: float, imperial: bool) -> str:
+    """The unit that puts an ``extent`` (drawing units) closest to a typical
+    building's size, in log scale."""
+    guesses = _GUESSES_IMPERIAL if imperial else _GUESSES
+    return min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
 
 
 def _fmt(metres: float) -> str:
