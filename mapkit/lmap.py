@@ -337,7 +337,7 @@ def decode(data: bytes, name: str = "<bytes>") -> LineMap:
         stored = data[pos : pos + size]
         pos += size
         if zlib.crc32(stored) != int(ch["crc32"]):
-            raise LmapError(f"{name} is corrupt: checksum mismatch in chunk {label}")
+            raise LmapError(f"{name} is corrupt: checksum mismatch in chunk {label}; rebuild or re-copy it")
         raw_size = int(ch["raw_size"])
         if int(ch["codec"]) == _ZLIB:
             # At most one byte past the size the header states: a corrupt or

@@ -125,6 +125,8 @@ def _check_options(o: BuildOptions) -> None:
     for name in ("robot_radius", "min_edge_length"):
         if not getattr(o, name) >= 0:
             raise MapkitError(f"--{name.replace('_', '-')} must be >= 0 metres, got {getattr(o, name)}")
+    if not 0.0 < o.crease_deg < 180.0:
+        raise MapkitError(f"--crease-deg must be in (0, 180) degrees, got {o.crease_deg}")
     if o.eps > 0.5:
         raise MapkitError(f"--eps is the lookup tolerance and must be at most 0.5 m, got {o.eps}")
 

@@ -12,6 +12,7 @@ A failed localisation is not an error: it prints its reason and exits 1.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import os
@@ -95,10 +96,27 @@ def _read_image(path: str, camera):
     from matcher.lines import detect_lines
 
     _input_file(path, "image file")
-    img = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
+    with _c_stderr_silenced():
+        img = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
     if img is None:
         raise UsageError(f"image file {path} could not be read (PNG, JPEG, ... expected)")
     return detect_lines(img, camera)
+
+
+@contextlib.contextmanager
+def _c_stderr_silenced():
+    """File descriptor 2 pointed at /dev/null for the block: OpenCV's image
+    codecs print their own complaints there ("libpng error: Read Error"),
+    which the one-line error that follows says better."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def _human(res, n_lines: int) -> str:

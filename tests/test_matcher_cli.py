@@ -143,6 +143,18 @@ def test_bad_lines_files_one_line(files, capsys, tmp_path, content, message):
     assert err.startswith("matcher: error: ") and message in err and len(err.strip().splitlines()) == 1
 
 
+def test_truncated_image_is_one_line_from_a_fresh_process(files, tmp_path):
+    """libpng's own complaint on the C stderr is kept quiet: the one line says it."""
+    img = np.random.default_rng(0).integers(0, 255, (480, 640)).astype(np.uint8)  # the cut falls in pixel data
+    ok, png = cv2.imencode(".png", img)
+    p = tmp_path / "cut.png"
+    p.write_bytes(png.tobytes()[: len(png) // 2])
+    a = args(files, lines=False) + ["--image", str(p)]
+    out = subprocess.run([sys.executable, "-m", "matcher", *a], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and out.stdout == ""
+    assert out.stderr.startswith("matcher: error: image file") and len(out.stderr.strip().splitlines()) == 1, out.stderr
+
+
 @pytest.mark.parametrize("option", ["--map", "--camera", "--lines"])
 def test_a_directory_for_a_file(files, capsys, tmp_path, option):
     a = args(files)

@@ -378,9 +378,16 @@ def _mapkit(*args, **kw):
     return subprocess.run([sys.executable, "-m", "mapkit", *args], capture_output=True, text=True, timeout=60, **kw)
 
 
+def _sigint_default():
+    # A shell's background job ('pytest &') starts with SIGINT ignored, and a
+    # Python started with it ignored never raises KeyboardInterrupt: the
+    # server below must see Ctrl-C as a terminal would send it.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_cli_serves_until_ctrl_c(flat_path):
     proc = subprocess.Popen([sys.executable, "-m", "mapkit", "view", str(flat_path), "--port", "0"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_sigint_default)
     try:
         line = proc.stdout.readline()
         assert "http://127.0.0.1:" in line, line + proc.stderr.read()

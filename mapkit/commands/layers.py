@@ -26,10 +26,12 @@ def run(args) -> int:
 
     options = import_options_from_args(args)
     path = Path(args.plan)
+    if path.is_dir():
+        raise MapkitError(f"{path}: is a directory, expected a DXF file")
     if not path.is_file():
         raise MapkitError(f"{path}: no such file; check the path")
     if path.suffix.lower() != ".dxf":
-        raise MapkitError(f"{path.name}: 'mapkit layers' reads DXF plans; meshes have no layers")
+        raise MapkitError(f"{path.name}: 'mapkit layers' reads DXF plans (.dxf), got a '{path.suffix}' file")
     doc, warnings = read_dxf(path)
     counts = layer_counts(doc)
     try:

@@ -70,7 +70,13 @@ def run(args) -> int:
         # Inside the try: a Ctrl-C right after the address is shown must stop
         # the server too (its threads would keep the process alive).
         print(f"mapkit view: {args.map} at {inspector.url}  (Ctrl-C to stop)", flush=True)
-        threading.Event().wait()  # the server runs on its own threads; wait for Ctrl-C
+        # The server runs on its own threads; wait for Ctrl-C. In short
+        # waits: the kernel may deliver SIGINT to one of the server's
+        # threads, and a main thread blocked for good would never run
+        # Python's handler.
+        stop = threading.Event()
+        while not stop.wait(0.2):
+            pass
     except KeyboardInterrupt:
         pass
     finally:
