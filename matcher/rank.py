@@ -17,7 +17,9 @@ For each hypothesis, all at once where the arrays allow:
 5. the paper's score E. Hypotheses are ranked by number of matches, then
    by the reprojection error (the lines' end points' pixel distances to the
    projected segments, each over its line's noise bound), then E; E is what
-   the acceptance threshold tests.
+   the acceptance threshold tests. A hypothesis whose matches fix no more
+   than the pose's three numbers (three vertical edges) is not accepted:
+   it fits exactly, whatever it matched.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import numpy as np
 
 from matcher import verify
 from matcher.constraints import wrap
+from matcher.generate import segment_is_vertical
 from matcher.occlusion import sight_clear
 from matcher.overlap import (covered_span, distance_and_overlap, project_segments, projected_distance_and_overlap,
                              projected_end_distances)
@@ -105,6 +108,13 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
         alive &= _allowed(poses, prior, free, tol)
     n_fin = np.bincount(hyp, minlength=n_h)
+    # A vertical edge's line fixes one number of the pose (its bearing), any
+    # other line two. Matches that fix no more than the pose's three leave
+    # nothing over to check it: three vertical edges fit exactly (E = 0)
+    # whichever they are. Such a hypothesis is not accepted.
+    fixed = np.bincount(hyp, np.where(segment_is_vertical(segs[local]), 1.0, 2.0), minlength=n_h)
+    exact = alive & (fixed <= 3)
+    alive &= ~exact
     E = np.full(n_h, np.inf)
     if len(hyp):
         # E's position term at the middle of the part of each segment that
@@ -141,8 +151,13 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     order = np.lexsort((E, cost, -n_fin * (alive & np.isfinite(E))))
     why = ""
     if not np.isfinite(E).any():
-        why = ("no hypothesis kept its pose inside the prior bounds and the map's free space" if (n_in >= tol.min_matches).any()
-               else f"no hypothesis kept {tol.min_matches} matches that fit at its pose")
+        if exact.any():
+            why = ("the hypotheses left fix the pose exactly (three vertical edges, say), with nothing over to "
+                   "verify it; more image lines are needed")
+        elif (n_in >= tol.min_matches).any():
+            why = "no hypothesis kept its pose inside the prior bounds and the map's free space"
+        else:
+            why = f"no hypothesis kept {tol.min_matches} matches that fit at its pose"
     return Ranked(hyp, local, line_ids, poses, E, order, why)
 
 

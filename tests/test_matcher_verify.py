@@ -186,3 +186,25 @@ def test_reprojection_cost_sums_end_point_errors_over_noise():
     behind = poses.copy()
     behind[0, 2] += math.pi
     assert np.isinf(reprojection_cost(cam, img, behind, hyp, segs, np.arange(6), tol, 2)[0])
+
+
+def test_three_vertical_edges_alone_are_not_accepted():
+    """Three vertical edges fix the pose's three numbers exactly: E is zero
+    whichever edges they are, so nothing verifies the match. A wide camera
+    sees three corners of an empty room and no other line."""
+    import matcher
+    from _synthetic_map import make_box_map
+    from matcher.camera import Camera
+    from matcher.generate import segment_is_vertical
+
+    room = make_box_map()
+    cam = Camera.from_fov(120.0, 640, 480, 1.2, 0.0)
+    pose = (0.8, 0.8, math.radians(45.0))
+    lines = []
+    for seg in room.segments[segment_is_vertical(room.segments)]:
+        uv, z = cam.project(seg, *pose)
+        if (z > 0).all() and 0 <= uv[0, 0] <= cam.width:
+            lines.append(np.clip(uv, [0, 0], [cam.width, cam.height]))
+    assert len(lines) == 3
+    res = matcher.localize(room, cam, np.array(lines), (0.9, 0.7, 40.0), 0.3, 10)
+    assert not res and "fix the pose exactly" in res.reason
