@@ -196,8 +196,13 @@ def test_cli_writes_each_format(tmp_path, capsys, suffix):
     out = tmp_path / f"flat{suffix}"
     assert main(["extrude", str(FLAT), "-o", str(out)]) == 0
     assert "triangles" in capsys.readouterr().out
-    back = load_scene(out, BuildOptions())
+    back = load_scene(out, BuildOptions(up="y" if suffix == ".glb" else "z"))  # glTF is +Y up
     assert back.wall_height == pytest.approx(2.5)
+    if suffix == ".glb":
+        import trimesh
+
+        lo, hi = trimesh.load(out, force="mesh").bounds
+        assert hi[1] == pytest.approx(2.5, abs=0.01)  # the walls stand along +Y, up to their 2.5 m
     assert [p.name for p in tmp_path.iterdir()] == [out.name]  # no temporary left
 
 

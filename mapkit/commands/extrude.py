@@ -38,6 +38,14 @@ def run(args) -> int:
     if scene.walls.is_empty:
         raise MapkitError(f"{args.plan}: no walls to extrude; check the layer choice with 'mapkit preview'")
     mesh = scene_to_mesh(scene, ceiling=args.ceiling, robot_radius=options.robot_radius)
+    if kind == "glb":  # glTF's axes are +Y up: turned, so that viewers and simulators show it upright
+        import numpy as np
+
+        from mapkit.importers.mesh_load import Y_UP_TO_Z_UP
+
+        turn = np.eye(4)
+        turn[:3, :3] = Y_UP_TO_Z_UP.T
+        mesh.apply_transform(turn)
     data = mesh.export(file_type=kind)
     write_atomic(out, data if isinstance(data, (bytes, str)) else bytes(data))
     if not args.quiet:
