@@ -42,6 +42,9 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     top = float(info["wall_height_m"])
     if top <= MESH_LEVEL:
         raise NoWallsError(f"{path}: the model is flat (nothing stands above the floor); check --up")
+    if options.wall_height != BuildOptions.wall_height:
+        _warn(warnings, f"--wall-height {options.wall_height:g} is for DXF plans; a mesh's walls are as high as "
+                        f"the model's ({top:.3g} m)")
     cam_h = float(options.camera.get("height_m", 1.2))
     # The section must cut the walls: keep it strictly between floor and top.
     z = float(np.clip(cam_h, MESH_LEVEL, top - MESH_LEVEL))
