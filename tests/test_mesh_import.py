@@ -311,3 +311,10 @@ def test_build_a_map_from_each_real_mesh(tmp_path):
         assert main(["build", str(path), "-o", str(out), "-q"]) == 0
         m = load_map(out)
         assert 0 < m.n_segments <= len(load_scene(path).segments) and m.n_regions > 0
+
+
+def test_truncated_binary_stl_says_so(tmp_path):
+    cut = tmp_path / "cut.stl"
+    cut.write_bytes(HOSPITAL.read_bytes()[:12_000])
+    with pytest.raises(MapkitError, match=r"truncated \(its header lists 482 triangles, it holds 238\)"):
+        load_scene(cut, BuildOptions())

@@ -97,6 +97,7 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """
     import trimesh
 
+    _check_binary_stl_length(path)
     try:
         loaded = trimesh.load(str(path), process=False)
     except Exception as exc:  # trimesh raises anything from struct.error to KeyError on bad files
@@ -120,6 +121,25 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if not np.isfinite(vertices).all():
         raise MapkitError(f"{path}: the mesh has non-finite coordinates (NaN or infinity); repair or re-export it")
     return vertices, faces
+
+
+def _check_binary_stl_length(path: Path) -> None:
+    """MapkitError if ``path`` is a binary STL shorter than its header's
+    triangle count says (a cut download or copy): trimesh would read what
+    is there, or nothing, without saying so. An 80-byte header, a uint32
+    count, 50 bytes per triangle; ASCII STL starts with 'solid' and a
+    binary one whose size fits its count is left alone."""
+    if path.suffix.lower() != ".stl":
+        return
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        head = fh.read(84)
+    if len(head) < 84 or head[:5].lower() == b"solid":
+        return
+    count = int(np.frombuffer(head[80:84], dtype="<u4")[0])
+    if size < 84 + 50 * count:
+        raise MapkitError(f"{path}: the file is truncated (its header lists {count} triangles, it holds "
+                          f"{max(size - 84, 0) // 50}); copy or export it again")
 
 
 def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[np.ndarray, np.ndarray]:
