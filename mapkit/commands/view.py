@@ -20,7 +20,7 @@ def add_arguments(p) -> None:
 
 def run(args) -> int:
     import sys
-    import threading
+    import time
 
     from mapkit.errors import MapkitError
     from mapkit.lmap import load_map
@@ -71,12 +71,11 @@ def run(args) -> int:
         # the server too (its threads would keep the process alive).
         print(f"mapkit view: {args.map} at {inspector.url}  (Ctrl-C to stop)", flush=True)
         # The server runs on its own threads; wait for Ctrl-C. In short
-        # waits: the kernel may deliver SIGINT to one of the server's
+        # sleeps: the kernel may deliver SIGINT to one of the server's
         # threads, and a main thread blocked for good would never run
         # Python's handler.
-        stop = threading.Event()
-        while not stop.wait(0.2):
-            pass
+        while True:
+            time.sleep(0.2)
     except KeyboardInterrupt:
         pass
     finally:
