@@ -42,10 +42,12 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     walls = wall_result.walls
     if walls.is_empty:
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
-        raise NoWallsError(
-            f"no recognisable walls on the wall layers ({layers}); name the wall layers with --walls "
-            f"(see 'mapkit layers PLAN')"
-        )
+        if options.walls:  # the user named them: say what is wrong with them, not to name them
+            hint = ("they hold no lines or outlines that form walls (text, points and blocks of other things "
+                    "do not); check the choice with 'mapkit layers PLAN' and 'mapkit preview PLAN'")
+        else:
+            hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
+        raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
 
     openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"))

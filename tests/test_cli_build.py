@@ -124,3 +124,20 @@ def test_existing_map_survives_a_failed_build(tmp_path, capsys):
     bad.write_text("0\nSECTION\n2\nENTITIES\n0\nLINE\n")
     code, _, _ = run(capsys, "build", bad, "-o", out)
     assert code == 2 and out.read_bytes() == b"previous map"
+
+
+def test_camera_above_the_walls_is_warned(tmp_path, capsys):
+    code, out, err = run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.lmap", "--camera-height", "3")
+    assert code == 0 and "camera height 3 m is not below the walls' 2.5 m" in err
+
+
+def test_named_wall_layer_without_linework(tmp_path, capsys):
+    doc = ezdxf.new()
+    doc.layers.add("Walls")
+    doc.modelspace().add_text("kitchen", dxfattribs={"layer": "Walls"}).set_placement((1, 1))
+    doc.modelspace().add_line((0, 0), (5, 0), dxfattribs={"layer": "Other"})
+    plan = tmp_path / "text.dxf"
+    doc.saveas(plan)
+    assert_one_line_error(*run(capsys, "build", plan, "-o", tmp_path / "o.lmap", "--walls", "Walls"),
+                          "the wall layers given ('Walls') hold no lines or outlines, only TEXT")
+    assert_nothing_written(tmp_path)

@@ -34,6 +34,14 @@ _USED_ROLES = ("walls", "doors", "windows", "floor")
 def load_scene(path: Path, options: BuildOptions) -> Scene:
     """Import a DXF plan; see the module docstring. Raises MapkitError for user-fixable problems."""
     drawing, info = load_drawing(Path(path), options)
+    cam_h = float(options.camera.get("height_m", 1.2))
+    if cam_h >= options.wall_height:
+        # Visibility treats walls as full-height screens: seen from above
+        # their tops, what they hide in the map is in view.
+        message = (f"camera height {cam_h:g} m is not below the walls' {options.wall_height:g} m: the map's "
+                   "visibility lists assume walls hide what is behind them; check --camera-height and --wall-height")
+        log.warning(message)
+        info.setdefault("warnings", []).append(message)
     return reconstruct_scene(drawing, options, info)
 
 

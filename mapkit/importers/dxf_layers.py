@@ -49,6 +49,13 @@ def resolve_roles(counts: dict[str, Counter], options: BuildOptions) -> tuple[di
                 f"(pass --walls to choose)"
             )
             wall_layers = unknown
+    if not wall_layers and options.walls:  # the user named them: they hold no linework
+        named = sorted(name for name, role in roles.items() if role == "walls")
+        raise NoWallsError(
+            f"the wall layers given ({', '.join(repr(n) for n in named)}) hold no lines or outlines, only "
+            f"{', '.join(sorted({k for n in named for k in counts[n]})) or 'nothing'}; layers are "
+            f"{_listing(counts)}; see 'mapkit layers PLAN'"
+        )
     if not wall_layers:
         raise NoWallsError(
             f"no recognisable walls: layers are {_listing(counts)}; "
