@@ -102,6 +102,7 @@ def test_output_must_be_lmap(tmp_path, capsys):
         (["--wall-height", "1.5"], "--door-height 2.1 must be in (0, --wall-height 1.5]"),
         (["--window-sill", "1.5", "--window-head", "1.0"], "0 <= --window-sill < --window-head <= --wall-height"),
         (["--units", "m"], ("plan is 11 km across, not a building", "in mm it is 11 m across")),
+        (["--crease-deg", "200"], "--crease-deg must be in (0, 180) degrees"),
     ],
 )
 def test_bad_options(tmp_path, capsys, opts, needle):

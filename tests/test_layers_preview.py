@@ -128,3 +128,8 @@ def test_preview_output_must_be_png_in_an_existing_folder(capsys, tmp_path):
 def test_no_walls_error_lists_layers_and_suggests_the_option(capsys, tmp_path):
     code, out, err = run(capsys, "preview", CASES / "no_walls.dxf", "-o", tmp_path / "p.png")
     assert_one_line_error(code, out, err, "'Doors'", "'Furniture'", "--walls", "mapkit layers")
+
+
+def test_layers_on_a_directory_or_a_mesh_says_which(tmp_path, capsys):
+    assert_one_line_error(*run(capsys, "layers", tmp_path), "is a directory, expected a DXF file")
+    assert_one_line_error(*run(capsys, "layers", DATA / "hospital.stl"), "reads DXF plans (.dxf), got a '.stl' file")

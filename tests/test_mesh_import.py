@@ -318,3 +318,8 @@ def test_truncated_binary_stl_says_so(tmp_path):
     cut.write_bytes(HOSPITAL.read_bytes()[:12_000])
     with pytest.raises(MapkitError, match=r"truncated \(its header lists 482 triangles, it holds 238\)"):
         load_scene(cut, BuildOptions())
+
+
+def test_wall_height_option_on_a_mesh_is_warned(caplog):
+    load_scene(HOSPITAL, BuildOptions(wall_height=10.0))
+    assert "--wall-height 10 is for DXF plans; a mesh's walls are as high as the model's (3 m)" in caplog.text
