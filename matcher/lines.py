@@ -10,6 +10,7 @@ moved to the ideal pinhole (the form :func:`matcher.localize` expects).
 from __future__ import annotations
 
 import math
+import numbers
 
 import cv2
 import numpy as np
@@ -111,7 +112,7 @@ def detect_lines(image, camera=None, min_length: float = MIN_LENGTH_PX, merge: b
 
     ``camera``: a :class:`matcher.Camera`; with distortion coefficients the
     end points are undistorted; its size must match the image's."""
-    if isinstance(min_length, bool) or not isinstance(min_length, (int, float, np.integer, np.floating)) or not (
+    if isinstance(min_length, bool) or not isinstance(min_length, numbers.Real) or not (
             math.isfinite(min_length) and min_length >= 0):
         raise ValueError(f"min_length must be a number of pixels >= 0, got {min_length!r}")
     if camera is not None and not isinstance(camera, Camera):

@@ -49,22 +49,22 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     a ``reason`` when no hypothesis is accepted. Bad input (shapes, NaN,
     ranges) raises ValueError."""
     t0 = time.perf_counter()
-    tol = _checked_inputs(linemap, camera, tolerances)
-    img = prepare_lines(camera, check_lines(lines, camera, tol), tol)
+    tol, img = _checked_inputs(linemap, camera, lines, tolerances)
     px = check_prior(prior, dt, dyaw)
     return _localize(linemap, camera, img, px, tol, t0)
 
 
-def _checked_inputs(linemap, camera, tolerances) -> Tolerances:
-    """ValueError unless the map, camera and tolerances are of their types;
-    the tolerances to use."""
+def _checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
+    """ValueError unless the map, camera and tolerances are of their types
+    and the lines valid; the tolerances to use and the prepared lines."""
     if not isinstance(linemap, LineMap):
         raise ValueError(f"linemap must be a map from matcher.load_map('map.lmap'), got {type(linemap).__name__}")
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
     if tolerances is not None and not isinstance(tolerances, Tolerances):
         raise ValueError(f"tolerances must be a matcher.Tolerances, got {type(tolerances).__name__}")
-    return tolerances or DEFAULT
+    tol = tolerances or DEFAULT
+    return tol, prepare_lines(camera, check_lines(lines, camera, tol), tol)
 
 
 def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
@@ -89,8 +89,9 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     times["select"] = (time.perf_counter() - t0) * 1e3
     if len(ids) == 0:
         return fail("no candidate segment lies in the field of view for any heading of the prior interval")
-    if _too_few_lines(img, tol):
-        return fail(_too_few_lines(img, tol))
+    too_few = _too_few_lines(img, tol)
+    if too_few:
+        return fail(too_few)
 
     # ---- stage 1 ---------------------------------------------------------
     t1 = time.perf_counter()
@@ -203,13 +204,12 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     ``time_ms['total']`` covers all tries; ``time_ms['regions_tried']``
     counts them. Returns a falsy result if no region gives one."""
     t0 = time.perf_counter()
-    tol = _checked_inputs(linemap, camera, tolerances)
-    img = prepare_lines(camera, check_lines(lines, camera, tol), tol)
+    tol, img = _checked_inputs(linemap, camera, lines, tolerances)
     if linemap.n_regions == 0:
         return LocalizeResult(False, "the map has no regions", time_ms={"total": 0.0, "regions_tried": 0})
-    if _too_few_lines(img, tol):  # the same for every region
-        return LocalizeResult(False, _too_few_lines(img, tol),
-                              time_ms={"total": (time.perf_counter() - t0) * 1e3, "regions_tried": 0})
+    too_few = _too_few_lines(img, tol)
+    if too_few:  # the same for every region
+        return LocalizeResult(False, too_few, time_ms={"total": (time.perf_counter() - t0) * 1e3, "regions_tried": 0})
     # The robot is stopped: a larger search budget per region.
     tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
     centres, radii = linemap.region_centres(), linemap.region_radii()
