@@ -33,6 +33,12 @@ def check_output_path(path: str | os.PathLike) -> Path:
         raise OutputPathError(errno.ENOTDIR, "is a file, not a folder; choose another output path", str(parent))
     if not os.access(parent, os.W_OK | os.X_OK):
         raise OutputPathError(errno.EACCES, "output folder is not writable (permission denied)", str(parent))
+    # The rename below needs only the folder's permission, so it would replace
+    # a file its owner made read-only; refuse, as rm asks before removing one
+    # (the mode bits, not os.access: that says yes to root whatever the mode).
+    if path.exists() and (not os.access(path, os.W_OK) or not path.stat().st_mode & 0o222):
+        raise OutputPathError(errno.EACCES, "is read-only; make it writable (chmod u+w) or choose another "
+                              "output path", str(path))
     return path
 
 

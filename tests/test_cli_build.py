@@ -80,6 +80,12 @@ def test_unusable_output_paths_fail_before_the_build(tmp_path, capsys, monkeypat
     assert_one_line_error(*run(capsys, "build", plan, "-o", tmp_path / "d.lmap"), "d.lmap: is a directory")
     assert_one_line_error(*run(capsys, "build", plan, "-o", tmp_path / "file" / "o.lmap"), "file: is a file, not a folder")
     assert not list(tmp_path.glob("*.tmp")) and not list(tmp_path.glob(".*"))
+    # A file its owner made read-only is not replaced (the rename would allow it).
+    kept = tmp_path / "kept.lmap"
+    kept.write_bytes(b"the user's map")
+    kept.chmod(0o444)
+    assert_one_line_error(*run(capsys, "build", plan, "-o", kept), "kept.lmap: is read-only; make it writable")
+    assert kept.read_bytes() == b"the user's map"
 
 
 def test_output_must_be_lmap(tmp_path, capsys):

@@ -214,6 +214,16 @@ def test_empty_mesh(tmp_path):
         load_scene(empty)
 
 
+def test_gltf_missing_its_buffer(tmp_path):
+    files = trimesh.exchange.gltf.export_gltf(trimesh.Scene(room_walls()))
+    for name, data in files.items():
+        if name.endswith(".gltf"):  # the .bin buffers stay behind
+            (tmp_path / name).write_bytes(data)
+    gltf = next(tmp_path.glob("*.gltf"))
+    with pytest.raises(MapkitError, match=r"refers to is missing \(gltf_buffer_0\.bin\); put it beside"):
+        load_scene(gltf)
+
+
 def test_mesh_without_walls(tmp_path):
     plane = trimesh.Trimesh([[0, 0, 0], [8, 0, 0], [8, 6, 0], [0, 6, 0]], [[0, 1, 2], [0, 2, 3]])
     (tmp_path / "f.obj").write_text(plane.export(file_type="obj"))

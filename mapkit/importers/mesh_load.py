@@ -100,6 +100,9 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     _check_binary_stl_length(path)
     try:
         loaded = trimesh.load(str(path), process=False)
+    except FileNotFoundError as exc:  # the file exists (checked by the CLI): a buffer or texture it names does not
+        raise MapkitError(f"{path}: a file it refers to is missing ({exc.filename or exc}); put it beside "
+                          f"{path.name} or export the model as one .glb") from None
     except Exception as exc:  # trimesh raises anything from struct.error to KeyError on bad files
         reason = str(exc).splitlines()[0][:120] if str(exc) else type(exc).__name__
         raise MapkitError(f"{path}: not a readable {path.suffix} mesh ({reason}); check the file or export it again") from None
