@@ -33,6 +33,10 @@ def check_output_path(path: str | os.PathLike) -> Path:
         raise OutputPathError(errno.ENOTDIR, "is a file, not a folder; choose another output path", str(parent))
     if not os.access(parent, os.W_OK | os.X_OK):
         raise OutputPathError(errno.EACCES, "output folder is not writable (permission denied)", str(parent))
+    # The rename below would put a regular file in place of a device or a
+    # pipe (-o /dev/null, run as root, would replace /dev/null).
+    if path.exists() and not path.is_file():
+        raise OutputPathError(errno.EINVAL, "is not a regular file (a device or a pipe); give a file name", str(path))
     # The rename below needs only the folder's permission, so it would replace
     # a file its owner made read-only; refuse, as rm asks before removing one
     # (the mode bits, not os.access: that says yes to root whatever the mode).

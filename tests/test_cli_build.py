@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import ezdxf
@@ -86,6 +87,11 @@ def test_unusable_output_paths_fail_before_the_build(tmp_path, capsys, monkeypat
     kept.chmod(0o444)
     assert_one_line_error(*run(capsys, "build", plan, "-o", kept), "kept.lmap: is read-only; make it writable")
     assert kept.read_bytes() == b"the user's map"
+    # Nor is a pipe (or a device: -o /dev/null as root would replace it).
+    pipe = tmp_path / "pipe.lmap"
+    os.mkfifo(pipe)
+    assert_one_line_error(*run(capsys, "build", plan, "-o", pipe), "pipe.lmap: is not a regular file")
+    assert pipe.is_fifo()
 
 
 def test_output_must_be_lmap(tmp_path, capsys):
