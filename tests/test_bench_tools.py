@@ -32,6 +32,23 @@ def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
     assert sorted(p.name for p in out.iterdir()) == ["paper_fig5.png", "paper_fig6.png"]
 
 
+def test_bench_paper_pools_seeds(tmp_path, capsys):
+    js = tmp_path / "rows.json"
+    code = bench_paper.main(["--poses", "2", "--peq", "2", "--seed", "0", "1", "--repeat", "1", "--baseline-poses", "0",
+                             "--out", str(tmp_path), "--json", str(js)])
+    assert code == 0
+    assert "4 poses per PEQ; seeds 0, 1;" in capsys.readouterr().out
+    pooled = json.loads(js.read_text())["rows"]["2"]
+    assert len(pooled) == 4
+    # Seed 0's frames are the same pooled or alone.
+    assert bench_paper.main(["--poses", "2", "--peq", "2", "--repeat", "1", "--baseline-poses", "0",
+                             "--out", str(tmp_path / "alone"), "--json", str(js)]) == 0
+    alone = json.loads(js.read_text())["rows"]["2"]
+    assert [r["n_lines"] for r in alone] == [r["n_lines"] for r in pooled[:2]]
+    assert [r["n_true"] for r in alone] == [r["n_true"] for r in pooled[:2]]
+    assert sorted(p.name for p in tmp_path.glob("*.png")) == ["paper_fig5_seed0-1.png", "paper_fig6_seed0-1.png"]
+
+
 def test_bench_images_table(capsys):
     assert bench_images.main(["--frames", "1", "--peq", "1", "--supersample", "1"]) == 0
     out = capsys.readouterr().out.splitlines()

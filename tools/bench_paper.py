@@ -4,6 +4,7 @@
     python tools/bench_paper.py --quick         # 20 poses, baseline on 5
     python tools/bench_paper.py --synthetic     # on the synthetic flat instead of maps/flat.lmap
     python tools/bench_paper.py --max-hypotheses 100000 --baseline-poses 0   # stage 1 uncapped
+    python tools/bench_paper.py --seed 0 1 2 3 4 --baseline-poses 0 --repeat 1   # 500 frames per PEQ, pooled
 
 For each PEQ (method.md section 9): ``--poses`` simulated frames (seeded),
 each localised by our matcher and, on the first ``--baseline-poses`` of
@@ -22,7 +23,8 @@ each PEQ (the paper's figure 5); ``paper_fig6.png``, mean and standard
 deviation of the five smallest E per PEQ with the acceptance threshold (the
 paper's figure 6), and E of the correct hypothesis against the best false
 one. On another map than maps/flat.lmap the names carry the map's name
-(``paper_fig5_synthetic.png``), so the documented figures stay as they are.
+(``paper_fig5_synthetic.png``), and with other seeds than 0 the seeds
+(``paper_fig5_seed0-1-2.png``), so the documented figures stay as they are.
 """
 
 from __future__ import annotations
@@ -82,10 +84,14 @@ def indistinguishable(linemap, camera, frame) -> set:
 
 
 def simulate_peq(linemap, camera, peq, args):
-    """The PEQ's ``--poses`` frames (seeded by ``--seed`` and the PEQ)."""
-    rng = np.random.default_rng([args.seed, peq])
-    return [make_frame(linemap, camera, rng, peq, args.noise_px, args.noise_deg, clutter=args.clutter)
-            for _ in range(args.poses)]
+    """The PEQ's ``--poses`` frames per seed of ``--seed`` (each drawn from
+    the seed and the PEQ, so seed 0's frames are the same alone or pooled)."""
+    frames = []
+    for seed in args.seed:
+        rng = np.random.default_rng([seed, peq])
+        frames += [make_frame(linemap, camera, rng, peq, args.noise_px, args.noise_deg, clutter=args.clutter)
+                   for _ in range(args.poses)]
+    return frames
 
 
 def time_frames(linemap, camera, frames: dict, args) -> dict:
@@ -191,6 +197,12 @@ def summarise(rows):
     return out
 
 
+def _pct(v: float) -> str:
+    """A percentage as a whole number when it is one (100 frames), else
+    with one decimal (pooled seeds: 500 frames move it by 0.2)."""
+    return f"{v:.0f}%" if abs(v - round(v)) < 1e-9 else f"{v:.1f}%"
+
+
 def table(summary: dict) -> str:
     # "sets found": consistent sets stage 1 found before handing at most
     # max_hypotheses of them on ("hyp."): the count the paper's figure 5 shows.
@@ -209,8 +221,8 @@ def table(summary: dict) -> str:
             sp = f"{s['speedup_med']:.0f}x"
         sets = "-" if s["sets_found_max"] is None else f"{s['sets_found_med']:.0f} / {s['sets_found_max']}"
         lines.append(
-            f"| {peq} | {sets} | {s['hyp_med']:.0f} / {s['hyp_max']} | {s['first_correct_pct']:.0f}% ({s['first_correct_strict_pct']:.0f}%)"
-            f" | {s['accepted_pct']:.0f}% | {et} / {ef} / {ew} | {pe} | {s['ms_med']:.1f} / {s['ms_p95']:.1f} | {base} | {sp} |"
+            f"| {peq} | {sets} | {s['hyp_med']:.0f} / {s['hyp_max']} | {_pct(s['first_correct_pct'])} ({_pct(s['first_correct_strict_pct'])})"
+            f" | {_pct(s['accepted_pct'])} | {et} / {ef} / {ew} | {pe} | {s['ms_med']:.1f} / {s['ms_p95']:.1f} | {base} | {sp} |"
         )
     return "\n".join(lines)
 
@@ -278,7 +290,8 @@ def main(argv=None) -> int:
     ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of tools/_synthetic_map.py")
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ")
     ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ))
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seed", type=int, nargs="+", default=[0],
+                    help="one seed, or several whose frames are pooled per PEQ (--poses frames each)")
     ap.add_argument("--noise-px", type=float, default=1.0, help="uniform noise bound on line offset and end points")
     ap.add_argument("--noise-deg", type=float, default=1.0, help="uniform noise bound on line orientation")
     ap.add_argument("--clutter", type=int, default=3, help="random lines added per frame")
@@ -296,10 +309,11 @@ def main(argv=None) -> int:
     args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses)
     if args.quick:
         args.poses, args.baseline_poses = 20, 5
+    seeds = ", ".join(str(s) for s in args.seed)
     from _synthetic_map import cached_flat_map
 
     default_map = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
-    tag = ""  # figure names: plain for maps/flat.lmap, tagged with the map otherwise
+    tag = ""  # figure names: plain for maps/flat.lmap and seed 0, tagged with the map and seeds otherwise
     if args.synthetic:
         linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)", "_synthetic"
     elif args.map and Path(args.map).resolve() != default_map:
@@ -308,6 +322,8 @@ def main(argv=None) -> int:
         linemap, map_name = matcher.load_map(default_map), "maps/flat.lmap"
     else:
         linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)", "_synthetic"
+    if args.seed != [0]:  # the documented figures are seed 0's
+        tag += "_seed" + "-".join(str(s) for s in args.seed)
     camera = paper_camera(args.height, args.pitch)
     matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
     # Our latency first, every PEQ, before any check or baseline run: the
@@ -325,7 +341,8 @@ def main(argv=None) -> int:
     figures = plot(all_rows, summary, out, matcher.Tolerances().e_accept, tag)
     print(f"map {map_name}: {linemap.n_segments} segments, {linemap.n_regions} regions")
     print(f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
-          f"{args.noise_deg} deg; {args.clutter} clutter lines; {args.poses} poses per PEQ; seed {args.seed}; "
+          f"{args.noise_deg} deg; {args.clutter} clutter lines; {args.poses * len(args.seed)} poses per PEQ; "
+          f"seed{'s' if len(args.seed) > 1 else ''} {seeds}; "
           f"{platform.python_version()} on {platform.machine()}")
     print(table(summary))
     print("figures: " + ", ".join(str(f) for f in figures), file=sys.stderr)
