@@ -77,6 +77,11 @@ class Hypotheses:
     n_correspondences: int
     truncated: bool = False
     counts: dict = field(default_factory=dict)
+    #: (K,) bool: correspondences of a vertical edge with a vertical line;
+    #: (K, K) bool: their pairwise compatibility (None when stage 1 stopped
+    #: before the pairwise test).
+    vertical: np.ndarray | None = None
+    compat: np.ndarray | None = None
 
 
 def segment_is_vertical(segments: np.ndarray) -> np.ndarray:
@@ -364,7 +369,7 @@ def generate(
     counts["ms_pairs"] = round((t_tree - t_pairs) * 1e3, 3)
     counts["ms_tree"] = round((time.perf_counter() - t_tree) * 1e3, 3)
     return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
-                      truncated, counts)
+                      truncated, counts, vertical=is_v, compat=compat)
 
 
 def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce, dt, step, tol, sight):

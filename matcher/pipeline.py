@@ -18,6 +18,7 @@ from matcher.generate import (ImageLines, collinear_classes, collinear_labels, g
                               in_field_of_view)
 from matcher.occlusion import SightRays, face_normals, wall_edges
 from matcher.rank import verify_hypotheses
+from matcher.resection import vertical_hypotheses
 from matcher.result import LocalizeResult
 from matcher.tolerances import DEFAULT, Tolerances
 
@@ -106,6 +107,9 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
                     free=free, sight=sight, faces=faces)
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
+    if n_h == 0 and hyps.truncated:
+        hyps = _with_resection(hyps, [], reps, img, px, tol, free)
+        n_h = len(hyps.sets)
     if n_h == 0:
         return fail(f"no consistent set of {tol.min_matches} or more correspondences "
                     f"({hyps.n_correspondences} correspondences passed the unary tests)")
@@ -126,6 +130,17 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
                                      free)
         times["second_search"] = (time.perf_counter() - t3) * 1e3
+    if (hyps.truncated or not ranked_h.score[ranked_h.order[0]] <= tol.e_accept) and "resection" not in hyps.counts:
+        # The tree ran out of budget or nothing it found held: where vertical
+        # edges leave the position loose, resect from their triples instead.
+        t4 = time.perf_counter()
+        held = [int(h) for h in ranked_h.order if np.isfinite(ranked_h.score[h])][:_TREE_KEPT]
+        more = _with_resection(hyps, held, reps, img, px, tol, free)
+        if more.counts["resection"]:
+            hyps, n_h = more, len(more.sets)
+            ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol,
+                                         walls, free)
+        times["resection"] = (time.perf_counter() - t4) * 1e3
     E = ranked_h.score
     order = ranked_h.order
 
@@ -153,6 +168,30 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
                           matches=matches_of(best), **common)
 
 
+#: When resection adds hypotheses, the tree's that stage 2 kept stay with
+#: them, at most this many (best ranked first); the resection fills the rest
+#: of ``max_hypotheses``.
+_TREE_KEPT = 5
+
+
+def _with_resection(hyps, held, reps, img: ImageLines, px, tol: Tolerances, free):
+    """The sets ``held`` (indices) of stage 1's hypotheses followed by those
+    of :mod:`matcher.resection` (poses resected from triples of vertical
+    edges), at most ``max_hypotheses`` in all; ``counts["resection"]`` says
+    how many the resection gave."""
+    counts = dict(hyps.counts)
+    counts["resection"] = 0
+    if hyps.compat is None:
+        return replace(hyps, counts=counts)
+    sets, inits = vertical_hypotheses(reps[hyps.segment, 0, :2], hyps.segment, hyps.line, hyps.vertical,
+                                      hyps.compat, img.alpha, img.alpha_eps, px, free, tol.free_space_m,
+                                      tol.max_hypotheses - len(held), min_lines=tol.min_matches + 1)
+    counts["resection"] = len(sets)
+    init = hyps.init.reshape(-1, 3)[held]
+    return replace(hyps, sets=[hyps.sets[h] for h in held] + sets, init=np.concatenate([init, inits]),
+                   counts=counts)
+
+
 def _too_few_lines(img: ImageLines, tol: Tolerances) -> str:
     """Why the image lines cannot give a pose, or "" if they may."""
     n = int(img.usable.sum())
@@ -177,14 +216,15 @@ def _class_faces(faces: np.ndarray, label: np.ndarray) -> np.ndarray:
 
 def _doubtful(ranked, hyps, tol) -> bool:
     """Nothing accepted, or the best hypothesis kept fewer matches than the
-    stage-1 sets had by two or more (and stage 1 was not cut short)."""
+    largest stage-1 set had (and stage 1 was not cut short): a clutter line
+    may have padded the largest sets past the true one."""
     if hyps.truncated:  # a second search would run out of budget too
         return False
     best = int(ranked.order[0])
     if not ranked.score[best] <= tol.e_accept:
         return True
     kept = int((ranked.hyp == best).sum())
-    return kept <= max(len(x) for x in hyps.sets) - 2
+    return kept < max(len(x) for x in hyps.sets)
 
 
 #: Lost mode multiplies the tree's node and set budgets by this.
