@@ -146,9 +146,10 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     tri = triples(compat, corr, corr_line)
     if not len(tri):
         return empty
-    lines = np.unique(corr_line[corr])
-    # Correspondences grouped per line for the count: (V, Kv) membership.
-    member = corr_line[corr][None, :] == lines[:, None]
+    # Vertical correspondences sorted by line, so that a line's best edge
+    # is a minimum over one run of columns.
+    corr = corr[np.argsort(corr_line[corr], kind="stable")]
+    lines, starts = np.unique(corr_line[corr], return_index=True)
     keys, kept_poses, kept_err, kept_hit = [], [], [], []
     for c0 in range(0, len(tri), _CHUNK):
         t = tri[c0:c0 + _CHUNK]
@@ -168,7 +169,7 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
         err = np.abs(wrap(seen - alpha[corr_line[corr]][None, :])) / alpha_eps[corr_line[corr]][None, :]
         err = np.where(np.abs(seen) < 0.5 * math.pi, err, np.inf)
         # Per pose and line: the best edge's error (inf if none).
-        per_line = np.where(member[None, :, :], err[:, None, :], np.inf).min(axis=2)  # (P, V)
+        per_line = np.minimum.reduceat(err, starts, axis=1)  # (P, V)
         hit = per_line <= _BEARING_SLACK
         n = hit.sum(axis=1)
         good = np.nonzero(n >= min_lines)[0]
