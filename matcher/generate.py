@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -82,6 +82,9 @@ class Hypotheses:
     #: before the pairwise test).
     vertical: np.ndarray | None = None
     compat: np.ndarray | None = None
+    #: The tree's input (:class:`~matcher.tree.TreeInput`), for
+    #: :func:`search_again`; None when stage 1 stopped before the tree.
+    tree_input: object | None = None
 
 
 def segment_is_vertical(segments: np.ndarray) -> np.ndarray:
@@ -369,7 +372,21 @@ def generate(
     counts["ms_pairs"] = round((t_tree - t_pairs) * 1e3, 3)
     counts["ms_tree"] = round((time.perf_counter() - t_tree) * 1e3, 3)
     return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
-                      truncated, counts, vertical=is_v, compat=compat)
+                      truncated, counts, vertical=is_v, compat=compat, tree_input=inp)
+
+
+def search_again(hyps: Hypotheses, tol: Tolerances) -> Hypotheses:
+    """Stage 1's tree run again on the correspondences of ``hyps`` with
+    other tolerances (the second search, keeping sets smaller than the
+    largest: ``tol.match_slack``). The correspondences, their strips and
+    pairwise tests do not depend on the slack, so only the tree runs."""
+    if hyps.tree_input is None:
+        return hyps
+    t0 = time.perf_counter()
+    sets, init, truncated, nodes, found = search(hyps.tree_input, tol)
+    counts = dict(hyps.counts, tree_nodes=int(nodes), sets_found=int(found),
+                  ms_tree=round((time.perf_counter() - t0) * 1e3, 3))
+    return replace(hyps, sets=sets, init=np.array(init).reshape(-1, 3), truncated=truncated, counts=counts)
 
 
 def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce, dt, step, tol, sight):

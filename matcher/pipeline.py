@@ -15,7 +15,7 @@ from matcher.constraints import (bearing_noise, line_pieces, plane_noises, verti
                                  wrap)
 from matcher.freespace import free_space
 from matcher.generate import (ImageLines, collinear_classes, collinear_labels, generate,
-                              in_field_of_view)
+                              in_field_of_view, search_again)
 from matcher.occlusion import SightRays, face_normals, wall_edges
 from matcher.rank import verify_hypotheses
 from matcher.resection import vertical_hypotheses
@@ -124,8 +124,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         # Search again keeping sets one smaller than the largest.
         t3 = time.perf_counter()
         tol1 = replace(tol, match_slack=1)
-        hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol1, walls,
-                        free=free, sight=sight, faces=faces)
+        hyps = search_again(hyps, tol1)
         n_h = len(hyps.sets)
         ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
                                      free)
