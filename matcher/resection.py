@@ -48,8 +48,8 @@ _MAX_TRIPLES = 200000
 #: degrees): noise on a pose at the border.
 _PRIOR_SLACK_M = 0.1
 _PRIOR_SLACK_DEG = 2.0
-#: Poses nearer than the edge's noise to the camera are not poses: an edge
-#: must stand at least this far in front, metres.
+#: Every edge of a triple must stand at least this far in front of its
+#: resected camera, metres: nearer, the solution is a degenerate one.
 _MIN_RANGE_M = 0.2
 
 
@@ -115,15 +115,14 @@ def triples(compat: np.ndarray, corr: np.ndarray, line: np.ndarray, most: int = 
 
 
 def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray, vertical: np.ndarray,
-                        compat: np.ndarray,
-                        alpha: np.ndarray, alpha_eps: np.ndarray, prior, free=None, free_m: float = 0.0,
-                        max_hypotheses: int = 25, min_lines: int = 4):
+                        compat: np.ndarray, alpha: np.ndarray, alpha_eps: np.ndarray, prior, free=None,
+                        free_m: float = 0.0, max_hypotheses: int = 25, min_lines: int = 4):
     """Sets of correspondences from resected poses.
 
     Per correspondence k (K,): ``points`` (K, 2) the floor point of its
-    segment (used for the vertical ones), ``corr_seg`` that segment's id
-    and ``corr_line`` its image line,
-    ``vertical`` whether it pairs a vertical edge with a vertical line;
+    segment (used for the vertical ones), ``corr_seg`` that segment's id,
+    ``corr_line`` its image line, ``vertical`` whether it pairs a vertical
+    edge with a vertical line;
     ``compat`` (K, K) stage 1's pairwise compatibility. Per image line:
     ``alpha``, ``alpha_eps`` (M,) bearing and its noise bound, radians.
     ``prior`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians), ``free`` the map's
