@@ -216,14 +216,18 @@ def _class_faces(faces: np.ndarray, label: np.ndarray) -> np.ndarray:
 def _doubtful(ranked, hyps, tol) -> bool:
     """Nothing accepted, or the best hypothesis kept fewer matches than the
     largest stage-1 set had (and stage 1 was not cut short): a clutter line
-    may have padded the largest sets past the true one."""
+    may have padded the largest sets past the true one. One match fewer is
+    doubted only when the best also fits loosely (E above ``e_doubt``): a
+    clutter line dropped from the true set leaves it fitting as well as
+    ever, while the remains of a padded set, whose clutter line took a true
+    line's segment, sit at a pose a few centimetres off."""
     if hyps.truncated:  # a second search would run out of budget too
         return False
     best = int(ranked.order[0])
     if not ranked.score[best] <= tol.e_accept:
         return True
-    kept = int((ranked.hyp == best).sum())
-    return kept < max(len(x) for x in hyps.sets)
+    short = max(len(x) for x in hyps.sets) - int((ranked.hyp == best).sum())
+    return short >= 2 or (short == 1 and ranked.score[best] > tol.e_doubt)
 
 
 #: Lost mode multiplies the tree's node and set budgets by this.

@@ -54,6 +54,14 @@ class Tolerances:
     #: survive stage 2 wrongly are aliases that fit as well, so E alone does
     #: not reject them (see the benchmark).
     e_accept: float = 2e-3
+    #: A best hypothesis that stage 2 left one match short of the largest
+    #: stage-1 set is doubted, and stage 1 searches again for sets one
+    #: smaller, when its E is above this: twice the E of a correct match at
+    #: the default noise (about 1e-4). Over seeds 0 to 4 at PEQ 3 and 5, of
+    #: 75 such frames the remains of padded sets scored 2.9e-4 and 4.4e-4,
+    #: and all but two of the others below 1.9e-4 (docs/matcher.md). Scale
+    #: it with ``e_accept`` for a noisier detector.
+    e_doubt: float = 2e-4
     #: Stage 1 stops enumerating after this many consistent sets (a guard
     #: against pathological scenes; the result says so when it is hit).
     #: Leaves are tested for visibility only at the end, so sets that will
