@@ -77,14 +77,10 @@ class Hypotheses:
     n_correspondences: int
     truncated: bool = False
     counts: dict = field(default_factory=dict)
-    #: (K,) bool: correspondences of a vertical edge with a vertical line;
-    #: (K, K) bool: their pairwise compatibility (None when stage 1 stopped
-    #: before the pairwise test).
-    vertical: np.ndarray | None = None
-    compat: np.ndarray | None = None
-    #: The tree's input (:class:`~matcher.tree.TreeInput`), for
-    #: :func:`search_again`; None when stage 1 stopped before the tree.
-    tree_input: object | None = None
+    #: The tree's input (correspondences' strips, pairwise compatibility,
+    #: which of them are vertical), for :func:`search_again` and the
+    #: resection; None when stage 1 stopped before the tree.
+    tree_input: TreeInput | None = None
 
 
 def segment_is_vertical(segments: np.ndarray) -> np.ndarray:
@@ -372,7 +368,7 @@ def generate(
     counts["ms_pairs"] = round((t_tree - t_pairs) * 1e3, 3)
     counts["ms_tree"] = round((time.perf_counter() - t_tree) * 1e3, 3)
     return Hypotheses(seg_ids[seg_k], line_k, sets, np.array(init).reshape(-1, 3), len(segments), K,
-                      truncated, counts, vertical=is_v, compat=compat, tree_input=inp)
+                      truncated, counts, tree_input=inp)
 
 
 def search_again(hyps: Hypotheses, tol: Tolerances) -> Hypotheses:

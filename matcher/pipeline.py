@@ -180,10 +180,11 @@ def _with_resection(hyps, held, reps, img: ImageLines, px, tol: Tolerances, free
     how many the resection gave."""
     counts = dict(hyps.counts)
     counts["resection"] = 0
-    if hyps.compat is None:
+    inp = hyps.tree_input
+    if inp is None:
         return replace(hyps, counts=counts)
-    sets, inits = vertical_hypotheses(reps[hyps.segment, 0, :2], hyps.segment, hyps.line, hyps.vertical,
-                                      hyps.compat, img.alpha, img.alpha_eps, px, free, tol.free_space_m,
+    sets, inits = vertical_hypotheses(reps[hyps.segment, 0, :2], hyps.segment, hyps.line, inp.vertical,
+                                      inp.compat, img.alpha, img.alpha_eps, px, free, tol.free_space_m,
                                       tol.max_hypotheses - len(held), min_lines=tol.min_matches + 1)
     counts["resection"] = len(sets)
     init = hyps.init.reshape(-1, 3)[held]

@@ -94,7 +94,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
         # are judged at a pose the dropped ones no longer pull.
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
     if alive.any():
-        alive &= _allowed(poses, prior, free, tol)
+        alive &= within_prior(poses, prior, free, tol.free_space_m)
     if alive.any():
         # Contenders get the lines they are missing back, then a last refit
         # (plain least squares on the final matches).
@@ -106,7 +106,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
         order_t = np.argsort(hyp, kind="stable")
         hyp, local, line_ids = hyp[order_t], local[order_t], line_ids[order_t]
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
-        alive &= _allowed(poses, prior, free, tol)
+        alive &= within_prior(poses, prior, free, tol.free_space_m)
     n_fin = np.bincount(hyp, minlength=n_h)
     # A vertical edge's line fixes one number of the pose (its bearing), any
     # other line two. Matches that fix no more than the pose's three leave
@@ -185,14 +185,16 @@ def _refit(camera, img, segs, poses, hyp, local, line_ids):
                          camera.height_m, iterations=3)
 
 
-def _allowed(poses, prior, free, tol) -> np.ndarray:
-    """(H,) bool: poses (H, 3) within the prior bounds (plus noise slack) and,
-    with ``free``, within ``tol.free_space_m`` of the map's regions."""
+def within_prior(poses, prior, free, free_m: float) -> np.ndarray:
+    """(H,) bool: poses (H, 3) within the prior bounds ``(xe, ye, yaw_e, dt,
+    dyaw)`` (plus noise slack) and, with ``free``, within ``free_m`` of the
+    map's regions (looked up only for the poses inside the prior)."""
     xe, ye, yaw_e, dt, dyaw = prior
     ok = np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) <= dt + _PRIOR_SLACK_M
     ok &= np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + math.radians(_PRIOR_SLACK_DEG)
-    if free is not None:
-        ok &= free.distance(poses[:, :2]) <= tol.free_space_m
+    if free is not None and ok.any():
+        at = np.nonzero(ok)[0]
+        ok[at] = free.distance(poses[at, :2]) <= free_m
     return ok
 
 

@@ -32,6 +32,7 @@ import math
 import numpy as np
 
 from matcher.constraints import wrap
+from matcher.rank import within_prior
 
 #: A line counts as explained at a resected pose if its bearing is within
 #: this many times its noise bound of a candidate edge's: the pose itself
@@ -44,10 +45,6 @@ _CHUNK = 20000
 _KEEP = 200
 #: Most triples solved per frame: a bound on the time on any scene.
 _MAX_TRIPLES = 200000
-#: Resected poses outside the prior by more than this are dropped (metres,
-#: degrees): noise on a pose at the border.
-_PRIOR_SLACK_M = 0.1
-_PRIOR_SLACK_DEG = 2.0
 #: Every edge of a triple must stand at least this far in front of its
 #: resected camera, metres: nearer, the solution is a degenerate one.
 _MIN_RANGE_M = 0.2
@@ -137,7 +134,6 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     edge, one edge per line) with the pose. Returns ``(sets, inits)``: at
     most ``max_hypotheses`` index arrays into the correspondences and
     (H, 3) poses ``(x, y, yaw)``."""
-    xe, ye, yaw_e, dt, dyaw = prior
     corr = np.nonzero(vertical)[0]
     empty = ([], np.zeros((0, 3)))
     if len(np.unique(corr_line[corr])) < max(3, min_lines):
@@ -148,17 +144,13 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     # Vertical correspondences sorted by line, so that a line's best edge
     # is a minimum over one run of columns.
     corr = corr[np.argsort(corr_line[corr], kind="stable")]
-    lines, starts = np.unique(corr_line[corr], return_index=True)
-    keys, kept_poses, kept_err, kept_hit = [], [], [], []
+    starts = np.unique(corr_line[corr], return_index=True)[1]
+    keys, kept_poses, kept_err = [], [], []
     for c0 in range(0, len(tri), _CHUNK):
         t = tri[c0:c0 + _CHUNK]
         poses, ok = resect(points[t], alpha[corr_line[t]])
-        ok &= np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) <= dt + _PRIOR_SLACK_M
-        ok &= np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + math.radians(_PRIOR_SLACK_DEG)
-        if free is not None and ok.any():
-            at = np.nonzero(ok)[0]
-            ok[at] = free.distance(poses[at, :2]) <= free_m
         poses = poses[ok]
+        poses = poses[within_prior(poses, prior, free, free_m)]
         if not len(poses):
             continue
         # Bearing of every vertical correspondence's edge at every pose,
@@ -176,18 +168,17 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
             continue
         cost = np.where(hit[good], per_line[good] ** 2, 0.0).sum(axis=1)
         # Only the best few of a chunk can be among the best overall.
-        top = good[np.lexsort((cost, -n[good]))[:_KEEP]]
-        cost = np.where(hit[top], per_line[top] ** 2, 0.0).sum(axis=1)
-        keys += list(zip((-n[top]).tolist(), cost.tolist()))
+        best = np.lexsort((cost, -n[good]))[:_KEEP]
+        top = good[best]
+        keys += list(zip((-n[top]).tolist(), cost[best].tolist()))
         kept_poses.append(poses[top])
         kept_err.append(err[top])
-        kept_hit.append(hit[top])
     if not keys:
         return empty
-    kept_poses, kept_err, kept_hit = (np.concatenate(a) for a in (kept_poses, kept_err, kept_hit))
+    kept_poses, kept_err = np.concatenate(kept_poses), np.concatenate(kept_err)
     sets, inits, seen_sets = [], [], set()
     for i in sorted(range(len(keys)), key=keys.__getitem__):
-        s = _explained(kept_err[i], corr, corr_seg, corr_line, lines, kept_hit[i])
+        s = _explained(kept_err[i], corr, corr_seg, corr_line)
         key = s.tobytes()
         if len(s) < min_lines or key in seen_sets:
             continue
@@ -199,17 +190,17 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     return sets, np.array(inits).reshape(-1, 3)
 
 
-def _explained(err: np.ndarray, corr: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray,
-               lines: np.ndarray, hit: np.ndarray) -> np.ndarray:
-    """Sorted correspondence indices: for each explained line (``hit`` over
-    ``lines``), its vertical correspondence of smallest error ``err`` (Kv,)
-    whose edge no clearer fit took (one edge per line)."""
+def _explained(err: np.ndarray, corr: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray) -> np.ndarray:
+    """Sorted correspondence indices: for each line some correspondence of
+    ``corr`` explains (normalised error ``err`` (Kv,) within
+    ``_BEARING_SLACK``), the one of smallest error whose edge no clearer fit
+    took (one edge per line)."""
     picks, lines_done, segs_used = [], set(), set()
     for k in np.argsort(err).tolist():
         if not err[k] <= _BEARING_SLACK:
             break
         j, g = int(corr_line[corr[k]]), int(corr_seg[corr[k]])
-        if j in lines_done or g in segs_used or not hit[np.searchsorted(lines, j)]:
+        if j in lines_done or g in segs_used:
             continue
         picks.append(int(corr[k]))
         lines_done.add(j)

@@ -147,6 +147,8 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
             "e_wrong_pose": e_wrong_pose,
             "e_smallest": finite[:5],
             "ms": float(np.min(times[i])),
+            "second_search": "second_search" in res.time_ms,
+            "resection_ms": res.time_ms.get("resection"),
             "reason": res.reason,
         }
         if res:
@@ -183,6 +185,11 @@ def summarise(rows):
         "yaw_err_med_deg": float(np.median(a("yaw_err"))) if len(a("yaw_err")) else None,
         "ms_med": float(np.median(a("ms"))),
         "ms_p95": float(np.percentile(a("ms"), 95)),
+        # Frames that searched again for smaller sets, or resected poses
+        # from vertical edges (matcher/pipeline.py), and the resection's time.
+        "second_search_frames": int(a("second_search").sum()),
+        "resection_frames": int(len(a("resection_ms"))),
+        "resection_ms_med": float(np.median(a("resection_ms"))) if len(a("resection_ms")) else None,
     }
     if len(a("base_ms")):
         out.update(
