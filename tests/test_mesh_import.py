@@ -214,6 +214,14 @@ def test_empty_mesh(tmp_path):
         load_scene(empty)
 
 
+@pytest.mark.parametrize("suffix", [".glb", ".stl", ".ply", ".obj"])
+def test_zero_byte_mesh_file(tmp_path, suffix):
+    empty = tmp_path / f"empty{suffix}"
+    empty.write_bytes(b"")
+    with pytest.raises(MapkitError, match="the file is empty; export the model again"):
+        load_scene(empty)
+
+
 def test_gltf_missing_its_buffer(tmp_path):
     files = trimesh.exchange.gltf.export_gltf(trimesh.Scene(room_walls()))
     for name, data in files.items():

@@ -97,6 +97,8 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """
     import trimesh
 
+    if path.stat().st_size == 0:  # trimesh's own message for this is an index error
+        raise MapkitError(f"{path}: the file is empty; export the model again")
     _check_binary_stl_length(path)
     try:
         loaded = trimesh.load(str(path), process=False)
