@@ -1,7 +1,7 @@
 """The ``matcher`` command line (also ``python -m matcher``).
 
     matcher localize --map MAP --camera CAM.json (--lines LINES.json | --image IMG)
-                     --prior X,Y,YAW_DEG --dt METRES --dyaw DEG [--json]
+                     (--prior X,Y,YAW_DEG --dt METRES --dyaw DEG | --lost) [--json]
 
 Human-readable output by default, one JSON object on stdout with ``--json``
 (the result shape of docs/architecture.md). Errors a user can cause print
@@ -45,9 +45,11 @@ def build_parser() -> argparse.ArgumentParser:
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--lines", help='lines.json {"lines": [[u1, v1, u2, v2], ...]} (undistorted pixels)')
     src.add_argument("--image", help="image file; lines are detected with LSD")
-    p.add_argument("--prior", required=True, help="pose prior X,Y,YAW_DEG (metres, degrees)")
-    p.add_argument("--dt", required=True, type=float, help="position bound of the prior, metres")
-    p.add_argument("--dyaw", required=True, type=float, help="heading bound of the prior, degrees")
+    p.add_argument("--prior", help="pose prior X,Y,YAW_DEG (metres, degrees)")
+    p.add_argument("--dt", type=float, help="position bound of the prior, metres")
+    p.add_argument("--dyaw", type=float, help="heading bound of the prior, degrees")
+    p.add_argument("--lost", action="store_true",
+                   help="no prior: try every region of the map, any heading (lost mode; seconds, not milliseconds)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     return parser
 
@@ -119,8 +121,31 @@ def _c_stderr_silenced():
         os.close(saved)
 
 
+def _prior_options(args):
+    """``(prior, dt, dyaw)`` from the options, or None for ``--lost``;
+    UsageError unless exactly one of the two forms is given."""
+    given = [name for name in ("prior", "dt", "dyaw") if getattr(args, name) is not None]
+    if args.lost:
+        if given:
+            raise UsageError(f"--lost takes no prior; drop --{', --'.join(given)} or drop --lost")
+        return None
+    if len(given) < 3:
+        missing = [f"--{n}" for n in ("prior", "dt", "dyaw") if n not in given]
+        raise UsageError(f"missing {', '.join(missing)}: give --prior X,Y,YAW_DEG with --dt and --dyaw, "
+                         "or --lost when the robot has no estimate")
+    return _parse_prior(args.prior), args.dt, args.dyaw
+
+
+def _region_progress(done: int, total: int) -> None:
+    """Lost mode's progress on a terminal's stderr (one line, rewritten)."""
+    end = "\n" if done == total else ""
+    print(f"\rlost mode: region {done}/{total}", end=end, file=sys.stderr, flush=True)
+
+
 def _human(res, n_lines: int) -> str:
     t = ", ".join(f"{k} {v:.1f}" for k, v in res.time_ms.items() if k != "regions_tried")
+    if "regions_tried" in res.time_ms:
+        t += f" ({res.time_ms['regions_tried']} regions tried)"
     if not res:
         return f"not localised: {res.reason}\n  {res.hypotheses} hypotheses from {n_lines} lines; time ms: {t}"
     x, y, yaw = res.pose
@@ -139,13 +164,17 @@ def run_localize(args) -> int:
 
     from matcher.camera import Camera
 
-    prior = _parse_prior(args.prior)
+    prior = _prior_options(args)
     _input_file(args.map, "map file", "build one with 'mapkit build'")
     _input_file(args.camera, "camera file")
     camera = Camera.load(args.camera)
     linemap = matcher.load_map(args.map)
     lines = _read_lines(args.lines) if args.lines else _read_image(args.image, camera)
-    res = matcher.localize(linemap, camera, lines, prior, args.dt, args.dyaw)
+    if prior is None:
+        res = matcher.localize_global(linemap, camera, lines,
+                                      progress=_region_progress if sys.stderr.isatty() else None)
+    else:
+        res = matcher.localize(linemap, camera, lines, *prior)
     if args.json:
         print(json.dumps(res.to_dict()))
     else:

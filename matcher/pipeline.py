@@ -236,7 +236,7 @@ _LOST_BUDGET = 10
 
 
 def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None,
-                    first_accepted: bool = False):
+                    first_accepted: bool = False, progress=None):
     """Lost mode (method.md section 3): one prior per region (its centre,
     ``dt`` its radius, any heading, the region's own visible list).
 
@@ -245,8 +245,11 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     Otherwise every region is tried and the accepted result that explains
     the most lines wins, then the smallest E: a wrong room can hold a few
     lines that fit well, the right one explains more of the image.
-    ``time_ms['total']`` covers all tries; ``time_ms['regions_tried']``
-    counts them. Returns a falsy result if no region gives one."""
+    ``time_ms['total']`` covers all tries (the other entries are the winning
+    region's); ``time_ms['regions_tried']`` counts them. ``progress``, if
+    given, is called as ``progress(done, total)`` as the regions are done,
+    last with ``done == total``. Returns a falsy result if no region gives
+    one."""
     t0 = time.perf_counter()
     tol, img = _checked_inputs(linemap, camera, lines, tolerances)
     if linemap.n_regions == 0:
@@ -259,17 +262,21 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     centres, radii = linemap.region_centres(), linemap.region_radii()
     tried, best = 0, None
     for r in range(linemap.n_regions):
+        if progress is not None and r:
+            progress(r, linemap.n_regions)
         cx, cy = (float(v) for v in centres[r])
         dt = float(radii[r])
         if not (math.isfinite(cx) and math.isfinite(cy) and dt > 0):
             continue
         tried += 1
-        res = _localize(linemap, camera, img, (cx, cy, 0.0, min(dt, 100.0), math.pi), tol, t0,
+        res = _localize(linemap, camera, img, (cx, cy, 0.0, min(dt, 100.0), math.pi), tol, time.perf_counter(),
                         candidate_ids=linemap.region_list(r))
         if res and (best is None or (len(res.matches), -res.score) > (len(best.matches), -best.score)):
             best = res
             if first_accepted:
                 break
+    if progress is not None:
+        progress(linemap.n_regions, linemap.n_regions)
     total = (time.perf_counter() - t0) * 1e3
     if best is None:
         return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} tried)",

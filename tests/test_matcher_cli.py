@@ -184,6 +184,44 @@ def test_missing_option_and_both_sources(files, capsys):
     assert "not allowed with argument" in capsys.readouterr().err
 
 
+def test_lost_mode_from_the_command_line(files, capsys, tmp_path):
+    """--lost: no prior, every region tried (human and JSON forms). The
+    frame is one lost mode places in the right room (with few lines it may
+    pick another: README, lost mode)."""
+    from simulate import make_frame
+
+    fr = make_frame(files["map"], files["camera"], np.random.default_rng(3), 1)
+    (tmp_path / "lines.json").write_text(json.dumps({"lines": fr.lines.reshape(-1, 4).tolist()}))
+    d = files["dir"]
+    base = ["localize", "--map", str(d / "flat.lmap"), "--camera", str(d / "cam.json"),
+            "--lines", str(tmp_path / "lines.json"), "--lost"]
+    assert main(base + ["--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    x, y, _ = fr.pose
+    assert abs(out["pose"]["x"] - x) < 0.05 and abs(out["pose"]["y"] - y) < 0.05
+    assert out["time_ms"]["regions_tried"] == files["map"].n_regions
+    assert main(base) == 0
+    assert f"({files['map'].n_regions} regions tried)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "drop, add, message",
+    [
+        (("--prior",), (), "missing --prior: give --prior X,Y,YAW_DEG with --dt and --dyaw, or --lost"),
+        (("--dt", "--dyaw"), (), "missing --dt, --dyaw: give"),
+        ((), ("--lost",), "--lost takes no prior; drop --prior, --dt, --dyaw or drop --lost"),
+    ],
+)
+def test_prior_or_lost_one_line(files, capsys, drop, add, message):
+    a = args(files)
+    for opt in drop:
+        i = a.index(opt)
+        del a[i:i + 2]
+    assert main(a + list(add)) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("matcher: error: ") and message in err and len(err.strip().splitlines()) == 1
+
+
 def test_python_dash_m(files):
     out = subprocess.run([sys.executable, "-m", "matcher", *args(files, "--json")], capture_output=True, text=True,
                          timeout=120)

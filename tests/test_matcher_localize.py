@@ -101,8 +101,11 @@ def test_global_localisation_when_lost(small_map, cam):
     """No prior: every region is tried with its centre, its radius and any
     heading (seconds, not milliseconds: the robot is stopped)."""
     fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
-    res = matcher.localize_global(small_map, cam, fr.lines)
+    calls = []
+    res = matcher.localize_global(small_map, cam, fr.lines, progress=lambda done, total: calls.append((done, total)))
     assert res, res.reason
+    n = small_map.n_regions
+    assert calls == [(k, n) for k in range(1, n + 1)]
     pos, yaw = pose_error(res.pose, fr.pose)
     assert pos < 0.05 and yaw < 0.5
     assert res.time_ms["regions_tried"] == small_map.n_regions
