@@ -2,7 +2,8 @@
 
 A frame: a random camera pose in free space (inside a region of the map),
 the model segments it sees (occluded by the map's walls, extruded to
-``meta["wall_height"]``, clipped to the image), uniform noise on each line's
+``meta["wall_height"]``, clipped to the image and to the range the map's
+lists were built for), uniform noise on each line's
 orientation, offset and end points, random clutter lines, and a prior drawn
 within the bounds of a PEQ. ``python tools/simulate.py`` prints one frame.
 
@@ -100,17 +101,32 @@ def _clip_to_frustum(seg: np.ndarray, camera: Camera, x, y, yaw) -> np.ndarray |
     return np.array([seg[0] + t0 * (seg[1] - seg[0]), seg[0] + t1 * (seg[1] - seg[0])])
 
 
+def map_range(linemap) -> float:
+    """The range, metres, that the map's region lists were built with (its
+    ``build`` record; no limit for a map without one). A segment seen only
+    from farther is in no list: a frame that shows it would test the
+    map's range, not the matcher. (The lists' minimum visible length is not
+    applied: a region's list holds a segment that any of its points sees
+    long enough, so a sliver in a frame is usually listed, and a line the
+    lists lack is one more clutter line.)"""
+    build = linemap.meta.get("build", {}) if isinstance(linemap.meta, dict) else {}
+    return float(build.get("max_range", math.inf))
+
+
 def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: int = 160):
     """Ideal image lines of the visible model segments at ``pose`` (x, y, yaw_deg).
 
     Returns ``(lines (n, 2, 2) pixels, segment ids (n,))``: the longest
-    unoccluded run of each segment inside the image, if at least ``min_px``
-    long."""
+    unoccluded run of each segment inside the image and within the map's
+    range (:func:`map_range`, 3D distance from the camera centre), if at
+    least ``min_px`` long."""
     x, y, yaw_deg = pose
     yaw = math.radians(yaw_deg)
     walls = wall_edges(linemap)
     ea, eb = walls if walls is not None else (np.zeros((0, 2)), np.zeros((0, 2)))
     c = np.array([x, y])
+    centre = camera.centre(x, y)
+    max_range = map_range(linemap)
     out, ids = [], []
     for i, seg in enumerate(linemap.segments):
         part = _clip_to_frustum(seg, camera, x, y, yaw)
@@ -118,7 +134,7 @@ def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: 
             continue
         t = np.linspace(0.0, 1.0, samples)
         pts = part[0] + t[:, None] * (part[1] - part[0])
-        vis = ~_occluded(c, pts[:, :2], ea, eb)
+        vis = ~_occluded(c, pts[:, :2], ea, eb) & (np.linalg.norm(pts - centre, axis=1) <= max_range)
         if not vis.any():
             continue
         # Longest run of visible samples.
