@@ -77,6 +77,13 @@ def main(argv: list[str] | None = None) -> int:
     except FileNotFoundError as exc:
         what = (exc.strerror or "no such file").lower().replace("no such file or directory", "no such file")
         return _fail(f"{exc.filename or exc}: {what}; check the path")
+    except BrokenPipeError:  # before OSError, whose subclass it is
+        # The reader went away (`mapkit info --json | head`): not an error of ours.
+        # Point stdout at devnull so the interpreter's final flush stays quiet.
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except IsADirectoryError as exc:
         return _fail(f"{exc.filename}: is a directory, expected a file")
     except PermissionError as exc:
@@ -89,13 +96,6 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("mapkit: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        # The reader went away (`mapkit info --json | head`): not an error of ours.
-        # Point stdout at devnull so the interpreter's final flush stays quiet.
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
 
 
 def _fail(message: str) -> int:

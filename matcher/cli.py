@@ -150,8 +150,9 @@ def _human(res, n_lines: int) -> str:
         return f"not localised: {res.reason}\n  {res.hypotheses} hypotheses from {n_lines} lines; time ms: {t}"
     x, y, yaw = res.pose
     ru = "none" if res.runner_up_score is None else f"{res.runner_up_score:.3g}"
+    std = "" if res.pose_std is None else "  (std {:.3f} m, {:.3f} m, {:.2f} deg)".format(*res.pose_std)
     return (
-        f"pose x={x:.3f} m  y={y:.3f} m  yaw={yaw:.2f} deg\n"
+        f"pose x={x:.3f} m  y={y:.3f} m  yaw={yaw:.2f} deg{std}\n"
         f"  score E={res.score:.3g} (runner-up {ru}), {res.hypotheses} hypotheses, "
         f"{len(res.matches)} of {n_lines} lines matched\n"
         f"  matches [segment, line]: {res.matches}\n"
@@ -192,6 +193,10 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(str(exc))
     except ValueError as exc:  # CameraError, LmapError and input checks: clear messages
         return _fail(str(exc))
+    except BrokenPipeError:  # the reader went away (`matcher localize ... | head -1`); before OSError
+        # Point stdout at devnull so the interpreter's final flush stays quiet.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except OSError as exc:
         return _fail(f"{getattr(exc, 'filename', '') or ''}: {exc.strerror or exc}".lstrip(": "))
 

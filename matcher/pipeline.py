@@ -17,7 +17,7 @@ from matcher.freespace import free_space
 from matcher.generate import (ImageLines, collinear_classes, collinear_labels, generate,
                               in_field_of_view, search_again)
 from matcher.occlusion import SightRays, face_normals, wall_edges
-from matcher.rank import verify_hypotheses
+from matcher.rank import pose_std_of, verify_hypotheses
 from matcher.resection import vertical_hypotheses
 from matcher.result import LocalizeResult
 from matcher.tolerances import DEFAULT, Tolerances
@@ -163,8 +163,12 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
         res = LocalizeResult(False, why + (" (hypothesis search truncated)" if hyps.truncated else ""), **common)
         res.score = float(E[best]) if np.isfinite(E[best]) else None
         return res
-    return LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
-                          matches=matches_of(best), **common)
+    res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
+                         matches=matches_of(best), **common)
+    # Worked out when first read (a few tenths of a millisecond a robot
+    # that only wants the pose does not spend).
+    res.pose_std_from(lambda: pose_std_of(camera, img, segs, ranked_h, best, tol))
+    return res
 
 
 #: When resection adds hypotheses, the tree's that stage 2 kept stay with

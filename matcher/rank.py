@@ -44,9 +44,13 @@ _VISIBLE_END_M = 0.02
 #: (fractions of that part, its ends moved in a little: they are the least sure).
 _SPAN_SAMPLES = np.array([0.05, 0.275, 0.5, 0.725, 0.95])
 #: A refined pose may leave the prior bounds by this much (metres, degrees)
-#: before the hypothesis is dropped: noise on a pose at the border.
+#: before the hypothesis is dropped: noise on a pose at the border. A pose
+#: its matches fix loosely gets more: this many of its standard deviations
+#: (:func:`pose_spread`), e.g. six far vertical edges on one side, which
+#: leave the position uncertain by a decimetre.
 _PRIOR_SLACK_M = 0.1
 _PRIOR_SLACK_DEG = 2.0
+_PRIOR_SLACK_SIGMAS = 3.0
 
 
 @dataclass
@@ -89,12 +93,27 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     keep = inl & (n_in[hyp] >= tol.min_matches)
     hyp, line_ids, local = hyp[keep], line_ids[keep], local[keep]
     alive = n_in >= tol.min_matches
+
+    def in_prior(poses, hyp, local, line_ids):
+        """(H,) bool, :func:`within_prior`: with the fixed slack, then, for
+        the hypotheses of ``alive`` it drops, with the pose's own spread (a
+        loosely fixed pose; rare, and the covariance costs a few tenths of
+        a millisecond)."""
+        ok = within_prior(poses, prior, free, tol.free_space_m)
+        loose = np.nonzero(alive & ~ok)[0]
+        if len(loose):
+            sel = np.isin(hyp, loose)
+            cov = pose_covariance(camera, img, segs, poses[loose], np.searchsorted(loose, hyp[sel]), local[sel],
+                                  line_ids[sel], tol)
+            ok[loose] = within_prior(poses[loose], prior, free, tol.free_space_m, pose_spread(cov))
+        return ok
+
     if alive.any() and not keep.all():
         # Matches were dropped: refit, so that the lines added back below
         # are judged at a pose the dropped ones no longer pull.
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
     if alive.any():
-        alive &= within_prior(poses, prior, free, tol.free_space_m)
+        alive &= in_prior(poses, hyp, local, line_ids)
     if alive.any():
         # Contenders get the lines they are missing back, then a last refit
         # (plain least squares on the final matches).
@@ -106,7 +125,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
         order_t = np.argsort(hyp, kind="stable")
         hyp, local, line_ids = hyp[order_t], local[order_t], line_ids[order_t]
         poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
-        alive &= within_prior(poses, prior, free, tol.free_space_m)
+        alive &= in_prior(poses, hyp, local, line_ids)
     n_fin = np.bincount(hyp, minlength=n_h)
     # A vertical edge's line fixes one number of the pose (its bearing), any
     # other line two. Matches that fix no more than the pose's three leave
@@ -185,17 +204,96 @@ def _refit(camera, img, segs, poses, hyp, local, line_ids):
                          camera.height_m, iterations=3)
 
 
-def within_prior(poses, prior, free, free_m: float) -> np.ndarray:
+def within_prior(poses, prior, free, free_m: float, spread=None) -> np.ndarray:
     """(H,) bool: poses (H, 3) within the prior bounds ``(xe, ye, yaw_e, dt,
-    dyaw)`` (plus noise slack) and, with ``free``, within ``free_m`` of the
-    map's regions (looked up only for the poses inside the prior)."""
+    dyaw)`` (plus noise slack: _PRIOR_SLACK_M and _PRIOR_SLACK_DEG, or
+    _PRIOR_SLACK_SIGMAS times the pose's standard deviations ``spread`` (H,
+    2) (metres, radians; :func:`pose_spread`) where more) and, with
+    ``free``, within ``free_m`` of the map's regions (looked up only for
+    the poses inside the prior)."""
     xe, ye, yaw_e, dt, dyaw = prior
-    ok = np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) <= dt + _PRIOR_SLACK_M
-    ok &= np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + math.radians(_PRIOR_SLACK_DEG)
+    slack_m, slack_yaw = _PRIOR_SLACK_M, math.radians(_PRIOR_SLACK_DEG)
+    if spread is not None:
+        slack_m = np.maximum(slack_m, _PRIOR_SLACK_SIGMAS * spread[:, 0])
+        slack_yaw = np.maximum(slack_yaw, _PRIOR_SLACK_SIGMAS * spread[:, 1])
+    ok = np.hypot(poses[:, 0] - xe, poses[:, 1] - ye) <= dt + slack_m
+    ok &= np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + slack_yaw
     if free is not None and ok.any():
         at = np.nonzero(ok)[0]
         ok[at] = free.distance(poses[at, :2]) <= free_m
     return ok
+
+
+def pose_std_of(camera, img, segs, ranked: Ranked, h: int, tol):
+    """``(x, y, yaw_deg)`` standard deviations of hypothesis ``h``'s pose
+    (metres, degrees; :func:`pose_covariance`), or None where its matches do
+    not fix it."""
+    sel = ranked.hyp == h
+    cov = pose_covariance(camera, img, segs, ranked.poses[h:h + 1], np.zeros(int(sel.sum()), dtype=np.int64),
+                          ranked.local[sel], ranked.line[sel], tol)[0]
+    if not np.isfinite(cov).all():
+        return None
+    return float(math.sqrt(cov[0, 0])), float(math.sqrt(cov[1, 1])), float(math.degrees(math.sqrt(cov[2, 2])))
+
+
+def pose_spread(cov: np.ndarray) -> np.ndarray:
+    """(H, 2) standard deviations of poses with covariances ``cov`` (H, 3,
+    3) (:func:`pose_covariance`): of the position along its worst-fixed
+    direction (metres) and of the yaw (radians); inf where not fixed."""
+    out = np.full((len(cov), 2), np.inf)
+    fixed = np.isfinite(cov).all(axis=(1, 2))
+    if fixed.any():
+        out[fixed, 0] = np.sqrt(np.maximum(np.linalg.eigvalsh(cov[fixed, :2, :2])[:, 1], 0.0))
+        out[fixed, 1] = np.sqrt(np.maximum(cov[fixed, 2, 2], 0.0))
+    return out
+
+
+def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.ndarray:
+    """(H, 3, 3) per hypothesis the covariance of its least-squares pose
+    ``(x, y, yaw)`` (metres, radians) that image noise leaves. First order:
+    the inverse of J^T J, J the derivatives of the residuals
+    (:func:`matcher.verify.residuals`) weighted by their noise. Each
+    residual (the sine of the angle between an end point's ray and the
+    segment's plane, which at the fit is the line's own plane) is first
+    turned into pixels across its line: divided by its derivative along the
+    line's image normal, ``n . dp / |p|`` with ``n`` the line's
+    interpretation-plane normal and ``p`` the end point's ray ``K^-1 (u, v,
+    1)`` (a pixel spans less angle off the image centre). Then a line's two
+    end points are taken as their mean and half difference: an offset of
+    the line moves both ends alike (``line_px``), a turn about its middle
+    moves them apart (``line_deg`` over half its length); each bound is
+    taken as that of a uniform variable (standard deviation bound /
+    sqrt 3). Matches ``hyp, local, line_ids`` (T,) as for
+    :func:`reprojection_cost`. A hypothesis whose matches do not fix its
+    pose gets inf."""
+    n_h = len(poses)
+    out = np.full((n_h, 3, 3), np.inf)
+    if not len(hyp):
+        return out
+    lines = img.lines[line_ids]  # (T, 2, 2)
+    p = camera.pixel_rays(lines)  # (T, 2, 3)
+    _, J = verify.residuals(poses, hyp, segs[local, 0], segs[local, 1],
+                            p[:, 0] / np.linalg.norm(p[:, 0], axis=1, keepdims=True),
+                            p[:, 1] / np.linalg.norm(p[:, 1], axis=1, keepdims=True),
+                            camera.pitch, camera.height_m, jacobian=True)  # (T, 2, 3)
+    d = lines[:, 1] - lines[:, 0]
+    length = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+    # d(ray)/d(pixel across the line): (-d_v / fx, d_u / fy, 0) / length.
+    dp_x, dp_y = -d[:, 1] / (length * camera.fx), d[:, 0] / (length * camera.fy)
+    n = img.normals[line_ids]  # (T, 3) unit
+    per_px = (n[:, 0] * dp_x + n[:, 1] * dp_y)[:, None] / np.linalg.norm(p, axis=2)  # (T, 2)
+    per_px = np.where(np.abs(per_px) > 1e-12, per_px, 1e-12)
+    Jpx = J / per_px[..., None]  # (T, 2, 3): pixels across the line per unit of pose
+    sigma_offset = tol.line_px / math.sqrt(3.0)
+    sigma_turn = math.tan(math.radians(tol.line_deg)) * 0.5 * length / math.sqrt(3.0)  # (T,)
+    Jw = np.stack([0.5 * (Jpx[:, 0] + Jpx[:, 1]) / sigma_offset,
+                   0.5 * (Jpx[:, 0] - Jpx[:, 1]) / sigma_turn[:, None]], axis=1)  # (T, 2, 3)
+    A = np.zeros((n_h, 3, 3))
+    np.add.at(A, hyp, np.einsum("tki,tkj->tij", Jw, Jw))
+    fixed = np.linalg.det(A) > 1e-12 * np.maximum(np.abs(A).max(axis=(1, 2)), 1e-300) ** 3
+    if fixed.any():
+        out[fixed] = np.linalg.inv(A[fixed])
+    return out
 
 
 def unit_rays(camera, lines):

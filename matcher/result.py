@@ -11,8 +11,9 @@ class LocalizeResult:
     """Pose ``(x, y, yaw_deg)`` of the camera (metres, degrees), the paper's
     score ``E`` of the accepted hypothesis and of the runner-up, the number
     of hypotheses stage 1 produced, the matches ``[[segment_id, line_index],
-    ...]`` and the time per stage in milliseconds. ``bool(result)`` is
-    ``ok``; ``reason`` says why when it is False."""
+    ...]`` and the time per stage in milliseconds. :attr:`pose_std` is the
+    pose's standard deviations. ``bool(result)`` is ``ok``; ``reason`` says
+    why when it is False."""
 
     ok: bool
     reason: str = ""
@@ -30,8 +31,25 @@ class LocalizeResult:
     sets_found: int = 0
     stage1: dict = field(default_factory=dict, repr=False)
 
+    _pose_std: object = field(default=None, repr=False, compare=False)
+
     def __bool__(self) -> bool:
         return bool(self.ok)
+
+    def pose_std_from(self, compute) -> None:
+        """Have :attr:`pose_std` worked out by ``compute()`` when first read."""
+        self._pose_std = compute
+
+    @property
+    def pose_std(self) -> tuple[float, float, float] | None:
+        """Standard deviations ``(x, y, yaw_deg)`` (metres, degrees) of the
+        pose that the image noise of the tolerances leaves, to first order
+        (:func:`matcher.rank.pose_covariance`): for fusing with odometry; a
+        view of a few far vertical edges leaves decimetres. None without a
+        pose, or when the matches do not fix it. Worked out on first read."""
+        if callable(self._pose_std):
+            self._pose_std = self._pose_std()
+        return self._pose_std
 
     def to_dict(self) -> dict:
         """The JSON shape of docs/architecture.md."""
@@ -44,6 +62,9 @@ class LocalizeResult:
             "pose": None
             if self.pose is None
             else {"x": float(self.pose[0]), "y": float(self.pose[1]), "yaw_deg": float(self.pose[2])},
+            "pose_std": None
+            if self.pose_std is None
+            else {"x": float(self.pose_std[0]), "y": float(self.pose_std[1]), "yaw_deg": float(self.pose_std[2])},
             "score": num(self.score),
             "runner_up_score": num(self.runner_up_score),
             "hypotheses": int(self.hypotheses),

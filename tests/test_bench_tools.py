@@ -29,6 +29,10 @@ def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
         assert all(r["ms"] > 0 for r in rows)
         assert "base_ms" in rows[0] and "base_ms" not in rows[1]
         assert data["summary"][peq]["n"] == 3
+        # Correct results carry their error over the pose's std, summarised per axis.
+        z = [r["err_over_std"] for r in rows if "err_over_std" in r]
+        assert z and all(len(v) == 3 for v in z)
+        assert len(data["summary"][peq]["err_over_std_rms"]) == 3
     assert sorted(p.name for p in out.iterdir()) == ["paper_fig5.png", "paper_fig6.png"]
 
 

@@ -159,3 +159,19 @@ def test_unknown_option(map_path, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("mapkit: error: unrecognized arguments") and err.count("\n") == 1
+
+
+def test_reader_gone_is_quiet(map_path):
+    """`mapkit info MAP --json | head -0`: stdout's reader has gone; no error, no traceback."""
+    import os
+    import subprocess
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        out = subprocess.run([sys.executable, "-m", "mapkit", "info", str(map_path), "--json"], stdout=write_end,
+                             stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write_end)
+    assert out.returncode == 0 and out.stderr == ""

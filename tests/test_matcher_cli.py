@@ -222,6 +222,20 @@ def test_prior_or_lost_one_line(files, capsys, drop, add, message):
     assert err.startswith("matcher: error: ") and message in err and len(err.strip().splitlines()) == 1
 
 
+def test_reader_gone_is_quiet(files):
+    """`matcher localize ... | head -0`: stdout's reader has gone; no error, no traceback."""
+    import os
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        out = subprocess.run([sys.executable, "-m", "matcher", *args(files)], stdout=write_end,
+                             stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write_end)
+    assert out.returncode == 0 and out.stderr == ""
+
+
 def test_python_dash_m(files):
     out = subprocess.run([sys.executable, "-m", "matcher", *args(files, "--json")], capture_output=True, text=True,
                          timeout=120)

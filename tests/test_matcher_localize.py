@@ -64,8 +64,13 @@ def test_result_shape_and_json(small_map, cam):
     res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
     assert res and res.ok and res.reason == ""
     d = res.to_dict()
-    assert set(d) == {"ok", "pose", "score", "runner_up_score", "hypotheses", "matches", "time_ms"}
-    assert set(d["pose"]) == {"x", "y", "yaw_deg"}
+    assert set(d) == {"ok", "pose", "pose_std", "score", "runner_up_score", "hypotheses", "matches", "time_ms"}
+    assert set(d["pose"]) == set(d["pose_std"]) == {"x", "y", "yaw_deg"}
+    # The standard deviations are of the order the 1 px / 1 degree noise
+    # leaves at a few metres, and the error is within a few of them.
+    sx, sy, syaw = res.pose_std
+    assert 0.001 < sx < 0.1 and 0.001 < sy < 0.1 and 0.01 < syaw < 1.0
+    assert abs(res.pose[0] - fr.pose[0]) < 4 * sx and abs(res.pose[1] - fr.pose[1]) < 4 * sy
     assert d["score"] <= matcher.Tolerances().e_accept
     assert all(isinstance(a, int) and isinstance(b, int) for a, b in d["matches"])
     assert {"select", "generate", "verify", "total"} <= set(d["time_ms"])

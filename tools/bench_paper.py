@@ -153,6 +153,12 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
         }
         if res:
             row["pos_err"], row["yaw_err"] = pose_error(res.pose, fr.pose)
+            if row["correct_strict"] and res.pose_std is not None:
+                # The error in units of the result's own standard deviations
+                # (read here, after the timing: it is worked out when read).
+                err = (res.pose[0] - fr.pose[0], res.pose[1] - fr.pose[1],
+                       (res.pose[2] - fr.pose[2] + 180.0) % 360.0 - 180.0)
+                row["err_over_std"] = [e / s for e, s in zip(err, res.pose_std)]
         if i < args.baseline_poses:
             t0 = time.perf_counter()
             pose, bm, nodes, timed_out = baseline_localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw,
@@ -191,6 +197,12 @@ def summarise(rows):
         "resection_frames": int(len(a("resection_ms"))),
         "resection_ms_med": float(np.median(a("resection_ms"))) if len(a("resection_ms")) else None,
     }
+    # How well the results' pose_std describe their errors (x, y, yaw): the
+    # RMS of error / std (1 for a calibrated estimate) and the share within 2.
+    z = np.array([r["err_over_std"] for r in rows if "err_over_std" in r]).reshape(-1, 3)
+    if len(z):
+        out["err_over_std_rms"] = [round(float(v), 3) for v in np.sqrt((z**2).mean(axis=0))]
+        out["within_2_std_pct"] = [round(100.0 * float(v), 1) for v in (np.abs(z) <= 2.0).mean(axis=0)]
     if len(a("base_ms")):
         out.update(
             base_n=int(len(a("base_ms"))),
