@@ -272,16 +272,16 @@ def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.n
         return out
     lines = img.lines[line_ids]  # (T, 2, 2)
     p = camera.pixel_rays(lines)  # (T, 2, 3)
-    _, J = verify.residuals(poses, hyp, segs[local, 0], segs[local, 1],
-                            p[:, 0] / np.linalg.norm(p[:, 0], axis=1, keepdims=True),
-                            p[:, 1] / np.linalg.norm(p[:, 1], axis=1, keepdims=True),
-                            camera.pitch, camera.height_m, jacobian=True)  # (T, 2, 3)
+    p_len = np.linalg.norm(p, axis=2)  # (T, 2)
+    rays = p / p_len[..., None]
+    _, J = verify.residuals(poses, hyp, segs[local, 0], segs[local, 1], rays[:, 0], rays[:, 1], camera.pitch,
+                            camera.height_m, jacobian=True)  # (T, 2, 3)
     d = lines[:, 1] - lines[:, 0]
     length = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
     # d(ray)/d(pixel across the line): (-d_v / fx, d_u / fy, 0) / length.
     dp_x, dp_y = -d[:, 1] / (length * camera.fx), d[:, 0] / (length * camera.fy)
     n = img.normals[line_ids]  # (T, 3) unit
-    per_px = (n[:, 0] * dp_x + n[:, 1] * dp_y)[:, None] / np.linalg.norm(p, axis=2)  # (T, 2)
+    per_px = (n[:, 0] * dp_x + n[:, 1] * dp_y)[:, None] / p_len  # (T, 2)
     per_px = np.where(np.abs(per_px) > 1e-12, per_px, 1e-12)
     Jpx = J / per_px[..., None]  # (T, 2, 3): pixels across the line per unit of pose
     sigma_offset = tol.line_px / math.sqrt(3.0)

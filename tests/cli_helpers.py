@@ -21,3 +21,19 @@ def assert_one_line_error(code, out, err, *needles):
     assert "Traceback" not in err and out == ""
     for n in needles:
         assert n.lower() in lines[0].lower(), lines[0]
+
+
+def run_with_reader_gone(*argv):
+    """Run ``python ARGV`` with stdout a pipe whose reader has already gone
+    (``... | head -0``); return the CompletedProcess (stderr as text)."""
+    import os
+    import subprocess
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        return subprocess.run([sys.executable, *map(str, argv)], stdout=write_end, stderr=subprocess.PIPE,
+                              text=True, timeout=120)
+    finally:
+        os.close(write_end)

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from cli_helpers import assert_one_line_error, run
+from cli_helpers import assert_one_line_error, run, run_with_reader_gone
 import shapely.geometry.polygon
 from shapely.geometry import box
 
@@ -163,15 +163,5 @@ def test_unknown_option(map_path, capsys):
 
 def test_reader_gone_is_quiet(map_path):
     """`mapkit info MAP --json | head -0`: stdout's reader has gone; no error, no traceback."""
-    import os
-    import subprocess
-    import sys
-
-    read_end, write_end = os.pipe()
-    os.close(read_end)
-    try:
-        out = subprocess.run([sys.executable, "-m", "mapkit", "info", str(map_path), "--json"], stdout=write_end,
-                             stderr=subprocess.PIPE, text=True, timeout=120)
-    finally:
-        os.close(write_end)
+    out = run_with_reader_gone("-m", "mapkit", "info", map_path, "--json")
     assert out.returncode == 0 and out.stderr == ""

@@ -224,15 +224,9 @@ def test_prior_or_lost_one_line(files, capsys, drop, add, message):
 
 def test_reader_gone_is_quiet(files):
     """`matcher localize ... | head -0`: stdout's reader has gone; no error, no traceback."""
-    import os
+    from cli_helpers import run_with_reader_gone
 
-    read_end, write_end = os.pipe()
-    os.close(read_end)
-    try:
-        out = subprocess.run([sys.executable, "-m", "matcher", *args(files)], stdout=write_end,
-                             stderr=subprocess.PIPE, text=True, timeout=120)
-    finally:
-        os.close(write_end)
+    out = run_with_reader_gone("-m", "matcher", *args(files))
     assert out.returncode == 0 and out.stderr == ""
 
 
