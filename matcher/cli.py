@@ -1,7 +1,8 @@
 """The ``matcher`` command line (also ``python -m matcher``).
 
     matcher localize --map MAP --camera CAM.json (--lines LINES.json | --image IMG)
-                     (--prior X,Y,YAW_DEG --dt METRES --dyaw DEG | --lost) [--json]
+                     (--prior X,Y,YAW_DEG --dt METRES --dyaw DEG | --lost)
+                     [--budget-ms MS] [--json]
 
 Human-readable output by default, one JSON object on stdout with ``--json``
 (the result shape of docs/architecture.md). Errors a user can cause print
@@ -17,6 +18,7 @@ import json
 import math
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from mapkit.argv import join_negative_values
@@ -50,6 +52,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dyaw", type=float, help="heading bound of the prior, degrees")
     p.add_argument("--lost", action="store_true",
                    help="no prior: try every region of the map, any heading (lost mode; seconds, not milliseconds)")
+    p.add_argument("--budget-ms", type=float, metavar="MS",
+                   help="time budget: stop searching after MS milliseconds and verify what was found "
+                        "(default: no limit)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     return parser
 
@@ -136,6 +141,18 @@ def _prior_options(args):
     return _parse_prior(args.prior), args.dt, args.dyaw
 
 
+def _tolerances(args):
+    """The matcher's tolerances with the options' budget; UsageError if it
+    is not a positive number."""
+    from matcher.tolerances import DEFAULT
+
+    if args.budget_ms is None:
+        return DEFAULT
+    if not (math.isfinite(args.budget_ms) and args.budget_ms > 0):
+        raise UsageError(f"--budget-ms must be a positive number of milliseconds, got {args.budget_ms:g}")
+    return replace(DEFAULT, time_budget_ms=args.budget_ms)
+
+
 def _region_progress(done: int, total: int) -> None:
     """Lost mode's progress on a terminal's stderr (one line, rewritten)."""
     end = "\n" if done == total else ""
@@ -146,6 +163,8 @@ def _human(res, n_lines: int) -> str:
     t = ", ".join(f"{k} {v:.1f}" for k, v in res.time_ms.items() if k != "regions_tried")
     if "regions_tried" in res.time_ms:
         t += f" ({res.time_ms['regions_tried']} regions tried)"
+    if res and res.stage1.get("out_of_time"):
+        t += " (search stopped at the time budget)"
     if not res:
         return f"not localised: {res.reason}\n  {res.hypotheses} hypotheses from {n_lines} lines; time ms: {t}"
     x, y, yaw = res.pose
@@ -166,16 +185,17 @@ def run_localize(args) -> int:
     from matcher.camera import Camera
 
     prior = _prior_options(args)
+    tol = _tolerances(args)
     _input_file(args.map, "map file", "build one with 'mapkit build'")
     _input_file(args.camera, "camera file")
     camera = Camera.load(args.camera)
     linemap = matcher.load_map(args.map)
     lines = _read_lines(args.lines) if args.lines else _read_image(args.image, camera)
     if prior is None:
-        res = matcher.localize_global(linemap, camera, lines,
+        res = matcher.localize_global(linemap, camera, lines, tolerances=tol,
                                       progress=_region_progress if sys.stderr.isatty() else None)
     else:
-        res = matcher.localize(linemap, camera, lines, *prior)
+        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol)
     if args.json:
         print(json.dumps(res.to_dict()))
     else:

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from matcher import posegrid
+from matcher.budget import NO_LIMIT, Deadlines
 from matcher.camera import Camera
 from matcher.camera import world2cam_rotation
 from matcher.constraints import binary_constraint, distinct_points, unary_constraint, wrap
@@ -274,6 +275,7 @@ def generate(
     free=None,
     sight=None,
     faces: np.ndarray | None = None,
+    deadlines: Deadlines = NO_LIMIT,
 ) -> Hypotheses:
     """Stage 1 on candidate ``segments`` (N, 2, 3) with map ids ``seg_ids`` (N,).
 
@@ -283,8 +285,10 @@ def generate(
     ``sight`` the walls' :class:`~matcher.occlusion.SightRays` (kept with the
     map by the pipeline; made here from ``walls`` if None); ``faces`` (N, 2)
     the room-side normal of the wall face each candidate lies on, zeros for
-    none (:func:`~matcher.occlusion.face_normals`), or None. ``debug``, if a dict, receives
-    the intermediate arrays (for tools)."""
+    none (:func:`~matcher.occlusion.face_normals`), or None; ``deadlines``
+    the call's time budget (:mod:`matcher.budget`): the tree stops at them,
+    its sets so far are kept, ``truncated`` is set and
+    ``counts["out_of_time"]`` says why. ``debug``, if a dict, receives the intermediate arrays (for tools)."""
     t_start = time.perf_counter()
     xe, ye, yaw_e = prior
     step = math.radians(tol.yaw_step_deg)
@@ -358,10 +362,12 @@ def generate(
     t_tree = time.perf_counter()
     inp = TreeInput(quad, mask, yaws, compat, segments[seg_k], ce, dt, fwd, walls, vertical=is_v, line=line_k,
                     free=free, free_m=tol.free_space_m, front_c=front_c, front_b=front_b,
-                    single_fit=single_fit, sight=sight, shown=ShownSpans(camera, segments[seg_k], img.lines[line_k]))
+                    single_fit=single_fit, sight=sight, shown=ShownSpans(camera, segments[seg_k], img.lines[line_k]),
+                    deadlines=deadlines)
     if debug is not None:
         debug["tree_input"] = inp
     sets, init, truncated, nodes, found = search(inp, tol)
+    counts["out_of_time"] = bool(truncated and not deadlines.may_search())
     counts["tree_nodes"] = int(nodes)
     counts["sets_found"] = int(found)
     counts["ms_correspondences"] = round((t_pairs - t_start) * 1e3, 3)
@@ -381,6 +387,7 @@ def search_again(hyps: Hypotheses, tol: Tolerances) -> Hypotheses:
     t0 = time.perf_counter()
     sets, init, truncated, nodes, found = search(hyps.tree_input, tol)
     counts = dict(hyps.counts, tree_nodes=int(nodes), sets_found=int(found),
+                  out_of_time=bool(truncated and not hyps.tree_input.deadlines.may_search()),
                   ms_tree=round((time.perf_counter() - t0) * 1e3, 3))
     return replace(hyps, sets=sets, init=np.array(init).reshape(-1, 3), truncated=truncated, counts=counts)
 

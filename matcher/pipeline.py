@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from mapkit.lmap import LineMap
+from matcher.budget import NO_LIMIT, Deadlines
 from matcher.camera import Camera
 from matcher.checks import check_lines, check_prior
 from matcher.constraints import (bearing_noise, line_pieces, plane_noises, vertical_bearing, vertical_candidates,
@@ -52,7 +53,7 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     t0 = time.perf_counter()
     tol, img = _checked_inputs(linemap, camera, lines, tolerances)
     px = check_prior(prior, dt, dyaw)
-    return _localize(linemap, camera, img, px, tol, t0)
+    return _localize(linemap, camera, img, px, tol, t0, Deadlines.from_budget(t0, tol.time_budget_ms))
 
 
 def _checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
@@ -68,13 +69,28 @@ def _checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, Ima
     return tol, prepare_lines(camera, check_lines(lines, camera, tol), tol)
 
 
-def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
+def _localize(linemap, camera, img, px, tol, t0, deadlines: Deadlines = NO_LIMIT, candidate_ids=None):
+    """One prior ``px`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians), within the
+    time budget's ``deadlines``."""
     xe, ye, yaw_e, dt, dyaw = px
     times: dict[str, float] = {}
+    spent = []  # steps skipped for want of time
 
-    def fail(reason, hyps=0):
+    def in_time() -> bool:
+        """Time left to search; noted when there is not (asked only when
+        a step would otherwise run)."""
+        if deadlines.may_search():
+            return True
+        spent.append(True)
+        return False
+
+    def fail(reason, hyps=None):
         times["total"] = (time.perf_counter() - t0) * 1e3
-        return LocalizeResult(False, reason, hypotheses=hyps, time_ms=times)
+        return LocalizeResult(False, reason, time_ms=times, stage1={} if hyps is None else stage1_of(hyps))
+
+    def stage1_of(hyps) -> dict:
+        """Stage 1's counters, with whether the time budget cut anything."""
+        return dict(hyps.counts, out_of_time=bool(hyps.counts.get("out_of_time") or spent))
 
     # ---- selection: regions met by the disk, field of view ---------------
     ids = linemap.candidate_segments(xe, ye, dt) if candidate_ids is None else candidate_ids
@@ -104,37 +120,41 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     sight = linemap.cached("matcher.sight", lambda: SightRays(walls)) if walls is not None else None
     faces = _class_faces(linemap.cached("matcher.faces", lambda: face_normals(linemap.segments, walls))[ids], label)
     hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
-                    free=free, sight=sight, faces=faces)
+                    free=free, sight=sight, faces=faces, deadlines=deadlines)
     times["generate"] = (time.perf_counter() - t1) * 1e3
     n_h = len(hyps.sets)
-    if n_h == 0 and hyps.truncated:
-        hyps = _with_resection(hyps, [], reps, img, px, tol, free)
+    if n_h == 0 and hyps.truncated and in_time():
+        hyps = _with_resection(hyps, [], reps, img, px, tol, free, deadlines.search)
         n_h = len(hyps.sets)
     if n_h == 0:
         return fail(f"no consistent set of {tol.min_matches} or more correspondences "
-                    f"({hyps.n_correspondences} correspondences passed the unary tests)")
+                    f"({hyps.n_correspondences} correspondences passed the unary tests)" + _cut_short(hyps, tol, spent),
+                    hyps)
 
     # ---- stage 2 ---------------------------------------------------------
     t2 = time.perf_counter()
     ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
                                  free)
-    if _doubtful(ranked_h, hyps, tol) and tol.match_slack == 0:
+    if _doubtful(ranked_h, hyps, tol) and tol.match_slack == 0 and in_time():
         # The largest consistent sets held wrong matches (stage 2 threw them
         # out): the true set may be one smaller and was cut by the bound.
         # Search again keeping sets one smaller than the largest.
         t3 = time.perf_counter()
-        tol1 = replace(tol, match_slack=1)
-        hyps = search_again(hyps, tol1)
-        n_h = len(hyps.sets)
-        ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol, walls,
-                                     free)
+        again = search_again(hyps, replace(tol, match_slack=1))
+        if again.counts["out_of_time"]:  # cut short: the first search's sets stand
+            spent.append(True)
+        else:
+            hyps, n_h = again, len(again.sets)
+            ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol,
+                                         walls, free)
         times["second_search"] = (time.perf_counter() - t3) * 1e3
-    if (hyps.truncated or not ranked_h.score[ranked_h.order[0]] <= tol.e_accept) and "resection" not in hyps.counts:
+    if ((hyps.truncated or not ranked_h.score[ranked_h.order[0]] <= tol.e_accept) and "resection" not in hyps.counts
+            and in_time()):
         # The tree ran out of budget or nothing it found held: where vertical
         # edges leave the position loose, resect from their triples instead.
         t4 = time.perf_counter()
         held = [int(h) for h in ranked_h.order if np.isfinite(ranked_h.score[h])][:_TREE_KEPT]
-        more = _with_resection(hyps, held, reps, img, px, tol, free)
+        more = _with_resection(hyps, held, reps, img, px, tol, free, deadlines.search)
         if more.counts["resection"]:
             hyps, n_h = more, len(more.sets)
             ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol,
@@ -156,11 +176,12 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
     times["verify"] = (time.perf_counter() - t2) * 1e3
     times["total"] = (time.perf_counter() - t0) * 1e3
     common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=times, ranked=ranked,
-                  sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=dict(hyps.counts))
+                  sets_found=int(hyps.counts.get("sets_found", n_h)),
+                  stage1=stage1_of(hyps))
     if not E[best] <= tol.e_accept:
         why = ranked_h.why if not np.isfinite(E[best]) else (
             f"best score E={E[best]:.3g} is above the acceptance threshold {tol.e_accept:g}")
-        res = LocalizeResult(False, why + (" (hypothesis search truncated)" if hyps.truncated else ""), **common)
+        res = LocalizeResult(False, why + _cut_short(hyps, tol, spent), **common)
         res.score = float(E[best]) if np.isfinite(E[best]) else None
         return res
     res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
@@ -177,7 +198,7 @@ def _localize(linemap, camera, img, px, tol, t0, candidate_ids=None):
 _TREE_KEPT = 5
 
 
-def _with_resection(hyps, held, reps, img: ImageLines, px, tol: Tolerances, free):
+def _with_resection(hyps, held, reps, img: ImageLines, px, tol: Tolerances, free, deadline=math.inf):
     """The sets ``held`` (indices) of stage 1's hypotheses followed by those
     of :mod:`matcher.resection` (poses resected from triples of vertical
     edges), at most ``max_hypotheses`` in all; ``counts["resection"]`` says
@@ -189,11 +210,21 @@ def _with_resection(hyps, held, reps, img: ImageLines, px, tol: Tolerances, free
         return replace(hyps, counts=counts)
     sets, inits = vertical_hypotheses(reps[hyps.segment, 0, :2], hyps.segment, hyps.line, inp.vertical,
                                       inp.compat, img.alpha, img.alpha_eps, px, free, tol.free_space_m,
-                                      tol.max_hypotheses - len(held), min_lines=tol.min_matches + 1)
+                                      tol.max_hypotheses - len(held), min_lines=tol.min_matches + 1,
+                                      deadline=deadline)
     counts["resection"] = len(sets)
     init = hyps.init.reshape(-1, 3)[held]
     return replace(hyps, sets=[hyps.sets[h] for h in held] + sets, init=np.concatenate([init, inits]),
                    counts=counts)
+
+
+def _cut_short(hyps, tol: Tolerances, spent) -> str:
+    """What a failure's reason adds when the search stopped early: the time
+    budget spent (by stage 1, or ``spent`` non-empty: a later step
+    skipped), or stage 1's node or set budget."""
+    if hyps.counts.get("out_of_time") or spent:
+        return f" (time budget of {tol.time_budget_ms:g} ms spent)"
+    return " (hypothesis search truncated)" if hyps.truncated else ""
 
 
 def _too_few_lines(img: ImageLines, tol: Tolerances) -> str:
@@ -252,10 +283,12 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     ``time_ms['total']`` covers all tries (the other entries are the winning
     region's); ``time_ms['regions_tried']`` counts them. ``progress``, if
     given, is called as ``progress(done, total)`` as the regions are done,
-    last with ``done == total``. Returns a falsy result if no region gives
-    one."""
+    last with ``done == total``. The tolerances' ``time_budget_ms`` bounds
+    the whole call: regions are tried in order until it is spent. Returns a
+    falsy result if no region gives one."""
     t0 = time.perf_counter()
     tol, img = _checked_inputs(linemap, camera, lines, tolerances)
+    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms)
     if linemap.n_regions == 0:
         return LocalizeResult(False, "the map has no regions", time_ms={"total": 0.0, "regions_tried": 0})
     too_few = _too_few_lines(img, tol)
@@ -264,17 +297,20 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     # The robot is stopped: a larger search budget per region.
     tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
     centres, radii = linemap.region_centres(), linemap.region_radii()
-    tried, best = 0, None
+    tried, best, out_of_time = 0, None, False
     for r in range(linemap.n_regions):
         if progress is not None and r:
             progress(r, linemap.n_regions)
+        if not deadlines.may_search():
+            out_of_time = True
+            break
         cx, cy = (float(v) for v in centres[r])
         dt = float(radii[r])
         if not (math.isfinite(cx) and math.isfinite(cy) and dt > 0):
             continue
         tried += 1
         res = _localize(linemap, camera, img, (cx, cy, 0.0, min(dt, 100.0), math.pi), tol, time.perf_counter(),
-                        candidate_ids=linemap.region_list(r))
+                        deadlines, candidate_ids=linemap.region_list(r))
         if res and (best is None or (len(res.matches), -res.score) > (len(best.matches), -best.score)):
             best = res
             if first_accepted:
@@ -283,7 +319,9 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
         progress(linemap.n_regions, linemap.n_regions)
     total = (time.perf_counter() - t0) * 1e3
     if best is None:
-        return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} tried)",
+        spent = f"; the time budget of {tol.time_budget_ms:g} ms ran out" if out_of_time else ""
+        return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} of {linemap.n_regions} "
+                              f"tried{spent})",
                               time_ms={"total": total, "regions_tried": tried})
     best.time_ms["total"] = total
     best.time_ms["regions_tried"] = tried

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 
 import numpy as np
 
@@ -113,7 +114,8 @@ def triples(compat: np.ndarray, corr: np.ndarray, line: np.ndarray, most: int = 
 
 def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray, vertical: np.ndarray,
                         compat: np.ndarray, alpha: np.ndarray, alpha_eps: np.ndarray, prior, free=None,
-                        free_m: float = 0.0, max_hypotheses: int = 25, min_lines: int = 4):
+                        free_m: float = 0.0, max_hypotheses: int = 25, min_lines: int = 4,
+                        deadline: float = math.inf):
     """Sets of correspondences from resected poses.
 
     Per correspondence k (K,): ``points`` (K, 2) the floor point of its
@@ -123,7 +125,8 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     ``compat`` (K, K) stage 1's pairwise compatibility. Per image line:
     ``alpha``, ``alpha_eps`` (M,) bearing and its noise bound, radians.
     ``prior`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians), ``free`` the map's
-    free space or None.
+    free space or None. Triples are solved in batches of _CHUNK; none is
+    started once ``time.perf_counter()`` is past ``deadline``.
 
     Every pairwise compatible triple on three lines is resected; at each
     pose inside the prior (and free space) the lines explained are those
@@ -147,6 +150,8 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     starts = np.unique(corr_line[corr], return_index=True)[1]
     keys, kept_poses, kept_err = [], [], []
     for c0 in range(0, len(tri), _CHUNK):
+        if c0 and time.perf_counter() > deadline:
+            break
         t = tri[c0:c0 + _CHUNK]
         poses, ok = resect(points[t], alpha[corr_line[t]])
         poses = poses[ok]

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from matcher import posegrid
+from matcher.budget import NO_LIMIT, Deadlines
 from matcher.occlusion import sight_clear
 from matcher.tolerances import Tolerances
 
@@ -105,7 +106,10 @@ class TreeInput:
     :class:`~matcher.overlap.ShownSpans` of the correspondences (``segments``
     with their image lines), or None: with it, visibility is tested on the
     part of the segment the line shows at the set's pose (else on points
-    spread over the whole segment)."""
+    spread over the whole segment); ``deadlines`` the caller's time budget
+    (:class:`~matcher.budget.Deadlines`): past its ``search`` the tree stops
+    as at ``max_nodes``, past its ``checks`` the final tests of the sets
+    found stop."""
 
     quad: np.ndarray
     mask: np.ndarray
@@ -125,6 +129,7 @@ class TreeInput:
     single_fit: np.ndarray | None = None
     sight: object | None = None
     shown: object | None = None
+    deadlines: Deadlines = NO_LIMIT
 
     def __post_init__(self):
         self.seg_length = np.maximum(np.linalg.norm(self.segments[:, 1] - self.segments[:, 0], axis=1), 1e-9)
@@ -300,7 +305,8 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
         if state["truncated"]:
             return
         state["nodes"] += 1
-        if state["nodes"] > tol.max_nodes or (state["nodes"] > state["give_up_at"] and not sets):
+        if (state["nodes"] > tol.max_nodes or (state["nodes"] > state["give_up_at"] and not sets)
+                or not inp.deadlines.may_search()):
             state["truncated"] = True
             return
         # Look ahead: the open candidates of all lines still to decide, kept if
@@ -397,6 +403,8 @@ def search(inp: TreeInput, tol: Tolerances, eager: bool = False, aim_high: bool 
     state["found"] = len(sets)
     found_any = bool(sets)
     sets, inits = _visible_best(inp, sets, inits, tol, cache)
+    if not inp.deadlines.may_check():  # the final tests may have been cut short
+        state["truncated"] = True
     if found_any and not sets and not eager:
         # Every set failed the visibility test: the sets that raised the bound
         # may have hidden smaller valid ones. Search again, testing each leaf.
@@ -409,13 +417,14 @@ def _visible_best(inp: TreeInput, sets, inits, tol: Tolerances, cache):
     """The hypotheses: sets passing the visibility test (a set failing it
     loses its unseen members and queues again), largest first, then best
     fitting, at most ``max_hypotheses``, all at least as large as the
-    largest passing set minus ``match_slack``."""
+    largest passing set minus ``match_slack``; those found by the
+    deadline of the checks."""
     import heapq
 
     heap = [(-len(s), p[3], i, s) for i, (s, p) in enumerate(zip(sets, inits))]
     heapq.heapify(heap)
     out, out_init, seen_keys, n = [], [], set(), len(heap)
-    while heap and len(out) < tol.max_hypotheses:
+    while heap and len(out) < tol.max_hypotheses and inp.deadlines.may_check():
         neg, fit, _, m = heapq.heappop(heap)
         if out and -neg < len(out[0]) - tol.match_slack:
             break

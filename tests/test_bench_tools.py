@@ -1,6 +1,6 @@
-"""tools/bench_paper.py and tools/bench_images.py end to end on a few
-frames: the tables, the JSON rows and the figures (the full runs are the
-README's benchmarks)."""
+"""tools/bench_paper.py, tools/bench_images.py and tools/bench_budget.py
+end to end on a few frames: the tables, the JSON rows and the figures (the
+full runs are the README's and docs/matcher.md's benchmarks)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
+import bench_budget  # noqa: E402
 import bench_images  # noqa: E402
 import bench_paper  # noqa: E402
 
@@ -60,3 +61,14 @@ def test_bench_images_table(capsys):
     assert out[3].count("|") == 7
     assert bench_images.main(["--frames", "0"]) == 2
     assert capsys.readouterr().err.strip() == "error: --frames, --supersample and --repeat must be at least 1"
+
+
+def test_bench_budget_table(capsys):
+    assert bench_budget.main(["--poses", "2", "--peq", "2", "--budgets", "0", "1e-9"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[1].startswith("| PEQ | budget ms |")
+    none, spent = out[3].split(" | "), out[4].split(" | ")
+    assert none[1] == "none" and none[5] == "0"  # nothing cut without a budget
+    assert spent[1] == "1e-09" and spent[3] == "0%" and spent[5] == "2"  # a spent budget: both cut, none accepted
+    assert bench_budget.main(["--poses", "0"]) == 2
+    assert capsys.readouterr().err.strip() == "error: --poses must be at least 1 and --budgets at least 0"

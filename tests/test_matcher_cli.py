@@ -254,3 +254,29 @@ def test_simulated_frame_files_localise_from_the_command_line(tmp_path, capsys):
     assert code == 0 and res["ok"]
     assert sorted(map(tuple, res["matches"])) == sorted(map(tuple, truth["matches"]))
     assert abs(res["pose"]["x"] - truth["pose"]["x"]) < 0.02 and abs(res["pose"]["y"] - truth["pose"]["y"]) < 0.02
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "nan", "inf"])
+def test_budget_must_be_positive(files, capsys, value):
+    assert main(args(files, f"--budget-ms={value}")) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("matcher: error: --budget-ms must be a positive number of milliseconds")
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_budget_from_the_command_line(files, capsys):
+    assert main(args(files, "--budget-ms", "100000", "--json")) == 0
+    assert json.loads(capsys.readouterr().out)["ok"] is True
+    assert main(args(files, "--budget-ms", "1e-9")) == 1
+    assert "(time budget of 1e-09 ms spent)" in capsys.readouterr().out
+
+
+def test_human_output_says_when_the_budget_cut_the_search():
+    from matcher.cli import _human
+    from matcher.result import LocalizeResult
+
+    res = LocalizeResult(True, pose=(1.0, 2.0, 30.0), score=1e-4, matches=[[1, 0], [2, 1], [3, 2]],
+                         time_ms={"total": 50.2}, stage1={"out_of_time": True})
+    assert _human(res, 4).endswith("time ms: total 50.2 (search stopped at the time budget)")
+    res.stage1["out_of_time"] = False
+    assert _human(res, 4).endswith("time ms: total 50.2")

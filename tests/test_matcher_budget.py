@@ -1,0 +1,92 @@
+"""The time budget (Tolerances.time_budget_ms): the searches stop, the
+answer says so, and a budget that is never reached changes nothing."""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tools"))
+
+import matcher  # noqa: E402
+from _synthetic_map import make_small_flat  # noqa: E402
+from matcher.budget import NO_LIMIT, SEARCH_SHARE, Deadlines  # noqa: E402
+from simulate import make_frame, paper_camera  # noqa: E402
+
+#: A budget spent before the search starts.
+SPENT = replace(matcher.Tolerances(), time_budget_ms=1e-9)
+
+
+@pytest.fixture(scope="module")
+def small_map():
+    return make_small_flat()
+
+
+@pytest.fixture(scope="module")
+def cam():
+    return paper_camera()
+
+
+def test_deadlines_split_the_budget():
+    assert Deadlines.from_budget(10.0, math.inf) == NO_LIMIT
+    d = Deadlines.from_budget(10.0, 100.0)
+    assert d.search == pytest.approx(10.0 + SEARCH_SHARE * 0.1) and d.checks == pytest.approx(10.1)
+    assert NO_LIMIT.may_search() and NO_LIMIT.may_check()
+    assert not Deadlines.from_budget(0.0, 1.0).may_check()  # perf_counter is far past 1 ms
+
+
+def test_negative_budget_is_refused():
+    with pytest.raises(ValueError, match="time_budget_ms must be >= 0"):
+        matcher.Tolerances(time_budget_ms=-1.0)
+
+
+def test_spent_budget_is_a_reason_not_a_guess(small_map, cam):
+    fr = make_frame(small_map, cam, np.random.default_rng([7, 3]), 3)
+    res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, SPENT)
+    assert not res
+    assert "(time budget of 1e-09 ms spent)" in res.reason
+    assert res.stage1["out_of_time"] is True
+
+
+def test_budget_never_reached_changes_nothing(small_map, cam):
+    roomy = replace(matcher.Tolerances(), time_budget_ms=1e7)
+    rng = np.random.default_rng([7, 4])
+    for _ in range(4):
+        fr = make_frame(small_map, cam, rng, 4)
+        a = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+        b = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, roomy)
+        assert (bool(a), a.pose, a.matches, a.score, a.hypotheses) == (bool(b), b.pose, b.matches, b.score,
+                                                                        b.hypotheses)
+        assert b.stage1["out_of_time"] is False
+
+
+def test_budget_stops_a_long_search():
+    """A view along the example flat's row of door jambs (seed 0, PEQ 5,
+    frame 29 of tools/bench_paper.py): unbudgeted, its tree runs to the node
+    budget (about 1900 nodes, over a second here). With 50 ms it stops after
+    a few hundred nodes at most, and says so."""
+    linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
+    cam = paper_camera()
+    rng = np.random.default_rng([0, 5])
+    frames = [make_frame(linemap, cam, rng, 5, 1.0, 1.0, clutter=3) for _ in range(30)]
+    fr = frames[29]
+    tol = replace(matcher.Tolerances(), time_budget_ms=50.0)
+    res = matcher.localize(linemap, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, tol)
+    assert res.stage1["out_of_time"] is True
+    assert res.stage1["tree_nodes"] < 1000
+    assert "second_search" not in res.time_ms
+
+
+def test_lost_mode_budget_bounds_the_whole_call(small_map, cam):
+    fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
+    res = matcher.localize_global(small_map, cam, fr.lines, SPENT)
+    assert not res
+    assert res.reason == (f"no region gave an accepted hypothesis (0 of {small_map.n_regions} tried; "
+                          "the time budget of 1e-09 ms ran out)")
+    assert res.time_ms["regions_tried"] == 0
