@@ -15,22 +15,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
 
 import matcher  # noqa: E402
-from _synthetic_map import make_small_flat  # noqa: E402
 from matcher.budget import NO_LIMIT, SEARCH_SHARE, Deadlines  # noqa: E402
-from simulate import make_frame, paper_camera  # noqa: E402
+from simulate import make_frame  # noqa: E402
 
 #: A budget spent before the search starts.
 SPENT = replace(matcher.Tolerances(), time_budget_ms=1e-9)
-
-
-@pytest.fixture(scope="module")
-def small_map():
-    return make_small_flat()
-
-
-@pytest.fixture(scope="module")
-def cam():
-    return paper_camera()
 
 
 def test_deadlines_split_the_budget():
@@ -66,13 +55,12 @@ def test_budget_never_reached_changes_nothing(small_map, cam):
         assert b.stage1["out_of_time"] is False
 
 
-def test_budget_stops_a_long_search():
+def test_budget_stops_a_long_search(cam):
     """A view along the example flat's row of door jambs (seed 0, PEQ 5,
     frame 29 of tools/bench_paper.py): unbudgeted, its tree runs to the node
     budget (about 1900 nodes, over a second here). With 50 ms it stops after
     a few hundred nodes at most, and says so."""
     linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
-    cam = paper_camera()
     rng = np.random.default_rng([0, 5])
     frames = [make_frame(linemap, cam, rng, 5, 1.0, 1.0, clutter=3) for _ in range(30)]
     fr = frames[29]

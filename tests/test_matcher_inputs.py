@@ -25,11 +25,6 @@ def box():
 
 
 @pytest.fixture(scope="module")
-def cam():
-    return paper_camera()
-
-
-@pytest.fixture(scope="module")
 def good_lines(box, cam):
     return make_frame(box, cam, np.random.default_rng(2), 2, min_seen=3).lines
 

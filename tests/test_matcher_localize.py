@@ -17,18 +17,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 import matcher  # noqa: E402
-from _synthetic_map import make_small_flat  # noqa: E402
 from simulate import PEQ, make_frame, paper_camera, pose_error  # noqa: E402
-
-
-@pytest.fixture(scope="module")
-def small_map():
-    return make_small_flat()
-
-
-@pytest.fixture(scope="module")
-def cam():
-    return paper_camera()
 
 
 def _correct(res, frame) -> bool:
