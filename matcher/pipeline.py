@@ -311,6 +311,7 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
         tried += 1
         res = _localize(linemap, camera, img, (cx, cy, 0.0, min(dt, 100.0), math.pi), tol, time.perf_counter(),
                         deadlines, candidate_ids=linemap.region_list(r))
+        out_of_time |= bool(res.stage1.get("out_of_time"))
         if res and (best is None or (len(res.matches), -res.score) > (len(best.matches), -best.score)):
             best = res
             if first_accepted:
@@ -325,4 +326,6 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
                               time_ms={"total": total, "regions_tried": tried})
     best.time_ms["total"] = total
     best.time_ms["regions_tried"] = tried
+    # The best of the regions searched, not of all: the result says so.
+    best.stage1["out_of_time"] = out_of_time
     return best
