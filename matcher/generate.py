@@ -288,7 +288,8 @@ def generate(
     none (:func:`~matcher.occlusion.face_normals`), or None; ``deadlines``
     the call's time budget (:mod:`matcher.budget`): the tree stops at them,
     its sets so far are kept, ``truncated`` is set and
-    ``counts["out_of_time"]`` says why. ``debug``, if a dict, receives the intermediate arrays (for tools)."""
+    ``counts["out_of_time"]`` says why. ``debug``, if a dict, receives the
+    intermediate arrays (for tools)."""
     t_start = time.perf_counter()
     xe, ye, yaw_e = prior
     step = math.radians(tol.yaw_step_deg)

@@ -128,8 +128,8 @@ def _localize(linemap, camera, img, px, tol, t0, deadlines: Deadlines = NO_LIMIT
         n_h = len(hyps.sets)
     if n_h == 0:
         return fail(f"no consistent set of {tol.min_matches} or more correspondences "
-                    f"({hyps.n_correspondences} correspondences passed the unary tests)" + _cut_short(hyps, tol, spent),
-                    hyps)
+                    f"({hyps.n_correspondences} correspondences passed the unary tests)"
+                    + _cut_short(hyps, tol, spent), hyps)
 
     # ---- stage 2 ---------------------------------------------------------
     t2 = time.perf_counter()
@@ -176,8 +176,7 @@ def _localize(linemap, camera, img, px, tol, t0, deadlines: Deadlines = NO_LIMIT
     times["verify"] = (time.perf_counter() - t2) * 1e3
     times["total"] = (time.perf_counter() - t0) * 1e3
     common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=times, ranked=ranked,
-                  sets_found=int(hyps.counts.get("sets_found", n_h)),
-                  stage1=stage1_of(hyps))
+                  sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=stage1_of(hyps))
     if not E[best] <= tol.e_accept:
         why = ranked_h.why if not np.isfinite(E[best]) else (
             f"best score E={E[best]:.3g} is above the acceptance threshold {tol.e_accept:g}")
