@@ -42,9 +42,9 @@ class RegionLookup:
         # Rings are sorted by region, so a region's edges are one contiguous run.
         r = m.n_regions
         self.region_edge_start = np.searchsorted(self.edge_region, np.arange(r + 1))
-        self.centres, self.radii = self._centres_and_radii(ring_of_point)
+        self.centres, self.radii, self.areas = self._centres_radii_areas(ring_of_point)
 
-    def _centres_and_radii(self, ring_of_point: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _centres_radii_areas(self, ring_of_point: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         r = self.m.n_regions
         a, b = self.a, self.b
         cross = a[:, 0] * b[:, 1] - b[:, 0] * a[:, 1]  # shoelace terms, signed
@@ -70,7 +70,7 @@ class RegionLookup:
         radii = np.zeros(r)
         if len(d):
             np.maximum.at(radii, self.edge_region, d)
-        return centres, radii
+        return centres, radii, 0.5 * np.abs(area2)
 
     def candidate_regions(self, x: float, y: float, radius: float) -> np.ndarray:
         """Regions listed by the grid cells under the disk's bounding box (a superset)."""

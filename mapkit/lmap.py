@@ -189,6 +189,10 @@ class LineMap:
         """(R,) distance from each region's centre to its farthest vertex."""
         return self._query().radii
 
+    def region_areas(self) -> np.ndarray:
+        """(R,) floor area of each region, square metres (holes subtracted)."""
+        return self._query().areas
+
     def _query(self):
         if self._lookup is None:
             from mapkit.linemap_query import RegionLookup

@@ -274,8 +274,9 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     """Lost mode (method.md section 3): one prior per region (its centre,
     ``dt`` its radius, any heading, the region's own visible list).
 
-    With ``first_accepted`` the search stops at the first region that gives
-    an accepted hypothesis, in order of region id (the paper's loop).
+    Regions are tried largest first. With ``first_accepted`` the search
+    stops at the first region that gives an accepted hypothesis (the
+    paper's loop).
     Otherwise every region is tried and the accepted result that explains
     the most lines wins, then the smallest E: a wrong room can hold a few
     lines that fit well, the right one explains more of the image.
@@ -283,8 +284,8 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     region's); ``time_ms['regions_tried']`` counts them. ``progress``, if
     given, is called as ``progress(done, total)`` as the regions are done,
     last with ``done == total``. The tolerances' ``time_budget_ms`` bounds
-    the whole call: regions are tried in order until it is spent. Returns a
-    falsy result if no region gives one."""
+    the whole call: regions are tried until it is spent. Returns a falsy
+    result if no region gives one."""
     t0 = time.perf_counter()
     tol, img = _checked_inputs(linemap, camera, lines, tolerances)
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms)
@@ -296,10 +297,13 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     # The robot is stopped: a larger search budget per region.
     tol = replace(tol, max_nodes=tol.max_nodes * _LOST_BUDGET, max_sets=tol.max_sets * _LOST_BUDGET)
     centres, radii = linemap.region_centres(), linemap.region_radii()
+    # Largest region first: with no estimate, the robot stands most likely
+    # on the most floor, and a budget spent early has searched the most.
+    order = np.argsort(-linemap.region_areas(), kind="stable")
     tried, best, out_of_time = 0, None, False
-    for r in range(linemap.n_regions):
-        if progress is not None and r:
-            progress(r, linemap.n_regions)
+    for done, r in enumerate(order.tolist()):
+        if progress is not None and done:
+            progress(done, linemap.n_regions)
         if not deadlines.may_search():
             out_of_time = True
             break

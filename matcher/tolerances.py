@@ -86,7 +86,8 @@ class Tolerances:
     #: milliseconds, 40 on the largest views of the benchmark). A frame that
     #: runs out ends not localised far more often than wrong (the table in
     #: docs/matcher.md, from tools/bench_budget.py). In lost mode it bounds
-    #: the whole call: regions are tried in order until it is spent.
+    #: the whole call: regions are tried, the largest first, until it is
+    #: spent.
     time_budget_ms: float = math.inf
     #: Stage 1 hands at most this many hypotheses to stage 2: the largest
     #: sets, then those that fit best at their grid pose (mean normalised

@@ -100,6 +100,12 @@ def test_centres_are_area_centroids():
         np.testing.assert_allclose(c[r], [p.centroid.x, p.centroid.y], atol=1e-6)
 
 
+def test_areas_subtract_holes():
+    m, polys, _ = grid_map()
+    np.testing.assert_allclose(m.region_areas(), [p.area for p in polys], atol=1e-9)
+    assert m.region_areas()[1 * 6 + 2] == pytest.approx(1.0 - 0.09)  # the cell with the hole
+
+
 # --------------------------------------------------------------- corruption
 
 

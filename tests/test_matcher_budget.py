@@ -78,3 +78,28 @@ def test_lost_mode_budget_bounds_the_whole_call(small_map, cam):
     assert res.reason == (f"no region gave an accepted hypothesis (0 of {small_map.n_regions} tried; "
                           "the time budget of 1e-09 ms ran out)")
     assert res.time_ms["regions_tried"] == 0
+
+
+def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
+    """With no estimate the robot most likely stands on the most floor, and a
+    budget spent early has searched the most of it. (The example flat's
+    region ids do not follow area; each region's search is replaced by a
+    spy that records it.)"""
+    import matcher.pipeline as pipeline
+    from matcher.result import LocalizeResult
+
+    linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
+    centres, seen = linemap.region_centres(), []
+
+    def spy(linemap, camera, img, px, *args, **kwargs):
+        seen.append(int(np.argmin(np.hypot(*(centres - px[:2]).T))))
+        return LocalizeResult(False, "not searched")
+
+    monkeypatch.setattr(pipeline, "_localize", spy)
+    fr = make_frame(linemap, cam, np.random.default_rng(3), 1)
+    res = matcher.localize_global(linemap, cam, fr.lines)
+    assert not res and res.time_ms["regions_tried"] == linemap.n_regions
+    areas = linemap.region_areas()
+    assert not (np.diff(areas) <= 0).all()  # id order is not area order
+    assert sorted(seen) == list(range(linemap.n_regions))
+    assert (np.diff(areas[seen]) <= 0).all()

@@ -8,13 +8,16 @@ whether the answer is right (within 10 cm and 1 degree), then the median.
 
     python tools/bench_lost.py                  # maps/flat.lmap, 8 frames, seed 7
     python tools/bench_lost.py --frames 20 --first-accepted
+    python tools/bench_lost.py --budget-ms 3000    # each call bounded: the largest regions first
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -33,19 +36,23 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=8, help="frames to localise")
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--first-accepted", action="store_true", help="stop at the first accepted region (the paper's loop)")
+    ap.add_argument("--budget-ms", type=float, default=math.inf,
+                    help="time budget of each call, milliseconds (Tolerances.time_budget_ms; default none)")
     args = ap.parse_args(argv)
+    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
     linemap = matcher.load_map(args.map)
     camera = paper_camera(1.2, 0.0)
     rng = np.random.default_rng([args.seed, 1])
+    budget = "" if math.isinf(args.budget_ms) else f"; budget {args.budget_ms:g} ms per call"
     print(f"map {args.map}: {linemap.n_segments} segments, {linemap.n_regions} regions; "
-          f"{'first accepted region' if args.first_accepted else 'every region'}")
+          f"{'first accepted region' if args.first_accepted else 'every region'}{budget}")
     print("| frame | s | regions tried | position err m | yaw err deg | right |")
     print("|---|---|---|---|---|---|")
     seconds, right = [], 0
     for i in range(args.frames):
         frame = make_frame(linemap, camera, rng, 1, 1.0, 1.0, clutter=3)
         t0 = time.perf_counter()
-        res = matcher.localize_global(linemap, camera, frame.lines, first_accepted=args.first_accepted)
+        res = matcher.localize_global(linemap, camera, frame.lines, tol, first_accepted=args.first_accepted)
         seconds.append(time.perf_counter() - t0)
         err = pose_error(res.pose, frame.pose) if res else (float("nan"), float("nan"))
         ok = bool(res) and err[0] < 0.1 and err[1] < 1.0
