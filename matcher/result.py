@@ -70,6 +70,8 @@ class LocalizeResult:
             "hypotheses": int(self.hypotheses),
             "matches": [[int(a), int(b)] for a, b in self.matches],
             "time_ms": {k: v if isinstance(v, int) else round(float(v), 3) for k, v in self.time_ms.items()},
+            # Did the time budget cut the search (Tolerances.time_budget_ms)?
+            "out_of_time": bool(self.stage1.get("out_of_time", False)),
         }
         if not self.ok:
             d["reason"] = self.reason

@@ -266,9 +266,13 @@ def test_budget_must_be_positive(files, capsys, value):
 
 def test_budget_from_the_command_line(files, capsys):
     assert main(args(files, "--budget-ms", "100000", "--json")) == 0
-    assert json.loads(capsys.readouterr().out)["ok"] is True
+    out = json.loads(capsys.readouterr().out)
+    assert out["ok"] is True and out["out_of_time"] is False
     assert main(args(files, "--budget-ms", "1e-9")) == 1
     assert "(time budget of 1e-09 ms spent)" in capsys.readouterr().out
+    assert main(args(files, "--budget-ms", "1e-9", "--json")) == 1
+    out = json.loads(capsys.readouterr().out)
+    assert out["ok"] is False and out["out_of_time"] is True
 
 
 def test_human_output_says_when_the_budget_cut_the_search():

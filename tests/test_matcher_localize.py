@@ -53,7 +53,9 @@ def test_result_shape_and_json(small_map, cam):
     res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
     assert res and res.ok and res.reason == ""
     d = res.to_dict()
-    assert set(d) == {"ok", "pose", "pose_std", "score", "runner_up_score", "hypotheses", "matches", "time_ms"}
+    assert set(d) == {"ok", "pose", "pose_std", "score", "runner_up_score", "hypotheses", "matches", "time_ms",
+                      "out_of_time"}
+    assert d["out_of_time"] is False
     assert set(d["pose"]) == set(d["pose_std"]) == {"x", "y", "yaw_deg"}
     # The standard deviations are of the order the 1 px / 1 degree noise
     # leaves at a few metres, and the error is within a few of them.
