@@ -74,15 +74,14 @@ def _localize(linemap, camera, img, px, tol, t0, deadlines: Deadlines = NO_LIMIT
     time budget's ``deadlines``."""
     xe, ye, yaw_e, dt, dyaw = px
     times: dict[str, float] = {}
-    spent = []  # steps skipped for want of time
+    spent = False  # a step skipped, or its result dropped, for want of time
 
     def in_time() -> bool:
         """Time left to search; noted when there is not (asked only when
         a step would otherwise run)."""
-        if deadlines.may_search():
-            return True
-        spent.append(True)
-        return False
+        nonlocal spent
+        spent = spent or not deadlines.may_search()
+        return not spent
 
     def fail(reason, hyps=None):
         times["total"] = (time.perf_counter() - t0) * 1e3
@@ -142,7 +141,7 @@ def _localize(linemap, camera, img, px, tol, t0, deadlines: Deadlines = NO_LIMIT
         t3 = time.perf_counter()
         again = search_again(hyps, replace(tol, match_slack=1))
         if again.counts["out_of_time"]:  # cut short: the first search's sets stand
-            spent.append(True)
+            spent = True
         else:
             hyps, n_h = again, len(again.sets)
             ranked_h = verify_hypotheses(camera, img, segs, label, reps, hyps, (xe, ye, yaw_e, dt, dyaw), tol,
@@ -217,10 +216,10 @@ def _with_resection(hyps, held, reps, img: ImageLines, px, tol: Tolerances, free
                    counts=counts)
 
 
-def _cut_short(hyps, tol: Tolerances, spent) -> str:
+def _cut_short(hyps, tol: Tolerances, spent: bool) -> str:
     """What a failure's reason adds when the search stopped early: the time
-    budget spent (by stage 1, or ``spent`` non-empty: a later step
-    skipped), or stage 1's node or set budget."""
+    budget spent (by stage 1, or ``spent``: a later step skipped), or
+    stage 1's node or set budget."""
     if hyps.counts.get("out_of_time") or spent:
         return f" (time budget of {tol.time_budget_ms:g} ms spent)"
     return " (hypothesis search truncated)" if hyps.truncated else ""

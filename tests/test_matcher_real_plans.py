@@ -15,7 +15,7 @@ sys.path.insert(0, str(ROOT / "tools"))
 
 import matcher  # noqa: E402
 from mapkit.cli import main as mapkit_main  # noqa: E402
-from simulate import make_frame, paper_camera, pose_error  # noqa: E402
+from simulate import make_frame, pose_error  # noqa: E402
 
 PLANS = {
     "thehouse": (ROOT / "tests" / "data" / "thehouse.dxf", ["--walls", "s001-*", "--units", "m"]),
@@ -32,7 +32,7 @@ def real_map(request, tmp_path_factory):
 
 
 @pytest.mark.parametrize("peq", [3, 5])
-def test_recovery_on_real_plans(real_map, peq):
+def test_recovery_on_real_plans(real_map, cam, peq):
     """tools/bench_paper.py finds the correct match first in 100 % of 40
     frames per PEQ on both maps (docs/matcher.md); 9 of 10 here. The pose
     is looser than in the flat: these frames show five or six segments a
@@ -40,7 +40,6 @@ def test_recovery_on_real_plans(real_map, peq):
     plane by centimetres (median errors of 1 to 7 cm and up to 0.4 degree
     here; 1 cm in the flat, whose lines lie 2.8 m away)."""
     name, linemap = real_map
-    cam = paper_camera()
     rng = np.random.default_rng([13, peq])
     good, errs = 0, []
     for _ in range(10):

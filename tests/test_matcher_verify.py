@@ -211,7 +211,7 @@ def test_three_vertical_edges_alone_are_not_accepted():
 
 
 @pytest.mark.parametrize("pose, vertical_only", [((2.0, 2.5, 30.0), False), ((1.0, 1.5, 20.0), True)])
-def test_pose_spread_matches_the_scatter_of_noisy_fits(pose, vertical_only):
+def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, vertical_only):
     """rank.pose_covariance (first order), as standard deviations, against
     the scatter of least-squares poses over 300 draws of the simulator's
     noise (uniform offset and turn, 1 px and 1 degree), on a view of the
@@ -224,13 +224,12 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(pose, vertical_only):
     from dataclasses import replace
     from types import SimpleNamespace
 
-    from _synthetic_map import make_small_flat
     from simulate import add_noise, visible_lines
 
     from matcher.rank import pose_covariance, pose_spread, unit_rays
     from matcher.tolerances import DEFAULT
 
-    linemap, cam = make_small_flat(), paper_camera()
+    linemap = small_map
     ideal, ids = visible_lines(linemap, cam, pose)
     if vertical_only:
         keep = linemap.kinds[ids] == 2
