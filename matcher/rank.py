@@ -6,7 +6,9 @@ For each hypothesis, all at once where the arrays allow:
 1. a robust least-squares pose (:func:`matcher.verify.refine`) from the
    stage-1 grid pose (that grid start is the yaw search and linear solve);
 2. each match's model segment: the piece of its collinear group that the
-   image line overlaps most at that pose;
+   image line overlaps most at that pose; a loosely fixed pose whose lines
+   stick out of their segments slides to where they fit
+   (:mod:`matcher.slide`);
 3. matches that do not fit at the pose (line off its projected segment by
    more than the noise, sticking out beyond its end points, or the segment
    hidden by a wall) are dropped, and the pose refitted;
@@ -29,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from matcher import verify
+from matcher import slide, verify
 from matcher.constraints import wrap
 from matcher.generate import segment_is_vertical
 from matcher.occlusion import sight_clear
@@ -51,6 +53,9 @@ _SPAN_SAMPLES = np.array([0.05, 0.275, 0.5, 0.725, 0.95])
 _PRIOR_SLACK_M = 0.1
 _PRIOR_SLACK_DEG = 2.0
 _PRIOR_SLACK_SIGMAS = 3.0
+#: Hypotheses matching this many horizontal segments or more are not slid
+#: (:func:`slide_to_fit`): their lines fix the position.
+_SLIDE_MAX_HORIZONTAL = 2
 
 
 @dataclass
@@ -86,7 +91,12 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     poses = verify.refine(hyps.init, hyp, reps[cls, 0], reps[cls, 1], rays[:, 0], rays[:, 1],
                           camera.pitch, camera.height_m, robust_scale=scale)
     local = resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
-    inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol)
+    inl, dist = fits_and_distance(camera, img, poses[hyp], segs[local], line_ids, tol)
+    poses, slid = slide_to_fit(camera, img, segs, poses, hyp, local, line_ids, tol, inl,
+                               stuck_out=~inl & (dist <= fit_bound_px(lengths, tol)))
+    if slid.any():  # their lines judged again at the new poses
+        local = resolve_pieces(camera, poses[hyp], label, cls, segs, img.lines[line_ids])
+        inl = fits(camera, img, poses[hyp], segs[local], line_ids, tol)
     at = inl.nonzero()[0]  # visibility only where the line fits
     inl[at] = visible(camera, poses[hyp[at]], segs[local[at]], img.lines[line_ids[at]], walls)
     n_in = np.bincount(hyp, inl, minlength=n_h)
@@ -111,7 +121,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     if alive.any() and not keep.all():
         # Matches were dropped: refit, so that the lines added back below
         # are judged at a pose the dropped ones no longer pull.
-        poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
+        poses = _refit(camera, img, segs, poses, hyp, local, line_ids, tol, slid)
     if alive.any():
         alive &= in_prior(poses, hyp, local, line_ids)
     if alive.any():
@@ -124,7 +134,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
                                 for a in ((hyp, add_h), (local, add_s), (line_ids, add_l)))
         order_t = np.argsort(hyp, kind="stable")
         hyp, local, line_ids = hyp[order_t], local[order_t], line_ids[order_t]
-        poses = _refit(camera, img, segs, poses, hyp, local, line_ids)
+        poses = _refit(camera, img, segs, poses, hyp, local, line_ids, tol, slid)
         alive &= in_prior(poses, hyp, local, line_ids)
     n_fin = np.bincount(hyp, minlength=n_h)
     # A vertical edge's line fixes one number of the pose (its bearing), any
@@ -196,12 +206,75 @@ def reprojection_cost(camera, img, poses, hyp, segments, line_ids, tol, n_h) -> 
     return np.bincount(hyp, ((d / noise[:, None]) ** 2).sum(axis=1), minlength=n_h)
 
 
-def _refit(camera, img, segs, poses, hyp, local, line_ids):
+def _refit(camera, img, segs, poses, hyp, local, line_ids, tol, slid):
+    """Poses (H, 3) refitted by plain least squares on the matches. Those of
+    the hypotheses ``slid`` (H,) bool (:func:`slide_to_fit`) slide again if
+    their lines no longer fit: least squares alone takes them back out
+    along the direction their bearings leave loose."""
     if len(hyp) == 0:
         return poses
     r = unit_rays(camera, img.lines[line_ids])
-    return verify.refine(poses, hyp, segs[local, 0], segs[local, 1], r[:, 0], r[:, 1], camera.pitch,
-                         camera.height_m, iterations=3)
+    new = verify.refine(poses, hyp, segs[local, 0], segs[local, 1], r[:, 0], r[:, 1], camera.pitch,
+                        camera.height_m, iterations=3)
+    if slid.any():  # judged as the slide judges, so that they go back as far
+        sel = slid[hyp]
+        inl = np.ones(len(hyp), dtype=bool)
+        inl[sel] = _fits_projected(img, *project_segments(camera, new[hyp[sel]], segs[local[sel]]), line_ids[sel],
+                                   tol, end_px=tol.line_end_px)[0]
+        new, _ = slide_to_fit(camera, img, segs, new, hyp, local, line_ids, tol, inl)
+    return new
+
+
+def _fit_counter(camera, img, segs, hyp, local, line_ids, tol, which):
+    """``count(p)``: for poses ``p`` (W, N, 3) of the hypotheses ``which``
+    (W,), (W, N) how many of their lines lie within their projected segments
+    (:func:`fits`, allowing only the end points' noise beyond the ends)."""
+    sel = np.nonzero(np.isin(hyp, which))[0]
+    w_of = np.searchsorted(which, hyp[sel])
+    seg_sel, line_sel = segs[local[sel]], line_ids[sel]
+
+    def count(p: np.ndarray) -> np.ndarray:
+        n = p.shape[1]
+        uv, in_front = project_segments(camera, p[w_of].reshape(-1, 3), np.repeat(seg_sel, n, axis=0))
+        good = _fits_projected(img, uv, in_front, np.repeat(line_sel, n), tol, end_px=tol.line_end_px)[0]
+        out = np.zeros((len(which), n))
+        np.add.at(out, (np.repeat(w_of, n), np.tile(np.arange(n), len(sel))), good)
+        return out
+
+    return count
+
+
+def slide_to_fit(camera, img, segs, poses, hyp, local, line_ids, tol, inl, stuck_out=None):
+    """Poses (H, 3), those of loosely fixed hypotheses with a line that does
+    not fit (``inl`` (T,) False) moved to where more of their lines fit
+    (:func:`matcher.slide.slide_to_fit`); and (H,) bool, which moved.
+    Tried are the hypotheses with lines enough to be a contender if all
+    fitted, matching fewer than _SLIDE_MAX_HORIZONTAL horizontal segments
+    and, with ``stuck_out`` (T,) bool, with a line that lies along its
+    projected segment but sticks out of it (a line off its segment's line
+    says the match is wrong, not the distance)."""
+    n_h = len(poses)
+    slid = np.zeros(n_h, dtype=bool)
+    n_all = np.bincount(hyp, minlength=n_h)
+    n_fit = np.bincount(hyp, inl, minlength=n_h)
+    worth = (n_fit < n_all) & (n_all >= max(tol.min_matches, int(n_fit.max(initial=0)) - 1))
+    # Bearings are what leave a position loose: two horizontal segments' lines
+    # fix it (each puts the camera on a line of the floor at a given yaw).
+    worth &= np.bincount(hyp, ~segment_is_vertical(segs[local]), minlength=n_h) < _SLIDE_MAX_HORIZONTAL
+    if stuck_out is not None:
+        worth &= np.bincount(hyp, stuck_out, minlength=n_h) > 0
+    cand = np.nonzero(worth)[0]
+    if not len(cand):
+        return poses, slid
+    sel = np.isin(hyp, cand)
+    info = pose_information(camera, img, segs, poses[cand], np.searchsorted(cand, hyp[sel]), local[sel],
+                            line_ids[sel], tol)
+    count = _fit_counter(camera, img, segs, hyp, local, line_ids, tol, cand)
+    moved, move = slide.slide_to_fit(poses[cand], info, count, n_fit[cand])
+    poses = poses.copy()
+    poses[cand[move]] = moved[move]
+    slid[cand[move]] = True
+    return poses, slid
 
 
 def within_prior(poses, prior, free, free_m: float, spread=None) -> np.ndarray:
@@ -266,10 +339,22 @@ def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.n
     sqrt 3). Matches ``hyp, local, line_ids`` (T,) as for
     :func:`reprojection_cost`. A hypothesis whose matches do not fix its
     pose gets inf."""
+    A = pose_information(camera, img, segs, poses, hyp, local, line_ids, tol)
+    out = np.full(A.shape, np.inf)
+    fixed = np.linalg.det(A) > 1e-12 * np.maximum(np.abs(A).max(axis=(1, 2)), 1e-300) ** 3
+    if fixed.any():
+        out[fixed] = np.linalg.inv(A[fixed])
+    return out
+
+
+def pose_information(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.ndarray:
+    """(H, 3, 3) per hypothesis ``J^T J``, the inverse of
+    :func:`pose_covariance` (singular where the matches leave a direction of
+    the pose free)."""
     n_h = len(poses)
-    out = np.full((n_h, 3, 3), np.inf)
+    A = np.zeros((n_h, 3, 3))
     if not len(hyp):
-        return out
+        return A
     lines = img.lines[line_ids]  # (T, 2, 2)
     p = camera.pixel_rays(lines)  # (T, 2, 3)
     p_len = np.linalg.norm(p, axis=2)  # (T, 2)
@@ -288,12 +373,8 @@ def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.n
     sigma_turn = math.tan(math.radians(tol.line_deg)) * 0.5 * length / math.sqrt(3.0)  # (T,)
     Jw = np.stack([0.5 * (Jpx[:, 0] + Jpx[:, 1]) / sigma_offset,
                    0.5 * (Jpx[:, 0] - Jpx[:, 1]) / sigma_turn[:, None]], axis=1)  # (T, 2, 3)
-    A = np.zeros((n_h, 3, 3))
     np.add.at(A, hyp, np.einsum("tki,tkj->tij", Jw, Jw))
-    fixed = np.linalg.det(A) > 1e-12 * np.maximum(np.abs(A).max(axis=(1, 2)), 1e-300) ** 3
-    if fixed.any():
-        out[fixed] = np.linalg.inv(A[fixed])
-    return out
+    return A
 
 
 def unit_rays(camera, lines):
@@ -335,13 +416,16 @@ def fits_and_distance(camera, img, poses, segments, line_ids, tol):
     return _fits_projected(img, *project_segments(camera, poses, segments), line_ids, tol)
 
 
-def _fits_projected(img, uv, in_front, line_ids, tol):
+def _fits_projected(img, uv, in_front, line_ids, tol, end_px=None):
     """:func:`fits_and_distance` on segments already projected
-    (:func:`~matcher.overlap.project_segments`)."""
+    (:func:`~matcher.overlap.project_segments`); a line may stick out of
+    its projected segment by ``end_px`` pixels in all (default: both end
+    points' noise and 2 px for the pose)."""
     lines = img.lines[line_ids]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = projected_distance_and_overlap(uv, in_front, lines)
-    return (dist <= fit_bound_px(L, tol)) & (ov >= L - 2 * tol.line_end_px - 2.0), dist
+    end_px = 2 * tol.line_end_px + 2.0 if end_px is None else end_px
+    return (dist <= fit_bound_px(L, tol)) & (ov >= L - end_px), dist
 
 
 def visible(camera, poses, segments, lines, walls) -> np.ndarray:
