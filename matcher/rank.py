@@ -219,24 +219,29 @@ def _refit(camera, img, segs, poses, hyp, local, line_ids, tol, slid):
     if slid.any():  # judged as the slide judges, so that they go back as far
         sel = slid[hyp]
         inl = np.ones(len(hyp), dtype=bool)
-        inl[sel] = _fits_projected(img, *project_segments(camera, new[hyp[sel]], segs[local[sel]]), line_ids[sel],
-                                   tol, end_px=tol.line_end_px)[0]
+        inl[sel] = _fits_inside(camera, img, new[hyp[sel]], segs[local[sel]], line_ids[sel], tol)
         new, _ = slide_to_fit(camera, img, segs, new, hyp, local, line_ids, tol, inl)
     return new
 
 
+def _fits_inside(camera, img, poses, segments, line_ids, tol) -> np.ndarray:
+    """(T,) bool: :func:`fits`, allowing only the end points' noise beyond
+    the projected ends (the slide's test: a pose that passes it sits where
+    the lines lie inside their segments, not at the edge of :func:`fits`)."""
+    return _fits_projected(img, *project_segments(camera, poses, segments), line_ids, tol, end_px=tol.line_end_px)[0]
+
+
 def _fit_counter(camera, img, segs, hyp, local, line_ids, tol, which):
     """``count(p)``: for poses ``p`` (W, N, 3) of the hypotheses ``which``
-    (W,), (W, N) how many of their lines lie within their projected segments
-    (:func:`fits`, allowing only the end points' noise beyond the ends)."""
+    (W,), (W, N) how many of their lines pass :func:`_fits_inside`."""
     sel = np.nonzero(np.isin(hyp, which))[0]
     w_of = np.searchsorted(which, hyp[sel])
     seg_sel, line_sel = segs[local[sel]], line_ids[sel]
 
     def count(p: np.ndarray) -> np.ndarray:
         n = p.shape[1]
-        uv, in_front = project_segments(camera, p[w_of].reshape(-1, 3), np.repeat(seg_sel, n, axis=0))
-        good = _fits_projected(img, uv, in_front, np.repeat(line_sel, n), tol, end_px=tol.line_end_px)[0]
+        good = _fits_inside(camera, img, p[w_of].reshape(-1, 3), np.repeat(seg_sel, n, axis=0),
+                            np.repeat(line_sel, n), tol)
         out = np.zeros((len(which), n))
         np.add.at(out, (np.repeat(w_of, n), np.tile(np.arange(n), len(sel))), good)
         return out
