@@ -1,4 +1,4 @@
-"""Turn the builder's geometry (shapely) into a :class:`~mapkit.lmap.LineMap`.
+"""Turn the builder's geometry (shapely) into a :class:`~linemap.lmap.LineMap`.
 
 This is the one place where shapely polygons become the flat ring arrays of
 the file format, and where the region-lookup grid is computed (exactly, with
@@ -13,7 +13,7 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
-from mapkit.lmap import LineMap
+from linemap.lmap import LineMap
 
 #: Lookup grid cell size, metres: a few regions per cell keeps queries cheap.
 DEFAULT_GRID_CELL = 0.5
@@ -81,7 +81,7 @@ def assemble_map(
 ) -> LineMap:
     """Build a LineMap.
 
-    - ``segments`` (N, 2, 3), ``kinds`` (N,) :class:`~mapkit.lmap.SegmentKind` values.
+    - ``segments`` (N, 2, 3), ``kinds`` (N,) :class:`~linemap.lmap.SegmentKind` values.
     - ``region_polygons``: R shapely (Multi)Polygons, non-overlapping.
     - ``region_lists``: R integer arrays of visible segment ids.
     - ``walls``: shapely (Multi)Polygon of wall solids (occluders).

@@ -13,10 +13,10 @@ import pkgutil
 import sys
 
 import mapkit.commands
-from mapkit.argv import join_negative_values
-from mapkit.atomic import OutputPathError
+from linemap.argv import join_negative_values
+from linemap.atomic import OutputPathError
 from mapkit.errors import MapkitError
-from mapkit.lmap import LmapError
+from linemap.lmap import LmapError
 
 #: Order in ``mapkit --help``; any other command module is listed after these.
 ORDER = ["build", "info", "query", "export", "layers", "preview", "view", "extrude"]

@@ -27,7 +27,7 @@ import shapely
 from shapely.geometry import MultiPolygon
 
 from mapkit.assemble import rings_of
-from mapkit.lmap import SegmentKind
+from linemap.lmap import SegmentKind
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene
 from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, MERGE

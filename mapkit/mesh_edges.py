@@ -3,7 +3,7 @@
 Conventions (the whole module): ``vertices`` (V, 3) float metres, world
 frame, z up, the floor at ``floor_z`` (0 after import); ``faces`` (F, 3) int
 vertex ids; ``segments`` (N, 2, 3) float metres; ``kinds`` (N,) uint8
-:class:`~mapkit.lmap.SegmentKind`.
+:class:`~linemap.lmap.SegmentKind`.
 
 An edge of the mesh is a *feature edge* when
 
@@ -31,7 +31,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from mapkit.lmap import SegmentKind
+from linemap.lmap import SegmentKind
 from mapkit.tolerances import AXIS_DEG, COLLINEAR_DEG, MERGE, MESH_LEVEL, MESH_MAX_EDGE_FACES
 
 #: A face rises from an edge (a wall standing on the floor) when its normal

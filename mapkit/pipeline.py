@@ -1,4 +1,4 @@
-"""``mapkit build``: plan or mesh in, :class:`~mapkit.lmap.LineMap` out.
+"""``mapkit build``: plan or mesh in, :class:`~linemap.lmap.LineMap` out.
 
     import  ->  Scene  ->  edges  ->  visibility regions (VIR)  ->  LineMap
 
@@ -19,7 +19,7 @@ import numpy as np
 from mapkit import __version__
 from mapkit.assemble import assemble_map, polygon_parts
 from mapkit.errors import MapkitError
-from mapkit.lmap import LineMap, SegmentKind, file_sha256
+from linemap.lmap import LineMap, SegmentKind, file_sha256
 from mapkit.options import BuildOptions
 
 log = logging.getLogger("mapkit")
@@ -36,7 +36,7 @@ class BuildReport:
 
 def build_map(plan: str | Path, options: BuildOptions | None = None, progress: bool = False) -> tuple[LineMap, BuildReport]:
     """Run the whole pipeline on a DXF plan or a mesh; nothing is written."""
-    from matcher.camera import Camera
+    from linemap.camera import Camera
 
     from mapkit.edges import extract_edges
     from mapkit.importers import load_scene

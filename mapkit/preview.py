@@ -125,7 +125,7 @@ def _scale_bar(ax, bounds) -> None:
 
 def _save_atomic(fig, out: Path, dpi: int) -> None:
     """Render to a temporary file beside ``out``, then rename: no half-written PNG is ever seen."""
-    from mapkit.atomic import atomic_output
+    from linemap.atomic import atomic_output
 
     with atomic_output(out) as fh:
         fig.savefig(fh, dpi=dpi, format="png")

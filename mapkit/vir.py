@@ -80,7 +80,7 @@ def build_regions(
     - ``segments`` (N, 2, 3) float, metres, world frame z up.
     - ``occluders``: shapely (Multi)Polygon, wall solids (full height, opaque).
     - ``free_space``: shapely (Multi)Polygon, where the camera centre may be.
-    - ``camera``: :class:`matcher.camera.Camera` (``height_m``,
+    - ``camera``: :class:`linemap.camera.Camera` (``height_m``,
       ``elevation_range()``).
     - ``max_range`` (m), ``min_visible_length`` (m), ``eps`` (m): see
       docs/visibility.md; ``min_cell`` (m) the smallest quadtree cell;

@@ -13,7 +13,7 @@ import shapely
 from shapely.geometry import box
 
 from mapkit.assemble import polygon_parts
-from mapkit.lmap import SegmentKind
+from linemap.lmap import SegmentKind
 from mapkit.tolerances import CORNER_DEG
 
 

@@ -1,7 +1,7 @@
 """matcher: runtime model-to-image straight-line matching for robot self-location.
 
 Light by design: numpy, scipy and OpenCV only. Maps are read through the
-numpy-only :mod:`mapkit.lmap` module; nothing of the authoring stack
+numpy-only :mod:`linemap.lmap` module; nothing of the authoring stack
 (ezdxf, trimesh, shapely, viser) is imported here.
 
     >>> import matcher
@@ -12,8 +12,8 @@ numpy-only :mod:`mapkit.lmap` module; nothing of the authoring stack
     ... else: print(res.reason)
 """
 
-from mapkit.lmap import LineMap, LmapError, SegmentKind, load_map
-from matcher.camera import Camera, CameraError
+from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
+from linemap.camera import Camera, CameraError
 from matcher.pipeline import localize, localize_global
 from matcher.result import LocalizeResult
 from matcher.tolerances import Tolerances

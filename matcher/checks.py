@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from matcher.camera import Camera
+from linemap.camera import Camera
 from matcher.tolerances import Tolerances
 
 

@@ -21,7 +21,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from mapkit.argv import join_negative_values
+from linemap.argv import join_negative_values
 
 #: Exit codes: localised, not localised (a valid answer), user error.
 EXIT_OK, EXIT_NOT_FOUND, EXIT_USAGE = 0, 1, 2
@@ -182,7 +182,7 @@ def _human(res, n_lines: int) -> str:
 def run_localize(args) -> int:
     import matcher
 
-    from matcher.camera import Camera
+    from linemap.camera import Camera
 
     prior = _prior_options(args)
     tol = _tolerances(args)

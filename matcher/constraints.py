@@ -15,12 +15,8 @@ import math
 
 import numpy as np
 
-from matcher.camera import Camera
-
-
-def wrap(a):
-    """Angles to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2 * np.pi)
+from linemap.camera import Camera
+from linemap.geometry import wrap  # noqa: F401  (re-exported: stage code imports it from here)
 
 
 #: The noise cases of :func:`_perturbed_lines`: (rotation, offset) signs.

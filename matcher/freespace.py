@@ -85,4 +85,6 @@ def _even_odd_raster(points, offsets, origin, cell, nx, ny) -> np.ndarray:
 
 def free_space(linemap) -> FreeSpace:
     """The map's :class:`FreeSpace`, built on first use and kept with the map."""
-    return linemap.cached("matcher.free_space", lambda: FreeSpace(linemap.ring_points, linemap.ring_offsets))
+    from matcher.map_index import MapIndex
+
+    return linemap.derived(MapIndex).free

@@ -28,9 +28,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from matcher import posegrid
+from linemap.geometry import segment_is_vertical
 from matcher.budget import NO_LIMIT, Deadlines
-from matcher.camera import Camera
-from matcher.camera import world2cam_rotation
+from linemap.camera import Camera
+from linemap.camera import world2cam_rotation
 from matcher.constraints import binary_constraint, distinct_points, unary_constraint, wrap
 from matcher.occlusion import SightRays
 from matcher.overlap import ShownSpans
@@ -82,41 +83,6 @@ class Hypotheses:
     #: which of them are vertical), for :func:`search_again` and the
     #: resection; None when stage 1 stopped before the tree.
     tree_input: TreeInput | None = None
-
-
-def segment_is_vertical(segments: np.ndarray) -> np.ndarray:
-    """(N,) bool: direction within ``VERTICAL_AXIS_DEG`` of the vertical."""
-    v = segments[:, 1] - segments[:, 0]
-    vz = np.abs(v[:, 2]) / np.maximum(np.linalg.norm(v, axis=1), 1e-12)
-    return vz >= math.cos(math.radians(VERTICAL_AXIS_DEG))
-
-
-def in_field_of_view(segments: np.ndarray, camera: Camera, prior, dt: float, dyaw: float) -> np.ndarray:
-    """(N,) bool: segments that some heading of the interval and position of
-    the disk can have within the horizontal field of view.
-
-    From the disk centre a segment covers the bearings between its end
-    points; moving within the disk shifts any bearing by at most
-    ``asin(dt / distance)``. Segments closer than ``dt`` are kept."""
-    xe, ye, yaw_e = prior
-    if dyaw >= math.pi:
-        return np.ones(len(segments), dtype=bool)
-    c = np.array([xe, ye])
-    p0, p1 = segments[:, 0, :2] - c, segments[:, 1, :2] - c
-    b0 = wrap(np.arctan2(p0[:, 1], p0[:, 0]) - yaw_e)
-    span = wrap(np.arctan2(p1[:, 1], p1[:, 0]) - yaw_e - b0)  # short way: the segment misses c
-    lo = np.minimum(b0, b0 + span)
-    hi = np.maximum(b0, b0 + span)
-    seg = p1 - p0
-    L2 = np.maximum(np.einsum("ij,ij->i", seg, seg), 1e-12)
-    t = np.clip(-np.einsum("ij,ij->i", p0, seg) / L2, 0.0, 1.0)
-    dist = np.linalg.norm(p0 + t[:, None] * seg, axis=1)
-    widen = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0.0, 1.0))
-    reach = dyaw + camera.horizontal_half_fov() + widen
-    ok = np.zeros(len(segments), dtype=bool)
-    for shift in (-2 * math.pi, 0.0, 2 * math.pi):
-        ok |= (lo + shift <= reach) & (hi + shift >= -reach)
-    return ok | (dist <= dt) | (reach >= math.pi)
 
 
 def _vertical_sight(points, rows, alpha, yaw, centre, dt, width, step, sight, extent) -> np.ndarray:
@@ -300,7 +266,7 @@ def generate(
     W = np.einsum("gki,mk->mgi", Rg, img.normals)  # (M, Y, 3) world normals R^T n
     fwd = Rg[:, 2, :]  # (Y, 3) optical axis
 
-    vert_seg = segment_is_vertical(segments)
+    vert_seg = segment_is_vertical(segments, VERTICAL_AXIS_DEG)
     v = segments[:, 1] - segments[:, 0]
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
     tpar = np.einsum("nk,nk->n", ce - segments[:, 0], v)

@@ -15,7 +15,7 @@ import numbers
 import cv2
 import numpy as np
 
-from matcher.camera import Camera
+from linemap.camera import Camera
 
 #: Lines shorter than this many pixels are dropped: their orientation is
 #: too uncertain for the constraints (same default as ``Tolerances.min_line_px``).

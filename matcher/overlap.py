@@ -11,42 +11,16 @@ import math
 
 import numpy as np
 
-from matcher.camera import Camera
+from linemap.camera import Camera
+from linemap.geometry import project_segments as _project
 
 #: Segments are cut this far in front of the optical centre before projecting, metres.
 _NEAR_M = 0.05
 
 
 def project_segments(camera: Camera, poses: np.ndarray, segments: np.ndarray):
-    """Project segments (T, 2, 3) at poses (T, 3) ``(x, y, yaw)`` (or one pose
-    per leading index of any shape: poses (..., 3), segments (..., 2, 3)).
-
-    Returns ``(uv (..., 2, 2) pixels, ok (...))``: the part in front of the
-    camera (``Zc >= 5 cm``); ``ok`` False where nothing is in front.
-
-    The camera coordinates are written out from the rotation's rows r, d, f
-    of method.md section 2 (no (T, 3, 3) matrices: these arrays are short and
-    numpy's per-call cost dominates)."""
-    c, s = np.cos(poses[..., 2])[..., None], np.sin(poses[..., 2])[..., None]
-    cp, sp = math.cos(camera.pitch), math.sin(camera.pitch)
-    dx = segments[..., 0] - poses[..., None, 0]  # (..., 2)
-    dy = segments[..., 1] - poses[..., None, 1]
-    dz = segments[..., 2] - camera.height_m
-    ahead = c * dx + s * dy
-    X, Y, Z = s * dx - c * dy, -sp * ahead - cp * dz, cp * ahead - sp * dz
-    za, zb = Z[..., 0], Z[..., 1]
-    ok = np.maximum(za, zb) >= _NEAR_M
-    # An end point behind the near plane moves along the segment onto it.
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.clip((_NEAR_M - Z) / (Z[..., ::-1] - Z), 0.0, 1.0)  # (..., 2): each end's move towards the other
-    cut = Z < _NEAR_M
-    X = np.where(cut, X + t * (X[..., ::-1] - X), X)
-    Y = np.where(cut, Y + t * (Y[..., ::-1] - Y), Y)
-    Z = np.maximum(np.where(cut, Z + t * (Z[..., ::-1] - Z), Z), _NEAR_M)
-    uv = np.empty(X.shape + (2,))
-    uv[..., 0] = camera.fx * X / Z + camera.cx
-    uv[..., 1] = camera.fy * Y / Z + camera.cy
-    return uv, ok
+    """:func:`linemap.geometry.project_segments` with the matcher's near plane."""
+    return _project(camera, poses, segments, _NEAR_M)
 
 
 def distance_and_overlap(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines: np.ndarray):

@@ -8,16 +8,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from mapkit.lmap import LineMap
+from linemap.lmap import LineMap
 from matcher.budget import NO_LIMIT, Deadlines
-from matcher.camera import Camera
+from linemap.camera import Camera
 from matcher.checks import check_lines, check_prior
 from matcher.constraints import (bearing_noise, line_pieces, plane_noises, vertical_bearing, vertical_candidates,
                                  wrap)
-from matcher.freespace import free_space
-from matcher.generate import (ImageLines, collinear_classes, collinear_labels, generate,
-                              in_field_of_view, search_again)
-from matcher.occlusion import SightRays, face_normals, wall_edges
+from matcher.map_index import MapIndex
+from linemap.geometry import in_field_of_view
+from matcher.generate import ImageLines, collinear_classes, generate, search_again
 from matcher.rank import pose_std_of, verify_hypotheses
 from matcher.resection import vertical_hypotheses
 from matcher.result import LocalizeResult
@@ -112,12 +111,10 @@ def _localize(linemap, camera, img, px, tol, t0, deadlines: Deadlines = NO_LIMIT
     # ---- stage 1 ---------------------------------------------------------
     t1 = time.perf_counter()
     # Collinear groups: made once per map, spans per frame.
-    label, reps = collinear_classes(segs, label=linemap.cached(
-        "matcher.collinear", lambda: collinear_labels(linemap.segments))[ids])
-    walls = linemap.cached("matcher.walls", lambda: wall_edges(linemap))
-    free = free_space(linemap)
-    sight = linemap.cached("matcher.sight", lambda: SightRays(walls)) if walls is not None else None
-    faces = _class_faces(linemap.cached("matcher.faces", lambda: face_normals(linemap.segments, walls))[ids], label)
+    index = linemap.derived(MapIndex)
+    label, reps = collinear_classes(segs, label=index.collinear[ids])
+    walls, free, sight = index.walls, index.free, index.sight
+    faces = _class_faces(index.faces[ids], label)
     hyps = generate(reps, np.arange(len(reps)), camera, img, (xe, ye, yaw_e), dt, dyaw, tol, walls,
                     free=free, sight=sight, faces=faces, deadlines=deadlines)
     times["generate"] = (time.perf_counter() - t1) * 1e3

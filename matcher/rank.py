@@ -33,7 +33,8 @@ import numpy as np
 
 from matcher import slide, verify
 from matcher.constraints import wrap
-from matcher.generate import segment_is_vertical
+from linemap.geometry import segment_is_vertical
+from matcher.tolerances import VERTICAL_AXIS_DEG
 from matcher.occlusion import sight_clear
 from matcher.overlap import (covered_span, distance_and_overlap, project_segments, projected_distance_and_overlap,
                              projected_end_distances)
@@ -141,7 +142,7 @@ def verify_hypotheses(camera, img, segs, label, reps, hyps, prior, tol, walls, f
     # other line two. Matches that fix no more than the pose's three leave
     # nothing over to check it: three vertical edges fit exactly (E = 0)
     # whichever they are. Such a hypothesis is not accepted.
-    fixed = np.bincount(hyp, np.where(segment_is_vertical(segs[local]), 1.0, 2.0), minlength=n_h)
+    fixed = np.bincount(hyp, np.where(segment_is_vertical(segs[local], VERTICAL_AXIS_DEG), 1.0, 2.0), minlength=n_h)
     exact = alive & (fixed <= 3)
     alive &= ~exact
     E = np.full(n_h, np.inf)
@@ -265,7 +266,7 @@ def slide_to_fit(camera, img, segs, poses, hyp, local, line_ids, tol, inl, stuck
     worth = (n_fit < n_all) & (n_all >= max(tol.min_matches, int(n_fit.max(initial=0)) - 1))
     # Bearings are what leave a position loose: two horizontal segments' lines
     # fix it (each puts the camera on a line of the floor at a given yaw).
-    worth &= np.bincount(hyp, ~segment_is_vertical(segs[local]), minlength=n_h) < _SLIDE_MAX_HORIZONTAL
+    worth &= np.bincount(hyp, ~segment_is_vertical(segs[local], VERTICAL_AXIS_DEG), minlength=n_h) < _SLIDE_MAX_HORIZONTAL
     if stuck_out is not None:
         worth &= np.bincount(hyp, stuck_out, minlength=n_h) > 0
     cand = np.nonzero(worth)[0]

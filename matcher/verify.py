@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from matcher.camera import world2cam_rotation
+from linemap.camera import world2cam_rotation
 from matcher.constraints import world_normals
 
 #: Gauss-Newton iterations: from the grid start (within half a yaw step and a

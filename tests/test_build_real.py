@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from mapkit.cli import main
-from mapkit.lmap import SegmentKind, load_map
+from linemap.lmap import SegmentKind, load_map
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data"

@@ -12,7 +12,7 @@ from shapely.geometry import box
 
 from mapkit.assemble import assemble_map
 from mapkit.cli import main
-from mapkit.lmap import SegmentKind, save_map
+from linemap.lmap import SegmentKind, save_map
 
 
 @pytest.fixture(scope="module")

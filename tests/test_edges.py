@@ -9,7 +9,7 @@ import pytest
 from shapely.geometry import MultiPolygon, Point, Polygon, box
 
 from mapkit.edges import extract_edges
-from mapkit.lmap import SegmentKind as K
+from linemap.lmap import SegmentKind as K
 from mapkit.options import BuildOptions
 from mapkit.scene import Opening, Scene
 

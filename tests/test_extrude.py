@@ -13,7 +13,7 @@ from mapkit.cli import main
 from mapkit.edges import extract_edges
 from mapkit.extrude import SLAB_THICKNESS, scene_to_mesh
 from mapkit.importers import load_scene
-from mapkit.lmap import SegmentKind as K
+from linemap.lmap import SegmentKind as K
 from mapkit.options import BuildOptions
 from mapkit.scene import Opening, Scene
 

@@ -11,7 +11,7 @@ import shapely
 from shapely.geometry import Point, box
 
 from mapkit.assemble import assemble_map, region_geometry
-from mapkit.lmap import (
+from linemap.lmap import (
     _CHUNK,
     _HEADER,
     FORMAT_MAJOR,
@@ -311,7 +311,7 @@ def test_failed_save_leaves_previous_file(tmp_path, monkeypatch):
     def boom(*a, **k):
         raise OSError("disk full")
 
-    monkeypatch.setattr("mapkit.atomic.os.fsync", boom)
+    monkeypatch.setattr("linemap.atomic.os.fsync", boom)
     with pytest.raises(OSError, match="disk full"):
         save_map(path, grid_map(seed=5)[0])
     assert path.read_bytes() == before

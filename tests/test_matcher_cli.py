@@ -19,7 +19,7 @@ from matcher.cli import main  # noqa: E402
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     from _synthetic_map import make_small_flat
-    from mapkit.lmap import save_map
+    from linemap.lmap import save_map
     from simulate import make_frame, paper_camera
 
     d = tmp_path_factory.mktemp("cli")

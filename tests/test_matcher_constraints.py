@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from matcher.camera import Camera, world2cam_rotation
+from linemap.camera import Camera, world2cam_rotation
 from matcher.constraints import (
     binary_constraint,
     line_pieces,

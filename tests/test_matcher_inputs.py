@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 import matcher  # noqa: E402
 from _synthetic_map import make_box_map  # noqa: E402
-from matcher.camera import Camera, CameraError  # noqa: E402
+from linemap.camera import Camera, CameraError  # noqa: E402
 from simulate import make_frame, paper_camera  # noqa: E402
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import matcher
-from matcher.camera import Camera
+from linemap.camera import Camera
 from matcher.lines import merge_collinear
 
 

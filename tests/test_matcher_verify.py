@@ -12,7 +12,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 from matcher import verify  # noqa: E402
-from matcher.camera import world2cam_rotation  # noqa: E402
+from linemap.camera import world2cam_rotation  # noqa: E402
 from matcher.overlap import _NEAR_M, project_segments  # noqa: E402
 from simulate import paper_camera  # noqa: E402
 
@@ -194,14 +194,14 @@ def test_three_vertical_edges_alone_are_not_accepted():
     sees three corners of an empty room and no other line."""
     import matcher
     from _synthetic_map import make_box_map
-    from matcher.camera import Camera
-    from matcher.generate import segment_is_vertical
+    from linemap.camera import Camera
+    from linemap.geometry import segment_is_vertical
 
     room = make_box_map()
     cam = Camera.from_fov(120.0, 640, 480, 1.2, 0.0)
     pose = (0.8, 0.8, math.radians(45.0))
     lines = []
-    for seg in room.segments[segment_is_vertical(room.segments)]:
+    for seg in room.segments[segment_is_vertical(room.segments, 2.0)]:
         uv, z = cam.project(seg, *pose)
         if (z > 0).all() and 0 <= uv[0, 0] <= cam.width:
             lines.append(np.clip(uv, [0, 0], [cam.width, cam.height]))

@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from mapkit.importers.mesh_load import weld
-from mapkit.lmap import SegmentKind as K
+from linemap.lmap import SegmentKind as K
 from mapkit.mesh_edges import edge_faces, feature_edges, merge_collinear
 
 CREASE, MIN_LEN = 30.0, 0.2

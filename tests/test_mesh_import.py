@@ -14,7 +14,7 @@ from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers import load_scene
 from mapkit.importers.mesh_load import Y_UP_TO_Z_UP, load_mesh
 from mapkit.importers.mesh_section import MeshSections
-from mapkit.lmap import SegmentKind as K
+from linemap.lmap import SegmentKind as K
 from mapkit.options import BuildOptions
 
 DATA = Path(__file__).parent / "data"
@@ -322,7 +322,7 @@ def test_edges_move_with_the_model(tmp_path, seed):
 def test_build_a_map_from_each_real_mesh(tmp_path):
     """The pipeline takes the mesh scenes through to a .lmap."""
     from mapkit.cli import main
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
 
     for path in (ROOM, HOSPITAL):
         out = tmp_path / (path.stem + ".lmap")

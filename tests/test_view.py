@@ -22,7 +22,7 @@ from shapely.geometry import Polygon, box
 
 from mapkit.assemble import assemble_map
 from mapkit.errors import MapkitError
-from mapkit.lmap import SegmentKind, save_map
+from linemap.lmap import SegmentKind, save_map
 from mapkit.view import geometry, palette
 from mapkit.view.demo import DEMO_CAMERA, synthetic_flat
 from mapkit.view.fov import in_horizontal_view, wrap
@@ -32,7 +32,7 @@ from mapkit.view.result_overlay import image_line_rays
 from mapkit.view.server import Inspector, floor_point
 from mapkit.view.stats import map_camera, map_statistics, statistics_markdown
 from mapkit.view.synthetic_image import clip_to_image, project_segments, render_segments
-from matcher.camera import Camera
+from linemap.camera import Camera
 
 
 # --------------------------------------------------------------------------
@@ -474,7 +474,7 @@ def built_flat(tmp_path_factory):
 
 def test_real_map_with_its_plan_overlaid(built_flat):
     from mapkit.importers import load_scene
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
 
     plan_path, map_path = built_flat
     m = load_map(map_path)

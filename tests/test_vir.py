@@ -12,10 +12,10 @@ from shapely.geometry import Point, box
 from visibility_oracle import VisibilityOracle, random_points
 
 from mapkit.assemble import assemble_map
-from mapkit.lmap import load_map, save_map
+from linemap.lmap import load_map, save_map
 from mapkit.vir import build_regions
 from mapkit.vir_synthetic import apartment, scene_from_walls, single_room
-from matcher.camera import Camera
+from linemap.camera import Camera
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)
 EPS = 0.05

@@ -12,7 +12,7 @@ import shapely.affinity
 from shapely.geometry import Point, box
 from visibility_oracle import VisibilityOracle, random_points
 
-from mapkit.lmap import SegmentKind
+from linemap.lmap import SegmentKind
 from mapkit.tolerances import OCCLUSION_SHRINK
 from mapkit.vir_synthetic import apartment, l_room, single_room, two_rooms
 from mapkit.visibility import (
@@ -25,7 +25,7 @@ from mapkit.visibility import (
     vertical_extent,
     visibility_polygon,
 )
-from matcher.camera import Camera
+from linemap.camera import Camera
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)  # +-27.7 deg vertically
 E_MIN, E_MAX = CAMERA.elevation_range()

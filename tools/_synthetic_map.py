@@ -22,7 +22,7 @@ from shapely.geometry import box
 from shapely.ops import unary_union
 
 from mapkit.assemble import assemble_map
-from mapkit.lmap import LineMap, SegmentKind
+from linemap.lmap import LineMap, SegmentKind
 
 WALL_HEIGHT = 2.5
 ROBOT_RADIUS = 0.2
@@ -184,7 +184,7 @@ def cached_flat_map(path=None) -> LineMap:
     import os
     import tempfile
 
-    from mapkit.lmap import load_map, save_map
+    from linemap.lmap import load_map, save_map
 
     path = path or os.path.join(tempfile.gettempdir(), "matcher_synthetic_flat_v2.lmap")
     if os.path.exists(path):

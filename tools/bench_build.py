@@ -33,7 +33,7 @@ CASES = [
 def run_case(path: Path, extra: list[str], load_repeats: int) -> dict:
     from mapkit.cli import build_parser
     from mapkit.commands.build import options_from_args
-    from mapkit.lmap import load_map, save_map
+    from linemap.lmap import load_map, save_map
     from mapkit.pipeline import build_map
 
     with tempfile.TemporaryDirectory() as tmp:

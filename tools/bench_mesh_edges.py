@@ -79,7 +79,7 @@ def main(argv=None) -> int:
 
     from mapkit.importers import load_scene
     from mapkit.importers.mesh_load import load_mesh
-    from mapkit.lmap import KIND_NAMES
+    from linemap.lmap import KIND_NAMES
     from mapkit.mesh_edges import feature_edges
     from mapkit.options import BuildOptions
 

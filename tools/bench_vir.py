@@ -70,10 +70,10 @@ def check(part, segs, walls, free, camera, n: int) -> tuple[int, float, float]:
 
 def main(argv: list[str] | None = None) -> int:
     from mapkit.assemble import assemble_map
-    from mapkit.lmap import save_map
+    from linemap.lmap import save_map
     from mapkit.options import BuildOptions
     from mapkit.vir import build_regions
-    from matcher.camera import Camera
+    from linemap.camera import Camera
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("plans", nargs="*", help="DXF plans or meshes, or 'hall' for the synthetic open hall (the synthetic apartment always runs)")

@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
 
     import cv2
 
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
     from mapkit.view.demo import synthetic_flat
     from mapkit.view.headless import Chromium, wait_for
     from mapkit.view.result import parse_result

@@ -24,7 +24,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from matcher.camera import Camera  # noqa: E402
+from linemap.camera import Camera  # noqa: E402
 from matcher.constraints import wrap  # noqa: E402
 from matcher.occlusion import wall_edges  # noqa: E402
 
@@ -252,7 +252,7 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
     None, matches, nodes, timed_out)``."""
     from matcher import verify
     from matcher.checks import check_lines, check_prior
-    from matcher.generate import in_field_of_view
+    from linemap.geometry import in_field_of_view
     from matcher.tolerances import DEFAULT
 
     arr = check_lines(lines, camera, DEFAULT)

@@ -35,7 +35,7 @@ def add_arguments(p) -> None:
 
 def options_from_args(args):
     """BuildOptions from parsed arguments (import options, camera, visibility)."""
-    from matcher.camera import Camera
+    from linemap.camera import Camera
 
     from mapkit.commands._import_args import import_options_from_args
 
@@ -78,8 +78,8 @@ def _image_size(text: str) -> tuple[int, int]:
 def run(args) -> int:
     from pathlib import Path
 
-    from mapkit.atomic import check_output_path
-    from mapkit.lmap import save_map
+    from linemap.atomic import check_output_path
+    from linemap.lmap import save_map
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)

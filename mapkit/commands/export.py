@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from mapkit.atomic import check_output_path, write_atomic
+from linemap.atomic import check_output_path, write_atomic
 
 HELP = "export regions (Polygons) and segments (3D LineStrings) as GeoJSON"
 
@@ -17,7 +17,7 @@ def add_arguments(p) -> None:
 def to_geojson(m) -> dict:
     """A FeatureCollection: one Polygon per region (properties id, segments),
     one 3D LineString per segment (properties id, kind). Metres, local frame."""
-    from mapkit.lmap import SegmentKind
+    from linemap.lmap import SegmentKind
 
     features = []
     for r in range(m.n_regions):
@@ -55,7 +55,7 @@ def _closed(p, ccw: bool) -> list[list[float]]:
 
 
 def run(args) -> int:
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
 
     out = check_output_path(args.geojson)
     m = load_map(args.map)

@@ -23,7 +23,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from mapkit.atomic import check_output_path, write_atomic
+    from linemap.atomic import check_output_path, write_atomic
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.extrude import scene_to_mesh
     from mapkit.importers import load_scene

@@ -18,7 +18,7 @@ def summary(path) -> dict:
 
     import numpy as np
 
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
     from mapkit.pipeline import kind_counts
 
     m = load_map(path)

@@ -17,7 +17,7 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from mapkit.atomic import check_output_path
+    from linemap.atomic import check_output_path
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.errors import MapkitError
     from mapkit.importers import load_scene

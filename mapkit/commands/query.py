@@ -28,7 +28,7 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
 
     x, y = parse_xy(args.at)
     if not args.radius >= 0:

@@ -23,20 +23,20 @@ def run(args) -> int:
     import time
 
     from mapkit.errors import MapkitError
-    from mapkit.lmap import load_map
+    from linemap.lmap import load_map
 
     if args.lines and not args.result:
         raise MapkitError("--lines needs --result (the lines are drawn at the result's pose)")
     if not 0 <= args.port <= 65535:
         raise MapkitError(f"--port must be in [0, 65535], got {args.port}")
     if args.html:
-        from mapkit.atomic import check_output_path
+        from linemap.atomic import check_output_path
 
         check_output_path(args.html)
     m = load_map(args.map)
     camera = None
     if args.camera:
-        from matcher.camera import Camera
+        from linemap.camera import Camera
 
         camera = Camera.load(args.camera)
     result = None

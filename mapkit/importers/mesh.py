@@ -23,7 +23,7 @@ from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers.mesh_hidden import drop_hidden
 from mapkit.importers.mesh_load import load_mesh
 from mapkit.importers.mesh_section import MeshSections, as_multipolygon, boundary_outline
-from mapkit.lmap import KIND_NAMES
+from linemap.lmap import KIND_NAMES
 from mapkit.mesh_edges import face_normals, feature_edges, merge_overlapping
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene

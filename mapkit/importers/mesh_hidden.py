@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 
 from mapkit.importers.mesh_section import MeshSections
-from mapkit.lmap import SegmentKind
+from linemap.lmap import SegmentKind
 from mapkit.tolerances import MERGE, MESH_LEVEL
 
 #: Sections probe this far above and below a horizontal edge, metres: off

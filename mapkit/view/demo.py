@@ -1,4 +1,4 @@
-"""A synthetic flat as a :class:`~mapkit.lmap.LineMap`, for the inspector's
+"""A synthetic flat as a :class:`~linemap.lmap.LineMap`, for the inspector's
 tests, its screenshot and demos when no built map is at hand.
 
 The flat is a grid of rectangular rooms joined by doorways, with a few square
@@ -18,7 +18,7 @@ import shapely
 from shapely.geometry import box
 
 from mapkit.assemble import assemble_map, polygon_parts
-from mapkit.lmap import LineMap, SegmentKind
+from linemap.lmap import LineMap, SegmentKind
 
 #: The camera recorded in the synthetic map's build parameters (camera.json shape).
 DEMO_CAMERA = {"width": 640, "height": 480, "fx": 457.0, "fy": 457.0, "cx": 320.0, "cy": 240.0,

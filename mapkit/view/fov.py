@@ -26,7 +26,7 @@ def in_horizontal_view(
     """(N,) bool: True where part of a segment may lie inside the horizontal
     field of view for some camera centre within ``dt`` of (x, y) and some
     heading within ``dyaw`` of ``yaw`` (radians; ``half_fov`` from
-    :meth:`matcher.camera.Camera.horizontal_half_fov`).
+    :meth:`linemap.camera.Camera.horizontal_half_fov`).
 
     Seen from the disk's centre, a segment's points span the arc of bearings
     between its two end points (the shorter one: a straight segment not

@@ -17,7 +17,7 @@ import numpy as np
 import shapely
 import trimesh
 
-from mapkit.lmap import LineMap
+from linemap.lmap import LineMap
 
 
 def ring_edges(points: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

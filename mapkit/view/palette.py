@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mapkit.lmap import SegmentKind
+from linemap.lmap import SegmentKind
 
 #: One colour per segment kind; the legend lists them in this order.
 KIND_COLOURS: dict[SegmentKind, tuple[int, int, int]] = {

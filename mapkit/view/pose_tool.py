@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import viser.transforms as vtf
 
-from mapkit.lmap import LineMap
+from linemap.lmap import LineMap
 from mapkit.view import palette, scene_nodes
 from mapkit.view.fov import in_horizontal_view
 from mapkit.view.geometry import Triangles, disk_mesh, disk_outline
@@ -51,7 +51,7 @@ def camera_wxyz(camera, yaw: float) -> np.ndarray:
     """Quaternion (w, x, y, z) of the camera-to-world rotation at heading ``yaw``.
 
     viser's frustum follows OpenCV axes (X right, Y down, Z forward), like
-    :class:`matcher.camera.Camera`, whose world-to-camera rotation R has the
+    :class:`linemap.camera.Camera`, whose world-to-camera rotation R has the
     camera axes as rows; the camera-to-world rotation is R transposed.
     """
     return vtf.SO3.from_matrix(camera.world2cam(yaw).T).wxyz

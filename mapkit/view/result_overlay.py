@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from mapkit.lmap import LineMap
+from linemap.lmap import LineMap
 from mapkit.view import palette, scene_nodes
 from mapkit.view.pose_tool import add_frustum
 from mapkit.view.result import MatchResult

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
-from mapkit.lmap import LineMap, SegmentKind
+from linemap.lmap import LineMap, SegmentKind
 from mapkit.view import palette
 from mapkit.view.geometry import Triangles, extrude, lift, ring_edges, unique_edges, wall_polygon
 

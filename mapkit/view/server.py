@@ -23,7 +23,7 @@ import time
 import numpy as np
 import viser
 
-from mapkit.lmap import LineMap, SegmentKind
+from linemap.lmap import LineMap, SegmentKind
 from mapkit.view import palette, pose_tool, scene_nodes
 from mapkit.view.geometry import lift, map_bounds, region_adjacency, region_polygons, ring_edges, triangulate
 from mapkit.view.panel import SELECTION_HINT, build_panel, id_list_markdown

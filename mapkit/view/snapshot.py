@@ -15,8 +15,8 @@ import os
 
 import html
 
-from mapkit.atomic import write_atomic
-from mapkit.lmap import LineMap
+from linemap.atomic import write_atomic
+from linemap.lmap import LineMap
 from mapkit.view.palette import legend_html
 
 

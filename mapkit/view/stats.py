@@ -7,8 +7,8 @@ import os
 
 import numpy as np
 
-from mapkit.lmap import LineMap, SegmentKind
-from matcher.camera import Camera
+from linemap.lmap import LineMap, SegmentKind
+from linemap.camera import Camera
 
 #: Used when a map records no camera; the panel says so.
 FALLBACK_CAMERA = {"width": 640, "height": 480, "fx": 457.0, "fy": 457.0, "cx": 320.0, "cy": 240.0,

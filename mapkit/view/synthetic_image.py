@@ -2,7 +2,7 @@
 
 Segments are clipped to the camera's near plane in 3D (a segment crossing
 the plane through the camera centre would otherwise project through
-infinity), projected with :meth:`matcher.camera.Camera.project` (an ideal
+infinity), projected with :meth:`linemap.camera.Camera.project` (an ideal
 pinhole: lens distortion is not drawn) and clipped to the image rectangle.
 Image lines are (M, 2, 2) pixel end points (u column, v row).
 """
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from matcher.camera import Camera
+from linemap.camera import Camera
 
 #: Points nearer than this (metres, along the optical axis) are behind the image.
 NEAR_PLANE_M = 0.05

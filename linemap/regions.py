@@ -23,7 +23,7 @@ def concat_ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 
 
 class RegionLookup:
-    """Precomputed ring edges of a :class:`~mapkit.lmap.LineMap` for fast queries."""
+    """Precomputed ring edges of a :class:`~linemap.lmap.LineMap` for fast queries."""
 
     def __init__(self, m) -> None:
         self.m = m

@@ -1,0 +1,30 @@
+"""linemap: the core both halves share, numpy only.
+
+- :mod:`linemap.lmap`: the ``.lmap`` format (:class:`LineMap`,
+  :func:`load_map`, :func:`save_map`) and :mod:`linemap.regions`, region
+  lookup on a loaded map;
+- :mod:`linemap.camera`: the camera model and camera files;
+- :mod:`linemap.geometry`: angle wrap, vertical segments, the horizontal
+  field-of-view test, the projection of segments;
+- :mod:`linemap.atomic` and :mod:`linemap.argv`: file writes that never
+  leave a partial file, and the command lines' negative values.
+
+``mapkit`` (authoring) and ``matcher`` (runtime) both import from here;
+nothing here imports either of them.
+"""
+
+from linemap.camera import Camera, CameraError
+from linemap.lmap import FORMAT_MAJOR, FORMAT_MINOR, KIND_NAMES, LineMap, LmapError, SegmentKind, load_map, save_map
+
+__all__ = [
+    "FORMAT_MAJOR",
+    "FORMAT_MINOR",
+    "KIND_NAMES",
+    "Camera",
+    "CameraError",
+    "LineMap",
+    "LmapError",
+    "SegmentKind",
+    "load_map",
+    "save_map",
+]

@@ -1,0 +1,274 @@
+"""Camera model in the conventions of docs/method.md section 2.
+
+World: x, y horizontal, z up, metres. Camera: OpenCV pinhole, X right,
+Y down, Z forward; pixel ``u`` is the column, ``v`` the row. The camera
+centre is ``C = (x, y, h)``; ``yaw`` is the heading of the optical axis on
+the floor, counter-clockwise from +x; ``pitch`` is positive looking down;
+roll is zero. Angles are radians in code and degrees in files.
+
+numpy only: the map builder imports this too (for the vertical field of view).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import numbers
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+REQUIRED_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch_deg")
+
+
+class CameraError(ValueError):
+    """A camera description is missing a field or holds an impossible value."""
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A calibrated camera at a known height and pitch.
+
+    ``distortion`` holds OpenCV's coefficients (k1, k2, p1, p2[, k3...]) or is
+    empty for an ideal pinhole.
+    """
+
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    height_m: float
+    pitch_deg: float
+    distortion: tuple[float, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        check_camera(self)
+
+    # ---- construction -------------------------------------------------
+    @classmethod
+    def from_dict(cls, d: dict) -> "Camera":
+        """Build from the camera.json shape; missing or bad fields raise CameraError."""
+        if not isinstance(d, dict):
+            raise CameraError("camera description must be a JSON object")
+        missing = [k for k in REQUIRED_FIELDS if k not in d]
+        if missing:
+            raise CameraError(f"camera description lacks {', '.join(missing)} (needs {', '.join(REQUIRED_FIELDS)})")
+        vals = {k: _number(f"camera {k}", d[k]) for k in REQUIRED_FIELDS}
+        dist = d.get("distortion") or ()
+        if not isinstance(dist, (list, tuple)):
+            raise CameraError(f"camera distortion must be a list of numbers, got {dist!r}")
+        vals["distortion"] = tuple(_number("camera distortion", v) for v in dist)
+        for k in ("width", "height"):
+            if math.isfinite(vals[k]) and vals[k] == int(vals[k]):
+                vals[k] = int(vals[k])
+        return cls(**vals)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "Camera":
+        """Read a camera.json file."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise CameraError(f"camera file {path} not found") from None
+        except IsADirectoryError:
+            raise CameraError(f"camera file {path} is a directory; give the camera.json file in it") from None
+        except OSError as exc:
+            raise CameraError(f"camera file {path} could not be read ({exc.strerror or exc})") from None
+        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+            why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+            raise CameraError(f"camera file {path} is not valid JSON ({why})") from None
+        return cls.from_dict(d)
+
+    @classmethod
+    def from_fov(cls, hfov_deg: float, width: int, height: int, height_m: float, pitch_deg: float) -> "Camera":
+        """An ideal pinhole with square pixels and the given horizontal field of view."""
+        if not 1.0 <= hfov_deg < 179.0:
+            raise CameraError(f"horizontal field of view must be in [1, 179) degrees, got {hfov_deg}")
+        f = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+        return cls(width, height, f, f, width / 2.0, height / 2.0, height_m, pitch_deg)
+
+    def to_dict(self) -> dict:
+        d = {
+            "width": self.width,
+            "height": self.height,
+            "fx": self.fx,
+            "fy": self.fy,
+            "cx": self.cx,
+            "cy": self.cy,
+            "height_m": self.height_m,
+            "pitch_deg": self.pitch_deg,
+        }
+        if self.distortion:
+            d["distortion"] = list(self.distortion)
+        return d
+
+    # ---- geometry -------------------------------------------------------
+    @property
+    def pitch(self) -> float:
+        return math.radians(self.pitch_deg)
+
+    @property
+    def K(self) -> np.ndarray:
+        """(3, 3) intrinsic matrix."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def world2cam(self, yaw: float) -> np.ndarray:
+        """(3, 3) rotation R with rows (right, down, forward) in world coordinates."""
+        return world2cam_rotation(yaw, self.pitch)
+
+    def centre(self, x: float, y: float) -> np.ndarray:
+        return np.array([x, y, self.height_m])
+
+    def project(self, points: np.ndarray, x: float, y: float, yaw: float) -> tuple[np.ndarray, np.ndarray]:
+        """Project world points (..., 3) for the camera at pose (x, y, yaw).
+
+        Returns pixels (..., 2) as (u, v) and depth Zc (...,); points with
+        Zc <= 0 are behind the camera and their pixels are meaningless.
+        """
+        R = self.world2cam(yaw)
+        pc = (np.asarray(points, dtype=float) - self.centre(x, y)) @ R.T
+        z = pc[..., 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = np.stack([self.fx * pc[..., 0] / z + self.cx, self.fy * pc[..., 1] / z + self.cy], axis=-1)
+        return uv, z
+
+    def pixel_rays(self, uv: np.ndarray) -> np.ndarray:
+        """Rays K^-1 [u, v, 1] (..., 3) in camera coordinates (not normalised)."""
+        uv = np.asarray(uv, dtype=float)
+        return np.stack([(uv[..., 0] - self.cx) / self.fx, (uv[..., 1] - self.cy) / self.fy, np.ones(uv.shape[:-1])], axis=-1)
+
+    def interpretation_normals(self, lines: np.ndarray) -> np.ndarray:
+        """Unit normals (M, 3), camera frame, of the planes through the optical
+        centre and image lines (M, 2, 2) pixels (method.md section 4).
+
+        The sign is arbitrary (every use squares it or takes its absolute value).
+        Lines must be undistorted (see :meth:`undistort_pixels`)."""
+        rays = self.pixel_rays(np.asarray(lines, dtype=float))
+        n = np.cross(rays[:, 0], rays[:, 1])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def undistort_pixels(self, uv: np.ndarray) -> np.ndarray:
+        """Pixels (..., 2) of the real (distorted) camera -> pixels of the ideal
+        pinhole with the same K. Identity when there is no distortion."""
+        uv = np.asarray(uv, dtype=float)
+        if not self.distortion or uv.size == 0:
+            return uv.copy()
+        import cv2  # only needed with distortion; keeps this module numpy-only otherwise
+
+        pts = uv.reshape(-1, 1, 2).astype(np.float64)
+        out = cv2.undistortPoints(pts, self.K, np.asarray(self.distortion, dtype=np.float64), P=self.K)
+        return out.reshape(uv.shape)
+
+    def elevation_range(self) -> tuple[float, float]:
+        """(lowest, highest) elevation angle, radians, that any pixel looks at.
+
+        Elevation is measured from the horizontal plane, positive upwards. The
+        extremes of a pinhole's view cone lie on the image border, so the
+        border is sampled densely (corners included); the heading is free, so
+        these bounds are all the vertical field of view says about visibility.
+        """
+        w, h = self.width, self.height
+        t = np.linspace(0.0, 1.0, 257)
+        border = np.concatenate(
+            [
+                np.stack([t * w, np.zeros_like(t)], 1),
+                np.stack([t * w, np.full_like(t, h)], 1),
+                np.stack([np.zeros_like(t), t * h], 1),
+                np.stack([np.full_like(t, w), t * h], 1),
+                [[self.cx, 0.0], [self.cx, h]],
+            ]
+        )
+        rays = self.pixel_rays(border)
+        # World direction of a camera ray: R^T ray; its z component is d_z*Y + f_z*Z.
+        p = self.pitch
+        z = -math.cos(p) * rays[:, 1] - math.sin(p) * rays[:, 2]
+        elev = np.arcsin(z / np.linalg.norm(rays, axis=1))
+        return float(elev.min()), float(elev.max())
+
+    def horizontal_half_fov(self) -> float:
+        """Largest horizontal angle, radians, between the optical axis's heading and
+        the heading of any pixel's ray (used to drop segments out of view)."""
+        return self._half_fov
+
+    @cached_property
+    def ideal_bounds(self) -> tuple[float, float, float, float]:
+        """``(u_min, u_max, v_min, v_max)``: where the image's pixels land on
+        the ideal pinhole (the frame of the lines :func:`matcher.localize`
+        takes). The image itself without distortion; with it, the box around
+        the undistorted border as well (barrel distortion moves the corners
+        outwards). Computed once per camera (it is immutable)."""
+        w, h = float(self.width), float(self.height)
+        if not self.distortion:
+            return 0.0, w, 0.0, h
+        t = np.linspace(0.0, 1.0, 65)
+        zero, one = np.zeros_like(t), np.ones_like(t)
+        border = np.concatenate([np.stack([t * w, zero], 1), np.stack([t * w, one * h], 1),
+                                 np.stack([zero, t * h], 1), np.stack([one * w, t * h], 1)])
+        ideal = self.undistort_pixels(border)
+        lo, hi = ideal.min(axis=0), ideal.max(axis=0)
+        return min(0.0, float(lo[0])), max(w, float(hi[0])), min(0.0, float(lo[1])), max(h, float(hi[1]))
+
+    @cached_property
+    def _half_fov(self) -> float:
+        """:meth:`horizontal_half_fov`, computed once per camera (it is immutable)."""
+        w, h = self.width, self.height
+        t = np.linspace(0.0, 1.0, 129)
+        border = np.concatenate([np.stack([np.zeros_like(t), t * h], 1), np.stack([np.full_like(t, w), t * h], 1)])
+        R = self.world2cam(0.0)  # yaw 0: the optical axis heads along +x
+        d = self.pixel_rays(border) @ R  # world directions (R^T ray)
+        return float(np.abs(np.arctan2(d[:, 1], d[:, 0])).max())
+
+
+def world2cam_rotation(yaw, pitch: float) -> np.ndarray:
+    """World-to-camera rotation(s), rows r, d, f of method.md section 2.
+
+    ``yaw`` a scalar gives (3, 3); an array of yaws (...,) gives (..., 3, 3)."""
+    cy_, sy_ = np.cos(yaw), np.sin(yaw)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    z = np.zeros_like(cy_)
+    r = np.stack([sy_, -cy_, z], -1)
+    d = np.stack([-sp * cy_, -sp * sy_, z - cp], -1)
+    f = np.stack([cp * cy_, cp * sy_, z - sp], -1)
+    return np.stack([r, d, f], -2)
+
+
+def _number(what: str, v) -> float:
+    """``v`` as a float if it is a real number (not a bool, not a string);
+    else CameraError naming ``what``."""
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+        raise CameraError(f"{what} must be a number, got {v!r}")
+    try:
+        return float(v)
+    except OverflowError:
+        raise CameraError(f"{what} is out of range, got {v!r}") from None
+
+
+def check_camera(cam: Camera) -> None:
+    """Validate a camera; raise CameraError naming the field and its valid range."""
+    vals = {k: _number(f"camera {k}", getattr(cam, k)) for k in REQUIRED_FIELDS}
+    for k, v in vals.items():
+        if not math.isfinite(v):
+            raise CameraError(f"camera {k} must be finite, got {v}")
+    if vals["width"] != int(vals["width"]) or vals["height"] != int(vals["height"]):
+        raise CameraError(f"camera width and height must be whole pixels, got {cam.width}x{cam.height}")
+    if not isinstance(cam.distortion, tuple):
+        raise CameraError(f"camera distortion must be a tuple of numbers, got {cam.distortion!r}")
+    for v in cam.distortion:
+        _number("camera distortion", v)
+    if cam.width <= 0 or cam.height <= 0:
+        raise CameraError(f"camera width and height must be positive pixels, got {cam.width}x{cam.height}")
+    if cam.fx <= 0 or cam.fy <= 0:
+        raise CameraError(f"camera fx and fy must be positive, got {cam.fx}, {cam.fy}")
+    if cam.height_m <= 0:
+        raise CameraError(f"camera height_m must be above the floor (> 0 m), got {cam.height_m}")
+    if not -89.0 <= cam.pitch_deg <= 89.0:
+        raise CameraError(f"camera pitch_deg must be in [-89, 89] (positive looks down), got {cam.pitch_deg}")
+    if any(not math.isfinite(v) for v in cam.distortion):
+        raise CameraError("camera distortion coefficients must be finite")
+    if cam.distortion and len(cam.distortion) not in (4, 5, 8, 12, 14):
+        raise CameraError(f"camera distortion takes 4, 5, 8, 12 or 14 OpenCV coefficients, got {len(cam.distortion)}")

@@ -1,0 +1,51 @@
+"""What the matcher derives from a map once and keeps with it.
+
+:class:`MapIndex` is made on the first :func:`~matcher.localize` call on a
+map (``linemap.derived(MapIndex)``) and each of its parts on first use: a
+frame pays only for what it needs, and the second frame on the same map
+pays for none of it. The map must not be mutated after.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from linemap.lmap import LineMap
+from matcher.freespace import FreeSpace
+from matcher.generate import collinear_labels
+from matcher.occlusion import SightRays, WallEdges, face_normals, wall_edges
+
+
+class MapIndex:
+    """Per-map lookups of the matcher, each built on first use."""
+
+    def __init__(self, linemap: LineMap) -> None:
+        self.linemap = linemap
+
+    @cached_property
+    def collinear(self) -> np.ndarray:
+        """(N,) group id of each segment: segments on one 3D line
+        (:func:`~matcher.generate.collinear_labels`)."""
+        return collinear_labels(self.linemap.segments)
+
+    @cached_property
+    def walls(self) -> WallEdges | None:
+        """The wall outlines' edges, the occluders; None without walls."""
+        return wall_edges(self.linemap)
+
+    @cached_property
+    def sight(self) -> SightRays | None:
+        """How far one sees from each vertical edge, per bearing; None without walls."""
+        return SightRays(self.walls) if self.walls is not None else None
+
+    @cached_property
+    def faces(self) -> np.ndarray:
+        """(N, 2) room-side normal of the wall face each segment lies on (zeros: none)."""
+        return face_normals(self.linemap.segments, self.walls)
+
+    @cached_property
+    def free(self) -> FreeSpace:
+        """Distance from a floor point to the map's regions."""
+        return FreeSpace(self.linemap.ring_points, self.linemap.ring_offsets)
