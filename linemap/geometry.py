@@ -22,6 +22,23 @@ def wrap(a):
     return np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2 * np.pi)
 
 
+def world_normals(normals: np.ndarray, yaw: np.ndarray, pitch: float) -> np.ndarray:
+    """(..., 3) world directions ``R^T n`` of camera-frame vectors (..., 3)
+    (plane normals, rays) at yaws (...), broadcast together, written out from R's rows r, d, f of method.md section 2
+    (no (..., 3, 3) rotations: cheaper on these arrays). With ``f_h = n_z
+    cos p - n_y sin p``: ``(f_h cos y + n_x sin y, f_h sin y - n_x cos y,
+    -n_y cos p - n_z sin p)``."""
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    c, s = np.cos(yaw), np.sin(yaw)
+    nx, ny, nz = normals[..., 0], normals[..., 1], normals[..., 2]
+    ahead = nz * cp - ny * sp
+    w = np.empty(np.broadcast_shapes(np.shape(yaw), nx.shape) + (3,))
+    w[..., 0] = ahead * c + nx * s
+    w[..., 1] = ahead * s - nx * c
+    w[..., 2] = -ny * cp - nz * sp
+    return w
+
+
 def segment_is_vertical(segments: np.ndarray, axis_deg: float) -> np.ndarray:
     """(N,) bool: the direction of each segment (N, 2, 3) is within
     ``axis_deg`` degrees of the vertical."""

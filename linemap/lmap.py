@@ -151,16 +151,18 @@ class LineMap:
 
     def __post_init__(self) -> None:
         self._lookup = None  # built on first query: see linemap.regions
-        self._derived: dict[type, Any] = {}
+        self._derived: dict[tuple, Any] = {}
 
-    def derived(self, kind: type[T]) -> T:
-        """``kind(self)``, made on the first call and kept with the map: the
-        per-map data a runtime derives once (the matcher's
-        :class:`~matcher.map_index.MapIndex`, say), keyed by its type. The
-        map must not be mutated after."""
-        if kind not in self._derived:
-            self._derived[kind] = kind(self)
-        return self._derived[kind]
+    def derived(self, kind: type[T], *args) -> T:
+        """``kind(self, *args)``, made on the first call and kept with the
+        map: the per-map data a runtime derives once (the matcher's
+        :class:`~matcher.map_index.MapIndex`, say), keyed by its type and
+        ``args`` (hashable). The map must not be mutated after."""
+        key = (kind, *args)
+        hit = self._derived.get(key)
+        if hit is None:
+            hit = self._derived[key] = kind(self, *args)
+        return hit
 
     # Queries live in their own module to keep the format module about bytes.
     def regions_at(self, x: float, y: float) -> np.ndarray:
@@ -422,26 +424,11 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
     dw = _array(raw, b"WPTS", "<i4", n_wall_points, name, 2).astype(np.int64).reshape(n_wall_points, 2)
     wall_points = np.cumsum(dw, axis=0).astype(np.float64) * quantum
 
-    m = LineMap(
-        segments=segments,
-        kinds=kinds,
-        ring_points=ring_points,
-        ring_offsets=ring_offsets,
-        ring_region=ring_region,
-        ring_is_hole=ring_is_hole,
-        list_offsets=list_offsets,
-        list_indices=list_indices,
-        grid_origin=origin,
-        grid_cell=cell,
-        grid_shape=(ny, nx),
-        grid_offsets=grid_offsets,
-        grid_regions=grid_regions,
-        wall_points=wall_points,
-        wall_offsets=wall_offsets,
-        wall_is_hole=wall_is_hole,
-        meta=meta,
-        version=version,
-    )
+    m = LineMap(segments=segments, kinds=kinds, ring_points=ring_points, ring_offsets=ring_offsets,
+                ring_region=ring_region, ring_is_hole=ring_is_hole, list_offsets=list_offsets,
+                list_indices=list_indices, grid_origin=origin, grid_cell=cell, grid_shape=(ny, nx),
+                grid_offsets=grid_offsets, grid_regions=grid_regions, wall_points=wall_points,
+                wall_offsets=wall_offsets, wall_is_hole=wall_is_hole, meta=meta, version=version)
     if len(list_indices) != n_list:
         raise LmapError(f"{name} is inconsistent: {len(list_indices)} list entries, META says {n_list}")
     validate(m, name)

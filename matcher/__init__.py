@@ -1,8 +1,13 @@
 """matcher: runtime model-to-image straight-line matching for robot self-location.
 
-Light by design: numpy, scipy and OpenCV only. Maps are read through the
-numpy-only :mod:`linemap.lmap` module; nothing of the authoring stack
-(ezdxf, trimesh, shapely, viser) is imported here.
+Light by design: numpy, scipy and OpenCV only. Maps and cameras come from
+the numpy-only core :mod:`linemap`; nothing of ``mapkit`` or the authoring
+stack (ezdxf, trimesh, shapely, viser) is imported here.
+
+The method's two stages have a folder each (:mod:`matcher.stage1`,
+hypothesis generation; :mod:`matcher.stage2`, verification);
+:mod:`matcher.strategy` says which hypothesis sources run and when;
+:mod:`matcher.from_prior` and :mod:`matcher.lost` are the entry points.
 
     >>> import matcher
     >>> m = matcher.load_map("maps/flat.lmap")
@@ -12,9 +17,10 @@ numpy-only :mod:`linemap.lmap` module; nothing of the authoring stack
     ... else: print(res.reason)
 """
 
-from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
 from linemap.camera import Camera, CameraError
-from matcher.pipeline import localize, localize_global
+from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
+from matcher.from_prior import localize
+from matcher.lost import localize_global
 from matcher.result import LocalizeResult
 from matcher.tolerances import Tolerances
 

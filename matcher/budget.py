@@ -2,7 +2,7 @@
 
 The budget (``Tolerances.time_budget_ms``) is split: the searches (the
 interpretation tree, the second search, the resection) may take the first
-``SEARCH_SHARE`` of it, the final visibility tests of the sets they found
+``Internals.search_share`` of it, the final visibility tests of the sets they found
 the rest; stage 2 then runs on what passed, at most ``max_hypotheses``
 sets (a few milliseconds). The work before the tree (correspondences and
 their pairs, a few milliseconds, tens on the largest scenes) is not cut.
@@ -14,11 +14,6 @@ import math
 import time
 from typing import NamedTuple
 
-#: Share of the budget the searches may use: the final tests of a few
-#: hundred sets found take up to about a third of the search's time.
-SEARCH_SHARE = 0.7
-
-
 class Deadlines(NamedTuple):
     """``time.perf_counter()`` readings: ``search`` ends the searches,
     ``checks`` the final tests of the sets found (inf: no limit)."""
@@ -27,12 +22,13 @@ class Deadlines(NamedTuple):
     checks: float = math.inf
 
     @classmethod
-    def from_budget(cls, t0: float, budget_ms: float) -> Deadlines:
+    def from_budget(cls, t0: float, budget_ms: float, search_share: float) -> Deadlines:
         """The deadlines of a call started at ``t0`` (perf_counter seconds)
-        with ``budget_ms`` milliseconds (inf: none)."""
+        with ``budget_ms`` milliseconds (inf: none), the searches stopping at
+        ``search_share`` of it."""
         if not math.isfinite(budget_ms):
             return NO_LIMIT
-        return cls(t0 + SEARCH_SHARE * budget_ms / 1e3, t0 + budget_ms / 1e3)
+        return cls(t0 + search_share * budget_ms / 1e3, t0 + budget_ms / 1e3)
 
     def may_search(self) -> bool:
         """Is there time left to search?"""

@@ -44,7 +44,7 @@ class LocalizeResult:
     def pose_std(self) -> tuple[float, float, float] | None:
         """Standard deviations ``(x, y, yaw_deg)`` (metres, degrees) of the
         pose that the image noise of the tolerances leaves, to first order
-        (:func:`matcher.rank.pose_covariance`): for fusing with odometry; a
+        (:func:`matcher.stage2.covariance.pose_covariance`): for fusing with odometry; a
         view of a few far vertical edges leaves decimetres. None without a
         pose, or when the matches do not fix it. Worked out on first read."""
         if callable(self._pose_std):

@@ -1,5 +1,12 @@
 """Every threshold of the matcher, in one documented place.
 
+:class:`Tolerances` holds what a user tunes (the detector's noise, the
+search budgets, acceptance); :class:`Internals`, nested in it as
+``Tolerances.internals``, the method's inner constants (sample points,
+slacks, work sizes), each with the reason for its value. No other module of
+the matcher keeps a numeric threshold of its own (tests/test_layout.py
+walks their syntax trees for it).
+
 Lengths in metres, angles in degrees, image quantities in pixels. The
 defaults fit a detector whose lines are good to about 1 px in position and
 1 degree in orientation (LSD on a sharp 640x480 frame; the paper's simulated
@@ -10,7 +17,221 @@ test derived from them widens with it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
+from functools import cached_property
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Internals:
+    """The matcher's inner constants. Changing one changes the method, not
+    its tuning: each comment says what the value was chosen against. Tuples
+    are turned into arrays once (the ``*_array`` properties)."""
+
+    # ---- the map and its segments ---------------------------------------
+    #: Segments whose direction is within this many degrees of the vertical
+    #: are vertical (the map builder's axis tolerance, mapkit.tolerances.AXIS_DEG).
+    vertical_axis_deg: float = 2.0
+    #: Two segments are one collinear group (image lines cannot tell them
+    #: apart) when parallel within this many degrees...
+    collinear_deg: float = 0.5
+    #: ...and each one's end points lie within this many metres of the other's line.
+    collinear_m: float = 0.01
+    #: Raster cell of the free-space distance map, metres: the test's
+    #: resolution (a point's distance is its cell's, good to a cell diagonal, 7 cm).
+    free_cell_m: float = 0.05
+    #: Margin of that raster around the regions, metres: farther points read
+    #: as this far (any sane tolerance rejects them anyway).
+    free_border_m: float = 1.0
+    #: Bearings per vertical edge in the map's sight table (half a degree):
+    #: how far one sees back from the edge along each.
+    sight_bins: int = 720
+    #: The sight table's rays start this far from the edge, metres: the edge
+    #: stands on a wall face.
+    sight_skip_m: float = 0.05
+    #: A wall face's side is probed this far from a segment, metres.
+    face_probe_m: float = 0.03
+
+    # ---- stage 1: correspondences and pairs ------------------------------
+    #: Slack of the half-planes, metres: a vertical edge still counts as
+    #: ahead from this far behind the camera, a wall face as facing from this
+    #: far behind it (pose grid and noise).
+    front_slack_m: float = 0.1
+    #: A correspondence alone is kept at a grid yaw where its normalised
+    #: strip quadratic's minimum is at most this...
+    single_fit_max: float = 2.0
+    #: ...and a pair shares a pose where their summed quadratic's minimum is
+    #: at most this (each term must also stay within ``q_max``).
+    pair_fit_max: float = 3.0
+
+    # ---- stage 1: the interpretation tree --------------------------------
+    #: The tree tests visibility and free space inside the search only once
+    #: a set fixes the position: its feasible points at the best yaw reach
+    #: less than this far, metres, in any direction. Before that the best
+    #: point may be far from the truth and the tests would prune true sets.
+    pinned_m: float = 0.15
+    #: A set that leaves the position loose gets a visibility test of its
+    #: own once the search has used this share of its node budget: it costs
+    #: a few tenths of a millisecond, and the scenes that need it (a row of
+    #: door jambs, each jamb line fitting many jambs) are the ones where
+    #: loose sets multiply; most frames end well before.
+    loose_test_after: float = 0.1
+    #: Spacing, metres, of the camera positions that sample a loose set's
+    #: feasible region at each yaw, and the most per axis.
+    region_step_m: float = 0.15
+    region_max: int = 16
+    #: Share of the node budget the passes that aim at large sets may spend
+    #: without finding one.
+    aim_high_share: float = 0.05
+    #: Sight lines at a grid pose (a few centimetres off) count as blocked
+    #: only where they cross a wall more than this far from both ends,
+    #: metres. Looser than ``refined_sight_end_m``, stage 2's: the grid pose
+    #: is not the refined one.
+    grid_sight_end_m: float = 0.05
+    #: Points of a segment tested for visibility at a grid pose (fractions of
+    #: its length), when the part its image line shows is not known.
+    grid_sight_samples: tuple = (0.02, 0.26, 0.5, 0.74, 0.98)
+    #: The part of a segment its image line shows at a grid pose is widened
+    #: by this much at both ends before visibility is tested, metres (the
+    #: grid pose is a few centimetres and up to half a yaw step off)...
+    shown_widen_m: float = 0.1
+    #: ...and tested at these fractions of it (it is short: three do).
+    shown_samples: tuple = (0.05, 0.5, 0.95)
+    #: A segment counts as seen at a grid pose if it is seen from the pose's
+    #: point or from one of four points this far around it, metres: that
+    #: point is a few centimetres off, and a sight line through a doorway
+    #: swings onto a jamb over that distance. Too small loses true sets
+    #: behind door jambs; too large keeps a few more false ones for stage 2.
+    grid_jitter_m: float = 0.15
+    #: Segment points closer than this along the optical axis, metres, count
+    #: as behind the camera in the tree's visibility test.
+    in_front_m: float = 0.05
+    #: When the resection adds hypotheses, the tree's that stage 2 kept stay
+    #: with them, at most this many (best ranked first).
+    tree_sets_kept: int = 5
+    #: Lost mode multiplies the tree's node and set budgets by this: the
+    #: robot is stopped, and one search covers a whole region at any heading.
+    lost_budget_factor: int = 10
+
+    # ---- stage 1: resection from vertical edges ----------------------------
+    #: A line counts as explained at a resected pose if its bearing is within
+    #: this many times its noise bound of a candidate edge's: the pose comes
+    #: from three noisy bearings (stage 2 refits and applies the exact test).
+    resection_bearing_slack: float = 3.0
+    #: Best poses of each batch of triples kept for the final choice.
+    resection_keep: int = 200
+    #: Most triples solved per frame: a bound on the time on any scene.
+    resection_max_triples: int = 200000
+    #: Every edge of a triple must stand at least this far in front of its
+    #: resected camera, metres: nearer, the solution is a degenerate one.
+    resection_min_range_m: float = 0.2
+
+    # ---- stage 2: refinement ----------------------------------------------
+    #: Gauss-Newton iterations: from the grid start (within half a yaw step
+    #: and a few centimetres) the fit converges in 3 to 4.
+    refine_iterations: int = 6
+    #: Iterations of the refits after matches were dropped or added (they
+    #: start at a refined pose).
+    refit_iterations: int = 3
+    #: With robust weights, this many plain iterations come first: the
+    #: stage-1 start may be tens of centimetres off along a weakly fixed
+    #: direction, and weighting residuals from there would drop true matches.
+    refine_plain_first: int = 2
+    #: Gauss-Newton stops once no hypothesis moves more than this (metres and
+    #: radians) in one step: a micrometre, far below the pose's noise.
+    refine_converged: float = 1e-6
+    #: A refined pose may leave the prior bounds by this much (metres,
+    #: degrees) before the hypothesis is dropped: noise on a pose at the
+    #: border. A pose its matches fix loosely gets more: this many of its
+    #: standard deviations (six far vertical edges on one side leave the
+    #: position uncertain by a decimetre).
+    prior_slack_m: float = 0.1
+    prior_slack_deg: float = 2.0
+    prior_slack_sigmas: float = 3.0
+
+    # ---- stage 2: fit and visibility at a refined pose ---------------------
+    #: Segments are cut this far in front of the optical centre before
+    #: projecting, metres.
+    near_plane_m: float = 0.05
+    #: A true line's end points lie within its noise bound plus this many
+    #: pixels of the projected segment: the refined pose's own error.
+    fit_pose_px: float = 2.0
+    #: At a refined pose (a centimetre off) a sight line that cuts a wall this
+    #: far or more from the segment is blocked, metres: it tells the near and
+    #: far faces of a door jamb apart.
+    refined_sight_end_m: float = 0.02
+    #: Points tested for visibility along the part of a segment a line shows
+    #: (fractions of that part, its ends moved in a little: they are the least sure).
+    refined_sight_samples: tuple = (0.05, 0.275, 0.5, 0.725, 0.95)
+
+    # ---- stage 2: the slide of loosely fixed poses -------------------------
+    #: Hypotheses matching this many horizontal segments or more are not
+    #: slid: their lines fix the position.
+    slide_max_horizontal: int = 2
+    #: A pose is slid only if its position is loose by at least this much,
+    #: metres (one standard deviation along its worst-fixed axis): a pose
+    #: fixed better has no room to slide.
+    slide_min_loose_m: float = 0.05
+    #: Positions are tried within this many standard deviations along both
+    #: axes of the position, and at most this far, metres (a direction the
+    #: matches leave free has no standard deviation).
+    slide_sigmas: float = 3.0
+    slide_max_m: float = 2.0
+    #: The positions tried: a grid of this many fractions of that range per
+    #: axis; then this many bisections towards the best.
+    slide_grid: int = 15
+    slide_bisections: int = 8
+
+    # ---- time and work sizes -----------------------------------------------
+    #: Share of the time budget the searches may use: the final tests of a
+    #: few hundred sets found take up to about a third of the search's time.
+    search_share: float = 0.7
+    #: Most (pair, grid yaw) entries the pairwise test handles at once: its
+    #: arrays then stay under about 15 MB each.
+    pair_chunk: int = 1 << 18
+    #: Most triples of correspondences resected in one batch (memory).
+    resection_chunk: int = 20000
+    #: Most (ray, wall edge) pairs cast at once: arrays under about 10 MB
+    #: each (the first frame on a map casts every vertical edge's rays).
+    ray_chunk: int = 1 << 20
+    #: Above this many wall edges, sight lines are first tested against the
+    #: edges' bounding boxes (below it the filter costs more than it saves).
+    box_filter_edges: int = 512
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            for x in (v if isinstance(v, tuple) else (v,)):
+                if not (x == x) or x < 0:
+                    raise ValueError(f"internal tolerance {f.name} must be >= 0, got {v}")
+
+    @cached_property
+    def grid_sight_array(self) -> np.ndarray:
+        """``grid_sight_samples`` as an array."""
+        return np.array(self.grid_sight_samples)
+
+    @cached_property
+    def shown_array(self) -> np.ndarray:
+        """``shown_samples`` as an array."""
+        return np.array(self.shown_samples)
+
+    @cached_property
+    def refined_sight_array(self) -> np.ndarray:
+        """``refined_sight_samples`` as an array."""
+        return np.array(self.refined_sight_samples)
+
+    @cached_property
+    def jitter_array(self) -> np.ndarray:
+        """(5, 2) the grid pose's point and the four around it, metres."""
+        j = self.grid_jitter_m
+        return np.array([[0.0, 0.0], [j, 0.0], [-j, 0.0], [0.0, j], [0.0, -j]])
+
+    @cached_property
+    def slide_grid_array(self) -> np.ndarray:
+        """(G, 2) fractions of the slide's range along the position's two axes."""
+        t = np.linspace(-1, 1, self.slide_grid)
+        return np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2)
 
 
 @dataclass(frozen=True)
@@ -108,10 +329,16 @@ class Tolerances:
     #: Image lines may stick out of the image by this many pixels (noise on
     #: end points of lines clipped at the border).
     image_margin_px: float = 5.0
+    #: The method's inner constants (:class:`Internals`).
+    internals: Internals = field(default_factory=Internals)
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name == "internals":
+                if not isinstance(v, Internals):
+                    raise ValueError(f"tolerance internals must be a matcher.tolerances.Internals, got {v!r}")
+                continue
             if not (v == v) or v < 0:
                 raise ValueError(f"tolerance {f.name} must be >= 0, got {v}")
         if self.yaw_step_deg <= 0 or self.yaw_step_deg > 10:
@@ -121,7 +348,5 @@ class Tolerances:
 
 
 DEFAULT = Tolerances()
-
-#: Segments whose direction is within this many degrees of the vertical are
-#: vertical (same value as the map builder's axis tolerance).
-VERTICAL_AXIS_DEG = 2.0
+#: The default inner constants (for the per-map structures built before any call's tolerances are known).
+DEFAULT_INTERNALS = DEFAULT.internals

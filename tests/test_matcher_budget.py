@@ -15,7 +15,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tools"))
 
 import matcher  # noqa: E402
-from matcher.budget import NO_LIMIT, SEARCH_SHARE, Deadlines  # noqa: E402
+from matcher.budget import NO_LIMIT, Deadlines  # noqa: E402
+from matcher.tolerances import DEFAULT  # noqa: E402
+
+SEARCH_SHARE = DEFAULT.internals.search_share
 from simulate import make_frame  # noqa: E402
 
 #: A budget spent before the search starts.
@@ -23,11 +26,11 @@ SPENT = replace(matcher.Tolerances(), time_budget_ms=1e-9)
 
 
 def test_deadlines_split_the_budget():
-    assert Deadlines.from_budget(10.0, math.inf) == NO_LIMIT
-    d = Deadlines.from_budget(10.0, 100.0)
+    assert Deadlines.from_budget(10.0, math.inf, SEARCH_SHARE) == NO_LIMIT
+    d = Deadlines.from_budget(10.0, 100.0, SEARCH_SHARE)
     assert d.search == pytest.approx(10.0 + SEARCH_SHARE * 0.1) and d.checks == pytest.approx(10.1)
     assert NO_LIMIT.may_search() and NO_LIMIT.may_check()
-    assert not Deadlines.from_budget(0.0, 1.0).may_check()  # perf_counter is far past 1 ms
+    assert not Deadlines.from_budget(0.0, 1.0, SEARCH_SHARE).may_check()  # perf_counter is far past 1 ms
 
 
 def test_negative_budget_is_refused():
@@ -85,7 +88,7 @@ def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
     budget spent early has searched the most of it. (The example flat's
     region ids do not follow area; each region's search is replaced by a
     spy that records it.)"""
-    import matcher.pipeline as pipeline
+    import matcher.from_prior as from_prior
     from matcher.result import LocalizeResult
 
     linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
@@ -95,7 +98,7 @@ def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
         seen.append(int(np.argmin(np.hypot(*(centres - px[:2]).T))))
         return LocalizeResult(False, "not searched")
 
-    monkeypatch.setattr(pipeline, "_localize", spy)
+    monkeypatch.setattr(from_prior, "localize_prepared", spy)
     fr = make_frame(linemap, cam, np.random.default_rng(3), 1)
     res = matcher.localize_global(linemap, cam, fr.lines)
     assert not res and res.time_ms["regions_tried"] == linemap.n_regions

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from linemap.camera import Camera, world2cam_rotation
-from matcher.constraints import (
+from matcher.stage1.constraints import (
     binary_constraint,
     line_pieces,
     unary_constraint,

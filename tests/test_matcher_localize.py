@@ -145,18 +145,18 @@ def test_recovery_on_the_built_example_map(built_map, cam, peq):
 
 
 def test_second_search_rule():
-    """pipeline._doubtful: two matches short, or one short with a loose fit
+    """strategy.doubtful: two matches short, or one short with a loose fit
     (E above e_doubt), or nothing accepted, sends stage 1 back; a true set
     that lost one clutter line (E small) does not; a truncated search never."""
     from types import SimpleNamespace
 
-    from matcher.pipeline import _doubtful
+    from matcher.strategy import doubtful
     from matcher.tolerances import DEFAULT
 
     def case(kept, largest, E, truncated=False):
         ranked = SimpleNamespace(order=np.array([0]), score=np.array([E]), hyp=np.zeros(kept, dtype=int))
         hyps = SimpleNamespace(truncated=truncated, sets=[np.arange(largest)])
-        return _doubtful(ranked, hyps, DEFAULT)
+        return doubtful(ranked, hyps, DEFAULT)
 
     assert not case(5, 5, 1e-4)
     assert not case(5, 6, 1e-4)

@@ -15,8 +15,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 from simulate import make_frame, paper_camera  # noqa: E402
 
 import matcher  # noqa: E402
-from matcher.freespace import FreeSpace, free_space  # noqa: E402
-from matcher.generate import horizon_side_ok  # noqa: E402
+from matcher.scene.freespace import FreeSpace, free_space  # noqa: E402
+from matcher.stage1.correspondences import horizon_side_ok  # noqa: E402
 from matcher.tolerances import DEFAULT  # noqa: E402
 
 FLAT = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
@@ -107,7 +107,7 @@ def test_frame_of_vertical_edges_only(flat):
 
 
 def test_halfplane_reachable_hand_worked():
-    from matcher import posegrid
+    from matcher.stage1 import posegrid
 
     dt = 1.0
     # One strip x = 0 (|x| <= 0.1): its feasible set is the chord x ~ 0, y in [-1, 1].
@@ -124,7 +124,7 @@ def test_halfplane_reachable_hand_worked():
 def test_stretch_and_weak_axis_against_sampling():
     """The pinned test's two pieces: the weak axis of two crossing strips and
     the extent of their common part along it, against a dense sampling."""
-    from matcher import posegrid
+    from matcher.stage1 import posegrid
 
     dt, q_max = 1.0, 1.5
     rng = np.random.default_rng(3)
@@ -151,7 +151,7 @@ def test_stretch_and_weak_axis_against_sampling():
 
 
 def test_feasible_ellipse_reaches_equals_halfplane_reachable():
-    from matcher import posegrid
+    from matcher.stage1 import posegrid
 
     rng = np.random.default_rng(5)
     a = rng.normal(size=(40, 2))
@@ -173,7 +173,7 @@ def test_feasible_ellipse_reaches_equals_halfplane_reachable():
 
 
 def test_face_normals_point_into_the_rooms(flat):
-    from matcher.occlusion import face_normals, inside_walls, wall_edges
+    from matcher.scene.occlusion import face_normals, inside_walls, wall_edges
 
     walls = wall_edges(flat)
     f = face_normals(flat.segments, walls)
@@ -192,7 +192,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     pass for any image line at some yaw: its bearing line runs through the
     disk, on both sides of the edge. The camera must stand behind the edge
     on the ray towards it."""
-    from matcher.generate import _half_planes
+    from matcher.stage1.correspondences import _half_planes
 
     class _Img:
         alpha = np.array([0.0])  # the line is straight ahead
@@ -200,14 +200,17 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     yaws = np.array([0.0])
     ce = np.array([0.0, 0.0, 1.2])
     near = np.array([[1.0, 0.0, 0.0], [-0.5, 0.0, 0.0]])  # one ahead (+x), one behind
-    c, b = _half_planes(_Img, None, near, np.array([0, 1]), np.array([0, 0]), np.array([True, True]), yaws, ce, None)
+    c, b = _half_planes(_Img, None, near, np.array([0, 1]), np.array([0, 0]), np.array([True, True]), yaws, ce, None,
+                        DEFAULT.internals.front_slack_m)
     # At the disk centre (z = 0): c . z <= b holds for the edge ahead only.
     assert (0.0 <= b[0, 0]) and not (0.0 <= b[1, 0])
     assert np.allclose(c[:, 0], [[1.0, 0.0], [1.0, 0.0]])
 
 
 def test_collinear_groups_hand_worked_and_from_map_labels(flat):
-    from matcher.generate import collinear_classes, collinear_labels
+    from matcher.scene.collinear import collinear_classes, collinear_labels
+
+    angle, dist = DEFAULT.internals.collinear_deg, DEFAULT.internals.collinear_m
 
     segs = np.array([
         [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],  # a wall's floor line, split by a door...
@@ -216,21 +219,21 @@ def test_collinear_groups_hand_worked_and_from_map_labels(flat):
         [[1.5, 0.004, 0.0], [1.6, 0.004, 0.0]],  # 4 mm off the floor line: same line
         [[0.0, 0.0, 0.0], [0.0, 0.0, 2.1]],  # a jamb
     ])
-    label, reps = collinear_classes(segs)
+    label, reps = collinear_classes(segs, angle, dist)
     assert label.tolist() == [0, 0, 1, 0, 2]
     assert np.allclose(reps[0], [[0, 0, 0], [3, 0, 0]], atol=1e-2)
     # Map-wide labels restricted to a subset give the same groups and spans.
     rng = np.random.default_rng(2)
-    all_labels = collinear_labels(flat.segments, chunk=64)
+    all_labels = collinear_labels(flat.segments, angle, dist, chunk=64)
     for _ in range(5):
         ids = np.sort(rng.choice(flat.n_segments, 120, replace=False))
-        a, ra = collinear_classes(flat.segments[ids])
-        b, rb = collinear_classes(flat.segments[ids], label=all_labels[ids])
+        a, ra = collinear_classes(flat.segments[ids], angle, dist)
+        b, rb = collinear_classes(flat.segments[ids], angle, dist, label=all_labels[ids])
         assert (a == b).all() and np.allclose(ra, rb)
 
 
 def test_vectorised_stretches_and_weak_axes_match_the_scalar_ones():
-    from matcher import posegrid
+    from matcher.stage1 import posegrid
 
     rng = np.random.default_rng(11)
     ang = rng.uniform(0, np.pi, (3, 12))
@@ -249,8 +252,8 @@ def test_vectorised_stretches_and_weak_axes_match_the_scalar_ones():
 def _loose_set_facing_an_edge(walls):
     """Three strips along x through the disk centre (the position is loose
     along x), the last one a vertical edge at (3, 0) seen straight ahead."""
-    from matcher import posegrid
-    from matcher.tree import TreeInput
+    from matcher.stage1 import posegrid
+    from matcher.stage1.tree import TreeInput
 
     strip = posegrid.strip_quadratics(np.array([0.0, 1.0]), np.array(0.0), np.array(0.05))
     quad = np.broadcast_to(strip, (3, 1, 6)).copy()
@@ -266,17 +269,17 @@ def test_edge_seen_from_a_loose_region_hand_worked():
     edge at (3, 0): a wall at x = 2 hides it from the whole region, a
     doorway in that wall lets it be seen, and a wall off to the side does
     not matter."""
-    from matcher.tree import _edge_seen_from_region
+    from matcher.stage1.set_checks import edge_seen_from_region
 
     from dataclasses import replace
 
-    from matcher.occlusion import SightRays
+    from matcher.scene.occlusion import SightRays
 
     def seen(walls):
         inp = _loose_set_facing_an_edge(walls)
-        args = ([0, 1, 2], inp.quad.sum(axis=0), np.ones(1, dtype=bool), 1.5, 3)
-        cast = _edge_seen_from_region(inp, *args)  # sight lines cast
-        table = _edge_seen_from_region(replace(inp, sight=SightRays(walls)), *args)  # the map's sight table
+        args = ([0, 1, 2], inp.quad.sum(axis=0), np.ones(1, dtype=bool), replace(DEFAULT, q_max=1.5), 3)
+        cast = edge_seen_from_region(inp, *args)  # sight lines cast
+        table = edge_seen_from_region(replace(inp, sight=SightRays(walls)), *args)  # the map's sight table
         assert cast == table
         return cast
 
@@ -293,7 +296,7 @@ def test_loose_sets_cut_by_the_region_test(flat):
     true lines, three of them door jambs that each fit some twenty jambs.
     The sets of wrong jambs leave the position loose, so the pinned test
     never runs on them; the test on their whole feasible region
-    (tree._edge_seen_from_region) cuts them: with a budget of 3000 nodes
+    (set_checks.edge_seen_from_region) cuts them: with a budget of 3000 nodes
     (the test starting after 300) the search ends at about 2300. Without it
     the full search takes over 10000 nodes."""
     from dataclasses import replace
@@ -317,8 +320,8 @@ def test_aiming_at_large_sets_first_finds_the_same_sets_sooner(flat, monkeypatch
     enumerates some thirty of them before it meets the six; the passes
     aiming at large sets first (tree.search's default) return the same sets
     in a fraction of the nodes."""
-    import matcher.generate as generate
-    from matcher.tree import search
+    import matcher.stage1.generate as generate
+    from matcher.stage1.tree import search
 
     cam = paper_camera(1.2, 0.0)
     rng = np.random.default_rng([0, 5])
@@ -340,18 +343,19 @@ def test_aiming_at_large_sets_first_finds_the_same_sets_sooner(flat, monkeypatch
 
 
 @pytest.mark.parametrize("box_filter", [False, True])
-def test_sight_clear_against_shapely(flat, monkeypatch, box_filter):
-    """matcher.occlusion.sight_clear against shapely on the example map's
+def test_sight_clear_against_shapely(flat, box_filter):
+    """matcher.scene.occlusion.sight_clear against shapely on the example map's
     walls: sight lines from random cameras to random floor points and to
     points on wall faces, trimmed by the end margin, cross no wall edge
     exactly when the function says clear (with and without the edges'
     bounding-box filter that large maps use)."""
     from shapely.geometry import LineString, MultiLineString
 
-    import matcher.occlusion as occlusion
+    import matcher.scene.occlusion as occlusion
 
-    if box_filter:
-        monkeypatch.setattr(occlusion, "_BOX_FILTER_EDGES", 0)
+    from dataclasses import replace
+
+    work = replace(DEFAULT.internals, box_filter_edges=0) if box_filter else DEFAULT.internals
     walls = occlusion.wall_edges(flat)
     outline = MultiLineString([[tuple(a), tuple(b)] for a, b in zip(*walls)])
     rng = np.random.default_rng(3)
@@ -363,7 +367,7 @@ def test_sight_clear_against_shapely(flat, monkeypatch, box_filter):
         pts = lo + rng.random((30, 2)) * (hi - lo)
         on_wall = rng.integers(0, len(walls[0]), 15)
         pts[:15] = walls[0][on_wall] + rng.random((15, 1)) * (walls[1][on_wall] - walls[0][on_wall])
-        got = occlusion.sight_clear(cam, pts, walls, margin)
+        got = occlusion.sight_clear(cam, pts, walls, margin, work)
         for p, clear in zip(pts, got):
             r = p - cam
             u = r / np.linalg.norm(r)
@@ -377,8 +381,8 @@ def test_lines_reached_as_bits_equals_the_matrix_product(flat, monkeypatch):
     """The look-ahead counts the lines a candidate still reaches as bits of
     one integer (up to 63 lines) or by a one-hot matrix product (more): both
     give the same search, set for set and node for node."""
-    import matcher.generate as generate
-    import matcher.tree as tree
+    import matcher.stage1.generate as generate
+    import matcher.stage1.tree as tree
 
     cam = paper_camera(1.2, 0.0)
     rng = np.random.default_rng([1, 5])

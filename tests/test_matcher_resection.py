@@ -14,8 +14,16 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 import matcher  # noqa: E402
-from matcher.constraints import wrap  # noqa: E402
-from matcher.resection import resect, triples, vertical_hypotheses  # noqa: E402
+from linemap.geometry import wrap  # noqa: E402
+from matcher.tolerances import DEFAULT  # noqa: E402
+from matcher.stage1.resection import resect as _resect  # noqa: E402
+from matcher.stage1.resection import triples, vertical_hypotheses  # noqa: E402
+
+WORK = DEFAULT.internals
+
+
+def resect(points, alpha):
+    return _resect(points, alpha, WORK.resection_min_range_m)
 from simulate import make_frame, paper_camera, pose_error  # noqa: E402
 
 
@@ -63,7 +71,7 @@ def test_triples_are_compatible_and_on_three_lines():
     compat = rng.random((K, K)) < 0.5
     compat = np.triu(compat, 1)
     compat = compat | compat.T
-    t = triples(compat, np.arange(K), line)
+    t = triples(compat, np.arange(K), line, WORK.resection_max_triples)
     assert len(t)
     assert (line[t[:, 0]] != line[t[:, 1]]).all() and (line[t[:, 1]] != line[t[:, 2]]).all()
     assert (line[t[:, 0]] != line[t[:, 2]]).all()
@@ -88,7 +96,7 @@ def test_vertical_hypotheses_find_the_true_set_first():
     compat = (seg[:, None] != seg[None, :]) & (line[:, None] != line[None, :])
     prior = (2.3, 0.8, math.radians(30.0), 0.5, math.radians(20.0))
     sets, inits = vertical_hypotheses(edges[seg], seg, line, np.ones(K, bool), compat, lines_alpha,
-                                      np.full(6, 0.004), prior, max_hypotheses=5, min_lines=4)
+                                      np.full(6, 0.004), prior, None, DEFAULT, max_hypotheses=5, min_lines=4)
     assert sets
     best = sets[0]
     assert len(best) == 6 and (seg[best] == line[best]).all()
@@ -96,7 +104,7 @@ def test_vertical_hypotheses_find_the_true_set_first():
     # Outside the prior: nothing.
     far = (12.0, 9.0, 0.0, 0.5, math.radians(20.0))
     assert vertical_hypotheses(edges[seg], seg, line, np.ones(K, bool), compat, lines_alpha,
-                               np.full(6, 0.004), far)[0] == []
+                               np.full(6, 0.004), far, None, DEFAULT, 25, 4)[0] == []
 
 
 @pytest.mark.slow

@@ -1,5 +1,5 @@
 """Stage 2's slide of loosely fixed poses to where their lines fit
-(matcher/slide.py): the search on a made-up fit count, then the view of
+(matcher/stage2/slide.py): the search on a made-up fit count, then the view of
 one column's corners on the Barcelona pavilion that it was made for."""
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ sys.path.insert(0, str(ROOT / "tools"))
 
 import matcher  # noqa: E402
 from mapkit.cli import main as mapkit_main  # noqa: E402
-from matcher import slide  # noqa: E402
+from matcher.stage2 import slide  # noqa: E402
 from simulate import make_frame, pose_error  # noqa: E402
 
 
@@ -35,18 +35,18 @@ def test_slides_along_the_loose_axis_to_the_nearest_fit():
     # (independent of the position here) unchanged.
     info = np.diag([1e6, 1.0, 1e6])[None]
     poses = np.array([[2.0, 0.0, 0.3]])
-    moved, move = slide.slide_to_fit(poses, info, _count_where(lambda x, y: y >= 0.6), np.array([1.0]))
+    moved, move = slide.slide_poses(poses, info, _count_where(lambda x, y: y >= 0.6), np.array([1.0]))
     assert move.tolist() == [True]
     assert moved[0, 0] == pytest.approx(2.0, abs=1e-9)
     assert moved[0, 2] == pytest.approx(0.3, abs=1e-9)
-    assert 0.6 <= moved[0, 1] <= 0.6 + 2 * slide.MAX_M / 2**8 + 1e-9
+    assert 0.6 <= moved[0, 1] <= 0.6 + 2 * slide.DEFAULT_INTERNALS.slide_max_m / 2**8 + 1e-9
 
 
 def test_the_yaw_follows_the_position_as_the_information_says():
     # Yaw and y correlated: the cheapest yaw for a move d in y is
     # -A_yp d / A_yy = -0.5 d.
     info = np.array([[[1e6, 0.0, 0.0], [0.0, 1.0, 5.0], [0.0, 5.0, 10.0]]])
-    moved, move = slide.slide_to_fit(np.zeros((1, 3)), info, _count_where(lambda x, y: y <= -0.4), np.array([1.0]))
+    moved, move = slide.slide_poses(np.zeros((1, 3)), info, _count_where(lambda x, y: y <= -0.4), np.array([1.0]))
     assert move.tolist() == [True]
     assert moved[0, 2] == pytest.approx(-0.5 * moved[0, 1])
 
@@ -54,11 +54,11 @@ def test_the_yaw_follows_the_position_as_the_information_says():
 def test_a_well_fixed_pose_or_no_better_place_stays():
     count = _count_where(lambda x, y: y >= 0.6)
     tight = np.diag([1e6, 1e6, 1e6])[None]  # a millimetre: no room to slide
-    moved, move = slide.slide_to_fit(np.zeros((1, 3)), tight, count, np.array([1.0]))
+    moved, move = slide.slide_poses(np.zeros((1, 3)), tight, count, np.array([1.0]))
     assert not move.any() and np.array_equal(moved, np.zeros((1, 3)))
     loose = np.diag([1e6, 1.0, 1e6])[None]
     nowhere = _count_where(lambda x, y: y >= 10.0)  # beyond the 3 sigma reach
-    _, move = slide.slide_to_fit(np.zeros((1, 3)), loose, nowhere, np.array([1.0]))
+    _, move = slide.slide_poses(np.zeros((1, 3)), loose, nowhere, np.array([1.0]))
     assert not move.any()
 
 

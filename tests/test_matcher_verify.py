@@ -11,9 +11,17 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
-from matcher import verify  # noqa: E402
+from matcher.stage2 import refine as verify  # noqa: E402
 from linemap.camera import world2cam_rotation  # noqa: E402
-from matcher.overlap import _NEAR_M, project_segments  # noqa: E402
+from linemap.geometry import project_segments as _project  # noqa: E402
+from matcher.tolerances import DEFAULT as _TOL  # noqa: E402
+
+_NEAR_M = _TOL.internals.near_plane_m
+
+
+def project_segments(cam, poses, segments):
+    """The projection with the matcher's near plane."""
+    return _project(cam, poses, segments, _NEAR_M)
 from simulate import paper_camera  # noqa: E402
 
 PITCH, HEIGHT = math.radians(12.0), 1.2
@@ -78,7 +86,7 @@ def test_refine_recovers_each_pose_from_exact_rays():
             hyp.append(h)
     start = truth + np.array([0.2, -0.1, math.radians(3.0)])
     got = verify.refine(start, np.array(hyp), np.array(seg_a), np.array(seg_b), np.array(ray_a), np.array(ray_b),
-                        PITCH, HEIGHT)
+                        PITCH, HEIGHT, _TOL.internals)
     assert got == pytest.approx(truth, abs=1e-7)
 
 
@@ -100,7 +108,7 @@ def test_projection_cuts_either_end_behind_the_camera_at_the_near_plane():
 def test_covered_span_recovers_the_shown_part_of_a_segment():
     """Each image line shows a random sub-segment at a random pose (pitched
     camera): covered_span gives back its parameters along the segment."""
-    from matcher.overlap import covered_span
+    from matcher.projection import covered_span
 
     rng = np.random.default_rng(3)
     cam = paper_camera(HEIGHT, math.degrees(PITCH))
@@ -125,7 +133,8 @@ def test_visibility_is_tested_on_the_part_the_line_shows():
     """A floor line across the view, its left part hidden by a wall: a line
     showing the right end is seen, one showing the hidden middle is not,
     though both belong to a segment that has a visible point."""
-    from matcher.rank import visible
+    from matcher.stage2.fit import visible
+    from matcher.tolerances import DEFAULT
 
     cam = paper_camera(HEIGHT, 0.0)
     pose = np.array([[0.0, 0.0, 0.0]])  # at the origin, looking along +x
@@ -136,13 +145,13 @@ def test_visibility_is_tested_on_the_part_the_line_shows():
         sub = seg[:, :1] + np.array([t0, t1])[None, :, None] * (seg[:, 1:] - seg[:, :1])
         return project_segments(cam, pose, sub)[0]
 
-    assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls).all()  # y in [-1.8, -1.4]
-    assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls).any()  # y in [-0.4, 1.2]
-    assert visible(cam, pose[:0], seg[:0], line_showing(0.2, 0.6)[:0], walls).shape == (0,)
+    assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls, DEFAULT.internals).all()  # y in [-1.8, -1.4]
+    assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls, DEFAULT.internals).any()  # y in [-0.4, 1.2]
+    assert visible(cam, pose[:0], seg[:0], line_showing(0.2, 0.6)[:0], walls, DEFAULT.internals).shape == (0,)
 
 
 def test_shown_spans_agree_with_covered_span():
-    from matcher.overlap import ShownSpans, covered_span
+    from matcher.projection import ShownSpans, covered_span
 
     rng = np.random.default_rng(4)
     cam = paper_camera(HEIGHT, math.degrees(PITCH))
@@ -160,7 +169,7 @@ def test_reprojection_cost_sums_end_point_errors_over_noise():
     2 (1 / s)^2 with s its noise bound; a segment behind the camera, inf."""
     from types import SimpleNamespace
 
-    from matcher.rank import reprojection_cost
+    from matcher.stage2.rank import reprojection_cost
     from matcher.tolerances import Tolerances
 
     cam = paper_camera(HEIGHT, math.degrees(PITCH))
@@ -212,7 +221,7 @@ def test_three_vertical_edges_alone_are_not_accepted():
 
 @pytest.mark.parametrize("pose, vertical_only", [((2.0, 2.5, 30.0), False), ((1.0, 1.5, 20.0), True)])
 def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, vertical_only):
-    """rank.pose_covariance (first order), as standard deviations, against
+    """stage2.covariance.pose_covariance (first order), as standard deviations, against
     the scatter of least-squares poses over 300 draws of the simulator's
     noise (uniform offset and turn, 1 px and 1 degree), on a view of the
     test flat and on its vertical edges alone (bearings only: a looser
@@ -226,7 +235,8 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
 
     from simulate import add_noise, visible_lines
 
-    from matcher.rank import pose_covariance, pose_spread, unit_rays
+    from matcher.stage2.covariance import pose_covariance, pose_spread
+    from matcher.stage2.fit import unit_rays
     from matcher.tolerances import DEFAULT
 
     linemap = small_map
@@ -246,7 +256,7 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
     for _ in range(300):
         rays = unit_rays(cam, add_noise(ideal, rng, 1.0, 1.0, 0.0, cam))
         fit = verify.refine(truth[None], hyp, segs[ids, 0], segs[ids, 1], rays[:, 0], rays[:, 1], cam.pitch,
-                            cam.height_m)[0]
+                            cam.height_m, tol.internals)[0]
         errors.append(fit - truth)
     errors = np.array(errors)
     scatter_m = math.sqrt(np.linalg.eigvalsh(np.cov(errors[:, :2].T))[1])

@@ -59,7 +59,7 @@ def indistinguishable(linemap, camera, frame) -> set:
     matcher's fit bound, inside its extent) and the segment is in plain sight.
     Two door jambs or corners one behind the other on the same image column
     are the usual case: swapping them changes nothing in the image."""
-    from matcher.rank import fits, visible
+    from matcher.stage2.fit import fits, visible
     from matcher.tolerances import DEFAULT
 
     x, y, yaw = frame.pose
@@ -73,13 +73,13 @@ def indistinguishable(linemap, camera, frame) -> set:
     class _Img:
         lines = frame.lines
 
-    ok = fits(camera, _Img, poses, linemap.segments[si], li, DEFAULT)
+    ok = fits(camera, _Img, poses, linemap.segments[si], li, DEFAULT)[0]
     sel = np.nonzero(ok)[0]
     walls = None
-    from matcher.occlusion import wall_edges
+    from matcher.scene.occlusion import wall_edges
 
     walls = wall_edges(linemap)
-    ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls)
+    ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls, DEFAULT.internals)
     return {(int(a), int(b)) for a, b in zip(si[ok], li[ok])}
 
 

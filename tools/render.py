@@ -32,9 +32,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from linemap.argv import join_negative_values  # noqa: E402
 from linemap.lmap import SegmentKind  # noqa: E402
 from linemap.camera import Camera  # noqa: E402
-from matcher.freespace import free_space  # noqa: E402
+from matcher.scene.freespace import free_space  # noqa: E402
 from linemap.geometry import in_field_of_view  # noqa: E402
-from matcher.occlusion import inside_walls, wall_edges  # noqa: E402
+from matcher.scene.occlusion import inside_walls, wall_edges  # noqa: E402
 
 LINTEL, WINDOW = SegmentKind.LINTEL, SegmentKind.WINDOW
 

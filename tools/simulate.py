@@ -25,8 +25,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from linemap.camera import Camera  # noqa: E402
-from matcher.constraints import wrap  # noqa: E402
-from matcher.occlusion import wall_edges  # noqa: E402
+from matcher.stage1.constraints import wrap  # noqa: E402
+from matcher.scene.occlusion import wall_edges  # noqa: E402
 
 PEQ = {1: (0.2, 10.0), 2: (0.4, 20.0), 3: (0.6, 30.0), 4: (0.8, 40.0), 5: (1.0, 50.0)}
 
@@ -250,7 +250,7 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
     pose stays within the prior bounds. A branch is cut when it cannot beat
     the largest interpretation found. Returns ``(pose (x, y, yaw_deg) or
     None, matches, nodes, timed_out)``."""
-    from matcher import verify
+    from matcher.stage2 import refine as verify
     from matcher.checks import check_lines, check_prior
     from linemap.geometry import in_field_of_view
     from matcher.tolerances import DEFAULT

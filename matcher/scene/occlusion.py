@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from matcher.tolerances import DEFAULT_INTERNALS, Internals
+
 
 class WallEdges(tuple):
     """Wall edges ``(a (E, 2), b (E, 2))``, a plain pair to unpack, that also
@@ -58,13 +60,14 @@ def inside_walls(points: np.ndarray, walls) -> np.ndarray:
     return ((straddle & (xc > x)).sum(axis=1) % 2) == 1
 
 
-def face_normals(segments: np.ndarray, walls, probe: float = 0.03) -> np.ndarray:
+def face_normals(segments: np.ndarray, walls, work: Internals = DEFAULT_INTERNALS) -> np.ndarray:
     """(N, 2) unit normal of the wall face each non-vertical segment (N, 2, 3)
     lies on, pointing into the room; zeros where there is no single face (a
     vertical segment, a line in a doorway or away from the walls). Probed
-    ``probe`` metres to either side at a quarter, half and three quarters
+    ``face_probe_m`` metres to either side at a quarter, half and three quarters
     of the segment: the face is where one side is wall all three times and
     the other side never. Such a segment is seen only from the room side."""
+    probe = work.face_probe_m
     n = len(segments)
     out = np.zeros((n, 2))
     d = segments[:, 1, :2] - segments[:, 0, :2]
@@ -85,20 +88,15 @@ def face_normals(segments: np.ndarray, walls, probe: float = 0.03) -> np.ndarray
     return out
 
 
-#: Most (ray, wall edge) pairs :func:`ray_cast` handles at once (its arrays
-#: then stay under about 10 MB each): the first frame on a map casts the rays
-#: of every vertical edge it meets, 720 each.
-_RAY_PAIRS = 1 << 20
-
-
-def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float) -> np.ndarray:
+def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float, chunk: int) -> np.ndarray:
     """(R,) distance along each ray (origins (R, 2), unit dirs (R, 2)) to the
-    first wall edge crossed beyond ``skip`` metres; inf if none."""
+    first wall edge crossed beyond ``skip`` metres; inf if none. At most
+    ``chunk`` (ray, wall edge) pairs are handled at once."""
     if walls is None or len(walls[0]) == 0:
         return np.full(len(origins), np.inf)
-    step = max(1, _RAY_PAIRS // len(walls[0]))
+    step = max(1, chunk // len(walls[0]))
     if len(origins) > step:  # in chunks of rays: (rays, edges) arrays stay small
-        return np.concatenate([ray_cast(origins[i:i + step], dirs[i:i + step], walls, skip)
+        return np.concatenate([ray_cast(origins[i:i + step], dirs[i:i + step], walls, skip, chunk)
                                for i in range(0, len(origins), step)])
     ea, eb = walls
     s = eb - ea  # (E, 2)
@@ -119,11 +117,12 @@ class SightRays:
     b + pi, up to that distance. Rays are cast once per point and kept, so
     a map's table fills up over the frames."""
 
-    def __init__(self, walls, bins: int = 720, skip: float = 0.05) -> None:
+    def __init__(self, walls, work: Internals = DEFAULT_INTERNALS) -> None:
         self.walls = walls
-        self.bins = int(bins)
+        self.bins = int(work.sight_bins)
         self.step = 2 * np.pi / self.bins
-        self.skip = float(skip)
+        self.skip = float(work.sight_skip_m)
+        self.chunk = int(work.ray_chunk)
         self._rows: dict[tuple[float, float], np.ndarray] = {}
         self._wide: dict[tuple[float, float], np.ndarray] = {}
         bear = np.arange(self.bins) * self.step - np.pi
@@ -152,7 +151,7 @@ class SightRays:
         if todo:
             o = np.repeat(points[todo], self.bins, axis=0)
             d = np.tile(self._dirs, (len(todo), 1))
-            got = ray_cast(o, d, self.walls, self.skip).reshape(len(todo), self.bins)
+            got = ray_cast(o, d, self.walls, self.skip, self.chunk).reshape(len(todo), self.bins)
             for i, row in zip(todo, got):
                 self._rows[keys[i]] = row
                 # The widened row: each bin the longest of itself and its neighbours.
@@ -162,12 +161,8 @@ class SightRays:
         return np.stack([table[k] for k in keys]) if keys else np.zeros((0, self.bins))
 
 
-#: Above this many wall edges the sight lines are first tested against the
-#: edges' bounding boxes (below it the filter costs more than it saves).
-_BOX_FILTER_EDGES = 512
-
-
-def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -> np.ndarray:
+def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float,
+                work: Internals = DEFAULT_INTERNALS) -> np.ndarray:
     """(Q,) bool: the floor sight line from ``cam`` (2,) or (Q, 2) to each of
     ``points`` (Q, 2) crosses no wall edge farther than ``end_margin`` metres
     from both its ends (the points lie on wall faces; the camera may be a
@@ -179,13 +174,14 @@ def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float) -
     is a signed distance ``n . x - n . p`` for all pairs at once, as one
     matrix product of homogeneous points ``(x, y, 1)`` and lines
     ``(n_x, n_y, -n . p)``: a handful of numpy calls, this runs at every
-    leaf of the tree."""
+    leaf of the tree. Above ``box_filter_edges`` wall edges the sight lines
+    are first tested against the edges' bounding boxes."""
     if walls is None or len(walls[0]) == 0 or len(points) == 0:
         return np.ones(len(points), dtype=bool)
     ea, eb = walls
     cam = np.asarray(cam, dtype=float)  # (2,) or (Q, 2): broadcast in every use below
     ends, lines = (walls.ends, walls.lines) if isinstance(walls, WallEdges) else _homogeneous(ea, eb)
-    if len(ea) > _BOX_FILTER_EDGES:
+    if len(ea) > work.box_filter_edges:
         lo = np.minimum(points.min(axis=0), cam.reshape(-1, 2).min(axis=0))
         hi = np.maximum(points.max(axis=0), cam.reshape(-1, 2).max(axis=0))
         near = (np.maximum(ea, eb) >= lo).all(axis=1) & (np.minimum(ea, eb) <= hi).all(axis=1)

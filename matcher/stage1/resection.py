@@ -32,33 +32,18 @@ import time
 
 import numpy as np
 
-from matcher.constraints import wrap
-from matcher.rank import within_prior
+from linemap.geometry import wrap
+from matcher.prior import within_prior
+from matcher.tolerances import Tolerances
 
-#: A line counts as explained at a resected pose if its bearing is within
-#: this many times its noise bound of a candidate edge's: the pose itself
-#: comes from three noisy bearings (stage 2 refits and applies the exact
-#: fit test).
-_BEARING_SLACK = 3.0
-#: Most triples of correspondences solved in one batch (memory).
-_CHUNK = 20000
-#: Best poses of each batch kept for the final choice.
-_KEEP = 200
-#: Most triples solved per frame: a bound on the time on any scene.
-_MAX_TRIPLES = 200000
-#: Every edge of a triple must stand at least this far in front of its
-#: resected camera, metres: nearer, the solution is a degenerate one.
-_MIN_RANGE_M = 0.2
-
-
-def resect(points: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def resect(points: np.ndarray, alpha: np.ndarray, min_range_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Camera poses from three vertical edges each.
 
     ``points`` (P, 3, 2) the edges' floor points (world, metres), ``alpha``
     (P, 3) their bearings, radians, right of the optical axis. Returns
     ``(poses (P, 3) x, y, yaw in radians, ok (P,) bool)``; ``ok`` is False
     where the three are degenerate (the camera on the circle through them,
-    or edges not all in front)."""
+    or edges not all at least ``min_range_m`` in front)."""
     s, c = np.sin(alpha), np.cos(alpha)
     px, py = points[..., 0], points[..., 1]
     # Rows of the 3 x 4 system in (u, v, tx, ty): -s qx - c qy = 0.
@@ -78,13 +63,13 @@ def resect(points: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarra
     ahead = qx * c - qy * s
     flip = np.where(ahead[:, 0] < 0, -1.0, 1.0)
     u, v, tx, ty, ahead = u * flip, v * flip, tx * flip, ty * flip, ahead * flip[:, None]
-    ok &= (ahead > _MIN_RANGE_M).all(axis=1)
+    ok &= (ahead > min_range_m).all(axis=1)
     x = -(u * tx - v * ty)
     y = -(v * tx + u * ty)
     return np.stack([x, y, np.arctan2(v, u)], axis=-1), ok
 
 
-def triples(compat: np.ndarray, corr: np.ndarray, line: np.ndarray, most: int = _MAX_TRIPLES) -> np.ndarray:
+def triples(compat: np.ndarray, corr: np.ndarray, line: np.ndarray, most: int) -> np.ndarray:
     """(T, 3) triples of correspondences of ``corr`` (indices into ``compat``
     (K, K) bool), on three different lines (``line`` (K,)), pairwise
     compatible. Line triples whose lines have the fewest candidates come
@@ -113,9 +98,8 @@ def triples(compat: np.ndarray, corr: np.ndarray, line: np.ndarray, most: int = 
 
 
 def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray, vertical: np.ndarray,
-                        compat: np.ndarray, alpha: np.ndarray, alpha_eps: np.ndarray, prior, free=None,
-                        free_m: float = 0.0, max_hypotheses: int = 25, min_lines: int = 4,
-                        deadline: float = math.inf):
+                        compat: np.ndarray, alpha: np.ndarray, alpha_eps: np.ndarray, prior, free,
+                        tol: Tolerances, max_hypotheses: int, min_lines: int, deadline: float = math.inf):
     """Sets of correspondences from resected poses.
 
     Per correspondence k (K,): ``points`` (K, 2) the floor point of its
@@ -125,23 +109,26 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     ``compat`` (K, K) stage 1's pairwise compatibility. Per image line:
     ``alpha``, ``alpha_eps`` (M,) bearing and its noise bound, radians.
     ``prior`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians), ``free`` the map's
-    free space or None. Triples are solved in batches of _CHUNK; none is
-    started once ``time.perf_counter()`` is past ``deadline``.
+    free space or None. Triples are solved in batches of
+    ``resection_chunk``; none is started once ``time.perf_counter()`` is
+    past ``deadline``.
 
     Every pairwise compatible triple on three lines is resected; at each
     pose inside the prior (and free space) the lines explained are those
     with a vertical correspondence whose edge is seen within
-    ``_BEARING_SLACK`` times the line's noise bound of its bearing. Poses
+    ``resection_bearing_slack`` times the line's noise bound of its bearing. Poses
     explaining at least ``min_lines`` lines, most first, then smallest
     normalised bearing error, give the sets (per explained line its best
     edge, one edge per line) with the pose. Returns ``(sets, inits)``: at
     most ``max_hypotheses`` index arrays into the correspondences and
     (H, 3) poses ``(x, y, yaw)``."""
+    work = tol.internals
+    slack, chunk = work.resection_bearing_slack, work.resection_chunk
     corr = np.nonzero(vertical)[0]
     empty = ([], np.zeros((0, 3)))
     if len(np.unique(corr_line[corr])) < max(3, min_lines):
         return empty
-    tri = triples(compat, corr, corr_line)
+    tri = triples(compat, corr, corr_line, work.resection_max_triples)
     if not len(tri):
         return empty
     # Vertical correspondences sorted by line, so that a line's best edge
@@ -149,13 +136,13 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     corr = corr[np.argsort(corr_line[corr], kind="stable")]
     starts = np.unique(corr_line[corr], return_index=True)[1]
     keys, kept_poses, kept_err = [], [], []
-    for c0 in range(0, len(tri), _CHUNK):
+    for c0 in range(0, len(tri), chunk):
         if c0 and time.perf_counter() > deadline:
             break
-        t = tri[c0:c0 + _CHUNK]
-        poses, ok = resect(points[t], alpha[corr_line[t]])
+        t = tri[c0:c0 + chunk]
+        poses, ok = resect(points[t], alpha[corr_line[t]], work.resection_min_range_m)
         poses = poses[ok]
-        poses = poses[within_prior(poses, prior, free, free_m)]
+        poses = poses[within_prior(poses, prior, free, tol)]
         if not len(poses):
             continue
         # Bearing of every vertical correspondence's edge at every pose,
@@ -166,14 +153,14 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
         err = np.where(np.abs(seen) < 0.5 * math.pi, err, np.inf)
         # Per pose and line: the best edge's error (inf if none).
         per_line = np.minimum.reduceat(err, starts, axis=1)  # (P, V)
-        hit = per_line <= _BEARING_SLACK
+        hit = per_line <= slack
         n = hit.sum(axis=1)
         good = np.nonzero(n >= min_lines)[0]
         if not len(good):
             continue
         cost = np.where(hit[good], per_line[good] ** 2, 0.0).sum(axis=1)
         # Only the best few of a chunk can be among the best overall.
-        best = np.lexsort((cost, -n[good]))[:_KEEP]
+        best = np.lexsort((cost, -n[good]))[:work.resection_keep]
         top = good[best]
         keys += list(zip((-n[top]).tolist(), cost[best].tolist()))
         kept_poses.append(poses[top])
@@ -183,7 +170,7 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     kept_poses, kept_err = np.concatenate(kept_poses), np.concatenate(kept_err)
     sets, inits, seen_sets = [], [], set()
     for i in sorted(range(len(keys)), key=keys.__getitem__):
-        s = _explained(kept_err[i], corr, corr_seg, corr_line)
+        s = _explained(kept_err[i], corr, corr_seg, corr_line, slack)
         key = s.tobytes()
         if len(s) < min_lines or key in seen_sets:
             continue
@@ -195,14 +182,15 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     return sets, np.array(inits).reshape(-1, 3)
 
 
-def _explained(err: np.ndarray, corr: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray) -> np.ndarray:
+def _explained(err: np.ndarray, corr: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray,
+               slack: float) -> np.ndarray:
     """Sorted correspondence indices: for each line some correspondence of
     ``corr`` explains (normalised error ``err`` (Kv,) within
-    ``_BEARING_SLACK``), the one of smallest error whose edge no clearer fit
+    ``slack``), the one of smallest error whose edge no clearer fit
     took (one edge per line)."""
     picks, lines_done, segs_used = [], set(), set()
     for k in np.argsort(err).tolist():
-        if not err[k] <= _BEARING_SLACK:
+        if not err[k] <= slack:
             break
         j, g = int(corr_line[corr[k]]), int(corr_seg[corr[k]])
         if j in lines_done or g in segs_used:

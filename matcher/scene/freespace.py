@@ -17,29 +17,26 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
-#: Raster cell, metres: the test's resolution (a point's distance is that of
-#: its cell, good to about a cell diagonal, 7 cm).
-CELL_M = 0.05
-#: Margin of the raster around the regions, metres: farther points read as
-#: this far (they are rejected by any sane tolerance anyway).
-_BORDER_M = 1.0
+from matcher.tolerances import DEFAULT_INTERNALS, Internals
 
 
 class FreeSpace:
     """Distance from a floor point to the map's regions, metres (0 inside)."""
 
-    def __init__(self, ring_points: np.ndarray, ring_offsets: np.ndarray, cell: float = CELL_M) -> None:
+    def __init__(self, ring_points: np.ndarray, ring_offsets: np.ndarray, work: Internals = DEFAULT_INTERNALS) -> None:
         """``ring_points`` (P, 2) and ``ring_offsets`` (K+1,): the region rings
         of a map (outer rings and holes alike; the union of regions is their
-        even-odd set because regions do not overlap)."""
-        self.cell = float(cell)
+        even-odd set because regions do not overlap). The raster's cell and
+        margin are ``free_cell_m`` and ``free_border_m``."""
+        self.cell = float(work.free_cell_m)
+        border = work.free_border_m
         if len(ring_points) == 0:
             self.origin = np.zeros(2)
             self.dist = np.full((1, 1), np.inf)
             self._last = np.zeros(2, dtype=np.int64)
             return
-        lo = ring_points.min(axis=0) - _BORDER_M
-        hi = ring_points.max(axis=0) + _BORDER_M
+        lo = ring_points.min(axis=0) - border
+        hi = ring_points.max(axis=0) + border
         nx, ny = (np.ceil((hi - lo) / self.cell).astype(int) + 1).tolist()
         self.origin = lo
         inside = _even_odd_raster(ring_points, ring_offsets, lo, self.cell, nx, ny)

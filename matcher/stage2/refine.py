@@ -11,7 +11,7 @@ points and the plane through the optical centre and the model segment
     E = 1/N sum (n . R v)^2 + 1/N sum (n . R (P_mid - C))^2
 
 with ``n`` the image line's plane normal, ``v`` the segment's direction and
-``P_mid`` its midpoint (the paper's; :mod:`matcher.rank` scores the middle
+``P_mid`` its midpoint (the paper's; :mod:`matcher.stage2.rank` scores the middle
 of the part of the segment that the line shows, the same point for a
 segment seen whole).
 """
@@ -21,19 +21,9 @@ from __future__ import annotations
 import numpy as np
 
 from linemap.camera import world2cam_rotation
-from matcher.constraints import world_normals
+from linemap.geometry import world_normals
+from matcher.tolerances import Internals
 
-#: Gauss-Newton iterations: from the grid start (within half a yaw step and a
-#: few centimetres) the fit converges in 3 to 4.
-_ITERATIONS = 6
-#: With robust weights, this many plain iterations come first: the stage-1
-#: start may be tens of centimetres off along a weakly fixed direction, and
-#: weighting residuals from there would throw out true matches.
-_PLAIN_FIRST = 2
-#: Gauss-Newton stops early once no hypothesis moves more than this (metres
-#: and radians) in one step: a micrometre, far below the pose's noise.
-_CONVERGED = 1e-6
-_DIAG = np.arange(3)
 
 
 class MatchTerms:
@@ -107,7 +97,8 @@ def _residuals(params, hyp, terms: MatchTerms, jacobian=False):
     return r, J
 
 
-def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=None, iterations=_ITERATIONS):
+def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, work: Internals, robust_scale=None,
+           iterations: int | None = None):
     """Gauss-Newton on all hypotheses together.
 
     ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,), model segment
@@ -115,16 +106,20 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
     points ``ray_a, ray_b`` (T, 3) camera frame. With ``robust_scale`` (T,)
     (radians), residuals are weighted by Tukey's biweight (zero beyond twice
     the scale; iteratively reweighted), so that a wrong match does not drag
-    the pose of the others away. Returns poses (H, 3)."""
+    the pose of the others away. ``work`` gives the iterations (``refine_iterations``
+    unless ``iterations``), the plain ones before robust weights and the
+    convergence step. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
     terms = MatchTerms(seg_a, seg_b, ray_a, ray_b, pitch, height)
     # Sums over each hypothesis's matches as one product: (H, 2T) one-hot of
     # each residual's hypothesis (np.add.at costs more on these short arrays).
     onehot = (np.repeat(hyp, 2)[None, :] == np.arange(H)[:, None]).astype(float)
-    for it in range(iterations):
+    plain_first, converged = work.refine_plain_first, work.refine_converged
+    diag_at = np.arange(3)
+    for it in range(work.refine_iterations if iterations is None else iterations):
         r0, J = _residuals(params, hyp, terms, jacobian=True)
-        if robust_scale is None or it < _PLAIN_FIRST:
+        if robust_scale is None or it < plain_first:
             Jw = J
         else:  # Tukey's biweight: residuals beyond twice the scale get no say
             u = np.clip(np.abs(r0) / (2.0 * robust_scale[:, None]), 0.0, 1.0)
@@ -134,11 +129,11 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, robust_scale=No
         b = onehot @ (Jw * r0.reshape(-1, 1))
         # Small Levenberg damping keeps degenerate hypotheses (all lines
         # parallel) from jumping away; it is negligible for a well-posed set.
-        diag = A[:, _DIAG, _DIAG]
-        A[:, _DIAG, _DIAG] = diag + (1e-9 + 1e-6 * diag.sum(axis=1))[:, None]
+        diag = A[:, diag_at, diag_at]
+        A[:, diag_at, diag_at] = diag + (1e-9 + 1e-6 * diag.sum(axis=1))[:, None]
         step = np.linalg.solve(A, b[..., None])[..., 0]
         params -= step
-        if np.abs(step).max() < _CONVERGED and (robust_scale is None or it >= _PLAIN_FIRST):
+        if np.abs(step).max() < converged and (robust_scale is None or it >= plain_first):
             break  # every hypothesis has converged (with its robust weights, if any)
     return params
 

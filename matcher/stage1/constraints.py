@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from linemap.camera import Camera
-from linemap.geometry import wrap  # noqa: F401  (re-exported: stage code imports it from here)
+from linemap.geometry import world_normals, wrap
 
 
 #: The noise cases of :func:`_perturbed_lines`: (rotation, offset) signs.
@@ -168,21 +168,6 @@ def unary_yaws(normals: np.ndarray, directions: np.ndarray, pitch: float):
     return y1, y2, slope
 
 
-def world_normals(normals: np.ndarray, yaw: np.ndarray, pitch: float) -> np.ndarray:
-    """(..., 3) world directions ``R^T n`` of camera-frame vectors (..., 3)
-    (plane normals, rays) at yaws (...), broadcast together, written out from R's rows r, d, f of method.md section 2
-    (no (..., 3, 3) rotations: cheaper on these arrays). With ``f_h = n_z
-    cos p - n_y sin p``: ``(f_h cos y + n_x sin y, f_h sin y - n_x cos y,
-    -n_y cos p - n_z sin p)``."""
-    cp, sp = math.cos(pitch), math.sin(pitch)
-    c, s = np.cos(yaw), np.sin(yaw)
-    nx, ny, nz = normals[..., 0], normals[..., 1], normals[..., 2]
-    ahead = nz * cp - ny * sp
-    w = np.empty(np.broadcast_shapes(np.shape(yaw), nx.shape) + (3,))
-    w[..., 0] = ahead * c + nx * s
-    w[..., 1] = ahead * s - nx * c
-    w[..., 2] = -ny * cp - nz * sp
-    return w
 
 
 def position_line(normal_world: np.ndarray, point: np.ndarray, height: float):

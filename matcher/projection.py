@@ -1,8 +1,11 @@
-"""Model segments against image lines at a known pose: distance and overlap.
+"""Model segments against image lines at a known pose: distance, overlap,
+and the part of a segment a line shows.
 
-Used after stage 2 has a pose: to tell which piece of a group of collinear
-segments an image line shows (the constraints, on infinite lines, cannot),
-and to add the image lines of visible segments that stage 1 left unmatched.
+Used by both stages: stage 1 tests visibility on the part of a segment its
+line shows (:class:`ShownSpans`), stage 2 tells which piece of a group of
+collinear segments an image line shows (the constraints, on infinite lines,
+cannot), fits lines to projected segments and adds the lines of visible
+segments that stage 1 left unmatched.
 """
 
 from __future__ import annotations
@@ -12,29 +15,22 @@ import math
 import numpy as np
 
 from linemap.camera import Camera
-from linemap.geometry import project_segments as _project
-
-#: Segments are cut this far in front of the optical centre before projecting, metres.
-_NEAR_M = 0.05
+from linemap.geometry import project_segments
 
 
-def project_segments(camera: Camera, poses: np.ndarray, segments: np.ndarray):
-    """:func:`linemap.geometry.project_segments` with the matcher's near plane."""
-    return _project(camera, poses, segments, _NEAR_M)
-
-
-def distance_and_overlap(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines: np.ndarray):
-    """For pairs t of (segment (T, 2, 3), image line (T, 2, 2)) at poses (T, 3):
+def distance_and_overlap(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines: np.ndarray, near_m: float):
+    """For pairs t of (segment (T, 2, 3), image line (T, 2, 2)) at poses (T, 3),
+    segments cut ``near_m`` in front of the camera:
     ``(dist (T,), overlap (T,))`` in pixels: the larger distance of the line's
     end points to the projected segment's line, and the length along the
     image line shared with the projected segment (negative: a gap)."""
-    uv, ok = project_segments(camera, poses, segments)
+    uv, ok = project_segments(camera, poses, segments, near_m)
     return projected_distance_and_overlap(uv, ok, lines)
 
 
 def projected_distance_and_overlap(uv: np.ndarray, ok: np.ndarray, lines: np.ndarray):
     """:func:`distance_and_overlap` for segments already projected
-    (:func:`project_segments`' ``uv`` (T, 2, 2) and ``ok`` (T,))."""
+    (:func:`linemap.geometry.project_segments`' ``uv`` (T, 2, 2) and ``ok`` (T,))."""
     dist = projected_end_distances(uv, ok, lines).max(axis=1)
     dl = lines[:, 1] - lines[:, 0]
     L = np.hypot(dl[:, 0], dl[:, 1])
@@ -49,7 +45,7 @@ def projected_distance_and_overlap(uv: np.ndarray, ok: np.ndarray, lines: np.nda
 def projected_end_distances(uv: np.ndarray, ok: np.ndarray, lines: np.ndarray) -> np.ndarray:
     """(T, 2) distances, pixels, of each image line's (T, 2, 2) end points to
     the line through its projected segment (``uv`` (T, 2, 2), ``ok`` (T,) as
-    :func:`project_segments` gives them); inf where nothing is in front."""
+    :func:`linemap.geometry.project_segments` gives them); inf where nothing is in front."""
     p, q = uv[:, 0], uv[:, 1]
     dq = q - p
     lq = np.hypot(dq[:, 0], dq[:, 1])
@@ -65,7 +61,7 @@ def covered_span(camera: Camera, poses: np.ndarray, segments: np.ndarray, lines:
     of the line, the point of the segment's 3D line closest to its sight
     ray, clipped to the segment. A line that shows a sliver of a long
     segment (the rest hidden by a wall or out of the image) covers that
-    sliver only: visibility is tested there (rank.visible). (For many calls
+    sliver only: visibility is tested there (:func:`matcher.stage2.fit.visible`). (For many calls
     on the same pairs, :class:`ShownSpans`.)"""
     c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
     p, q, dz = _level_rays(camera, lines)  # turned by the yaw below

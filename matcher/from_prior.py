@@ -1,0 +1,126 @@
+"""Localisation from a prior: :func:`localize`.
+
+    lines -> frame (matcher.frame) -> candidates (matcher.candidates)
+          -> strategy (matcher.strategy: stage 1 sources, stage 2 after each)
+          -> LocalizeResult (matcher.result)
+
+Lost mode, with no prior, is :func:`matcher.lost.localize_global`: this
+module's :func:`localize_prepared` once per region.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from linemap.camera import Camera
+from linemap.geometry import wrap
+from linemap.lmap import LineMap
+from matcher.budget import NO_LIMIT, Deadlines
+from matcher.candidates import Candidates, select_candidates
+from matcher.checks import check_lines, check_prior
+from matcher.frame import ImageLines, prepare_lines, too_few_lines
+from matcher.result import LocalizeResult
+from matcher.stage2.covariance import pose_std_of
+from matcher.strategy import Answer, Frame, run_strategy
+from matcher.tolerances import DEFAULT, Tolerances
+
+
+def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
+    """Localise the camera from image ``lines`` (M, 2, 2) or (M, 4) pixels of
+    the ideal pinhole (as :func:`matcher.detect_lines` gives them: undistorted
+    when the camera has distortion).
+
+    ``prior`` is ``(x, y, yaw_deg)``; the true pose is within ``dt`` metres
+    and ``dyaw`` degrees of it. Returns a :class:`LocalizeResult`, falsy with
+    a ``reason`` when no hypothesis is accepted. Bad input (shapes, NaN,
+    ranges) raises ValueError."""
+    t0 = time.perf_counter()
+    tol, img = checked_inputs(linemap, camera, lines, tolerances)
+    px = check_prior(prior, dt, dyaw)
+    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
+    return localize_prepared(linemap, camera, img, px, tol, t0, deadlines)
+
+
+def checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
+    """ValueError unless the map, camera and tolerances are of their types
+    and the lines valid; the tolerances to use and the prepared lines."""
+    if not isinstance(linemap, LineMap):
+        raise ValueError(f"linemap must be a map from matcher.load_map('map.lmap'), got {type(linemap).__name__}")
+    if not isinstance(camera, Camera):
+        raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
+    if tolerances is not None and not isinstance(tolerances, Tolerances):
+        raise ValueError(f"tolerances must be a matcher.Tolerances, got {type(tolerances).__name__}")
+    tol = tolerances or DEFAULT
+    return tol, prepare_lines(camera, check_lines(lines, camera, tol), tol)
+
+
+def localize_prepared(linemap, camera: Camera, img: ImageLines, px, tol: Tolerances, t0: float,
+                      deadlines: Deadlines = NO_LIMIT, candidate_ids=None) -> LocalizeResult:
+    """One prior ``px`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians) on prepared
+    lines, within the time budget's ``deadlines``: the candidates
+    (:mod:`matcher.candidates`), then the strategy (:mod:`matcher.strategy`),
+    then the result. ``candidate_ids``: the segments to consider instead of
+    those of the regions the prior disk meets (lost mode: a region's list)."""
+    times: dict[str, float] = {}
+    cands = select_candidates(linemap, camera, px, tol, candidate_ids)
+    times["select"] = (time.perf_counter() - t0) * 1e3
+    reason = cands if isinstance(cands, str) else too_few_lines(img, tol)
+    if reason:
+        times["total"] = (time.perf_counter() - t0) * 1e3
+        return LocalizeResult(False, reason, time_ms=times, stage1={})
+    answer = run_strategy(Frame(camera, img, cands, px, tol, deadlines))
+    times.update(answer.times)
+    return _result(answer, camera, img, cands, tol, t0, times)
+
+
+def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, tol: Tolerances, t0: float,
+            times: dict) -> LocalizeResult:
+    """The :class:`LocalizeResult` of the strategy's answer: the best ranked
+    pose if accepted, else a falsy result with the reason; the ranking,
+    stage 1's counters and the times either way."""
+    hyps, ranked_h, spent = answer.hyps, answer.ranked, answer.spent
+    stage1 = dict(hyps.counts, out_of_time=bool(hyps.counts.get("out_of_time") or spent))
+    if ranked_h is None:
+        times["total"] = (time.perf_counter() - t0) * 1e3
+        return LocalizeResult(False, f"no consistent set of {tol.min_matches} or more correspondences "
+                              f"({hyps.n_correspondences} correspondences passed the unary tests)"
+                              + _cut_short(hyps, tol, spent), time_ms=times, stage1=stage1)
+    E, order, ids, n_h = ranked_h.score, ranked_h.order, cands.ids, len(hyps.sets)
+
+    def matches_of(h):
+        sel = ranked_h.hyp == h
+        return sorted([int(ids[a]), int(b)] for a, b in zip(ranked_h.local[sel], ranked_h.line[sel]))
+
+    def pose_deg(p):
+        return (float(p[0]), float(p[1]), float(math.degrees(wrap(p[2]))))
+
+    ranked = [(float(E[h]), matches_of(h), pose_deg(ranked_h.poses[h])) for h in order]
+    best = int(order[0])
+    runner = float(E[order[1]]) if n_h > 1 and np.isfinite(E[order[1]]) else None
+    times["total"] = (time.perf_counter() - t0) * 1e3
+    common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=times, ranked=ranked,
+                  sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=stage1)
+    if not E[best] <= tol.e_accept:
+        why = ranked_h.why if not np.isfinite(E[best]) else (
+            f"best score E={E[best]:.3g} is above the acceptance threshold {tol.e_accept:g}")
+        res = LocalizeResult(False, why + _cut_short(hyps, tol, spent), **common)
+        res.score = float(E[best]) if np.isfinite(E[best]) else None
+        return res
+    res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
+                         matches=matches_of(best), **common)
+    # Worked out when first read (a few tenths of a millisecond a robot
+    # that only wants the pose does not spend).
+    res.pose_std_from(lambda: pose_std_of(camera, img, cands.segments, ranked_h, best, tol))
+    return res
+
+
+def _cut_short(hyps, tol: Tolerances, spent: bool) -> str:
+    """What a failure's reason adds when the search stopped early: the time
+    budget spent (by stage 1, or ``spent``: a later step skipped), or
+    stage 1's node or set budget."""
+    if hyps.counts.get("out_of_time") or spent:
+        return f" (time budget of {tol.time_budget_ms:g} ms spent)"
+    return " (hypothesis search truncated)" if hyps.truncated else ""

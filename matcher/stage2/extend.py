@@ -1,0 +1,85 @@
+"""Stage 2: the lines a hypothesis left unmatched that fit visible segments
+at its pose, added back (a hypothesis that lost a true line to a clutter
+line in stage 1 gets it back; a line broken in pieces is explained whole).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from linemap.geometry import project_segments
+from matcher.stage2.fit import fits_projected, visible
+
+
+def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls):
+    """For each hypothesis h of ``hyps``: the (segment, line) pairs that fit
+    at its pose ``poses[h]`` among its unmatched usable lines (see
+    :func:`fits`; the segment visible too), closest first, each line once.
+    A segment takes a further line only where that line shows another part
+    of it than its lines so far (they overlap by at most the end-point
+    noise): a detector breaks a line where its contrast fades or something
+    stands in front, and the pieces are all explained by the one segment,
+    while one-to-one matching would leave all but one unexplained (and a
+    wrong pose that spreads the pieces over several segments would explain
+    more lines). All hypotheses' pairs are tested in one batch. Returns
+    ``(hyp, line, local)`` (A,) of the pairs to add; matches are given as
+    ``hyp, local, line_ids`` (T,)."""
+    usable = np.nonzero(img.usable)[0]
+    N = len(segs)
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(hyps):
+        return empty, empty, empty
+    # Every candidate segment projected once per hypothesis (C, N, 2, 2),
+    # then each (hypothesis, free line, segment) pair looks it up.
+    uv, in_front = project_segments(camera, poses[hyps][:, None, :], np.broadcast_to(segs, (len(hyps),) + segs.shape),
+                                    tol.internals.near_plane_m)
+    ph, pl, ps = [], [], []
+    matched = {}  # (contender, segment) -> the lines on it
+    for c, h in enumerate(hyps.tolist()):
+        sel = np.nonzero(hyp == h)[0]
+        lines_free = np.ones(len(img.usable), dtype=bool)
+        lines_free[line_ids[sel]] = False
+        fl = usable[lines_free[usable]]
+        ph.append(np.full(len(fl) * N, c))
+        pl.append(np.repeat(fl, N))
+        ps.append(np.tile(np.arange(N), len(fl)))
+        for s_, l_ in zip(local[sel].tolist(), line_ids[sel].tolist()):
+            matched.setdefault((c, s_), []).append(l_)
+    pc, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
+    if not len(pc):  # no usable line left free
+        return empty, empty, empty
+    ph = hyps[pc]
+    ok, dist = fits_projected(img, uv[pc, si], in_front[pc, si], li, tol)
+    if ok.any():
+        sel = np.nonzero(ok)[0]
+        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], img.lines[li[sel]], walls, tol.internals)
+    out_h, out_l, out_s = [], [], []
+    lines_taken = set()  # (hypothesis, line)
+    # Closest first within each hypothesis; a line is added once, a segment
+    # again only for a part of it not shown yet.
+    cand = np.nonzero(ok)[0]
+    for k in cand[np.lexsort((dist[cand], ph[cand]))].tolist():
+        c, h, s_, l_ = int(pc[k]), int(ph[k]), int(si[k]), int(li[k])
+        if (h, l_) in lines_taken:
+            continue
+        on_it = matched.setdefault((c, s_), [])
+        if on_it:
+            spans = _spans_along(np.broadcast_to(uv[c, s_], (len(on_it) + 1, 2, 2)), img.lines[on_it + [l_]])
+            overlap = np.minimum(spans[:-1, 1], spans[-1, 1]) - np.maximum(spans[:-1, 0], spans[-1, 0])
+            if (overlap > 2.0 * tol.line_end_px).any():
+                continue
+        on_it.append(l_)
+        lines_taken.add((h, l_))
+        out_h.append(h)
+        out_s.append(s_)
+        out_l.append(l_)
+    return (np.array(out_h, dtype=np.int64), np.array(out_l, dtype=np.int64), np.array(out_s, dtype=np.int64))
+
+
+def _spans_along(uv: np.ndarray, lines: np.ndarray) -> np.ndarray:
+    """(T, 2) the interval, pixels, that each line (T, 2, 2) covers along its
+    projected segment ``uv`` (T, 2, 2), from the segment's first end point."""
+    d = uv[:, 1] - uv[:, 0]
+    d = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)[:, None]
+    t = np.einsum("tek,tk->te", lines - uv[:, None, 0], d)
+    return np.sort(t, axis=1)

@@ -1,0 +1,99 @@
+"""Stage 2: does an image line fit a model segment at a refined pose, and is
+the segment visible there?
+
+One fit test (:func:`fits`) serves the whole of stage 2: dropping matches
+that do not fit, sliding a loose pose (with a tighter end allowance), and
+adding the lines of other visible segments. One visibility test
+(:func:`visible`) at the refined pose; stage 1's own, at a grid pose a few
+centimetres off, is looser (:mod:`matcher.stage1.set_checks`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from linemap.geometry import project_segments
+from matcher.projection import covered_span, distance_and_overlap, projected_distance_and_overlap
+from matcher.scene.occlusion import sight_clear
+from matcher.tolerances import Internals
+
+
+def fits(camera, img, poses, segments, line_ids, tol, end_px=None):
+    """The fit test of a line to its segment at a pose: ``(ok (T,) bool,
+    dist (T,) pixels)`` for matches t of segments (T, 2, 3) and image lines
+    ``line_ids`` (T,) at poses (T, 3). A line fits when it lies within its
+    noise bound (:func:`fit_bound_px`) of the projected segment, and inside
+    its extent: occlusion and the image border only ever shorten the image
+    of a segment, so a line sticking out beyond a projected end point by
+    more than the end-point noise shows another segment. ``end_px``: how
+    far, pixels, a line may stick out in all (default: both end points'
+    noise and ``fit_pose_px`` for the pose; the slide passes the end points'
+    noise alone, so that a pose it accepts has the lines inside their
+    segments). ``dist`` is the lines' larger end-point distance to the
+    projected segment's line."""
+    uv, in_front = project_segments(camera, poses, segments, tol.internals.near_plane_m)
+    return fits_projected(img, uv, in_front, line_ids, tol, end_px)
+
+
+def fits_projected(img, uv, in_front, line_ids, tol, end_px=None):
+    """:func:`fits` on segments already projected
+    (:func:`linemap.geometry.project_segments`' ``uv`` (T, 2, 2), ``in_front`` (T,))."""
+    lines = img.lines[line_ids]
+    L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
+    dist, ov = projected_distance_and_overlap(uv, in_front, lines)
+    end_px = 2 * tol.line_end_px + tol.internals.fit_pose_px if end_px is None else end_px
+    return (dist <= fit_bound_px(L, tol)) & (ov >= L - end_px), dist
+
+
+def fit_bound_px(length, tol):
+    """Largest distance, pixels, of a true line's end points from the
+    projected segment: offset and rotation noise over half its length,
+    plus ``fit_pose_px`` for the pose's own error."""
+    return tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length + tol.internals.fit_pose_px
+
+
+def visible(camera, poses, segments, lines, walls, work: Internals) -> np.ndarray:
+    """(T,) bool: some point of the part of each segment (T, 2, 3) that its
+    image line (T, 2, 2) shows (:func:`~matcher.projection.covered_span`) is in
+    plain sight from the camera at poses (T, 3), walls as occluders. (Points
+    spread over the whole segment would miss a sliver seen past a jamb, and
+    would let a line showing the hidden part of a segment pass on another
+    part's visibility.) At a refined pose (a centimetre off) a sight line
+    that cuts a wall ``refined_sight_end_m`` or more from the segment is
+    blocked: it tells the near and far faces of a door jamb apart."""
+    if walls is None or not len(poses):
+        return np.ones(len(poses), dtype=bool)
+    span = covered_span(camera, poses, segments, lines)  # (T, 2)
+    samples = work.refined_sight_array
+    t = span[:, :1] + samples[None, :] * (span[:, 1:] - span[:, :1])  # (T, n)
+    a, b = segments[:, None, 0, :2], segments[:, None, 1, :2]
+    pts = a + t[..., None] * (b - a)
+    cams = np.repeat(poses[:, :2], len(samples), axis=0)
+    clear = sight_clear(cams, pts.reshape(-1, 2), walls, work.refined_sight_end_m, work)
+    return clear.reshape(len(poses), -1).any(axis=1)
+
+
+def resolve_pieces(camera, poses, label, cls, segs, lines, near_m: float):
+    """(T,) local segment of each match: the member of its collinear group
+    whose projection overlaps the image line most, at the match's pose
+    (T, 3) (segments cut ``near_m`` in front of the camera)."""
+    order = np.argsort(label, kind="stable")
+    sizes = np.bincount(label)
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    n = sizes[cls]
+    t = np.repeat(np.arange(len(cls)), n)
+    k = np.arange(len(t)) - np.repeat(np.cumsum(n) - n, n)
+    cand = order[starts[cls][t] + k]
+    _, ov = distance_and_overlap(camera, poses[t], segs[cand], lines[t], near_m)
+    # Best overlap per match: sort by (match, -overlap) and take the first of each run.
+    o = np.lexsort((-ov, t))
+    first = np.concatenate([[True], t[o][1:] != t[o][:-1]])
+    return cand[o][first]
+
+
+def unit_rays(camera, lines):
+    """(T, 2, 3) unit camera-frame rays of the end points of lines (T, 2, 2)."""
+    r = camera.pixel_rays(lines)
+    return r / np.linalg.norm(r, axis=-1, keepdims=True)

@@ -1,0 +1,195 @@
+"""The matcher's strategy: an ordered list of hypothesis sources, stage 2
+after each.
+
+The paper's method is one pass: stage 1 (generate hypotheses) then stage 2
+(verify them). Three sources of hypotheses stand here, tried in this order,
+each when the answer so far calls for it:
+
+1. :class:`TreeSearch`, the interpretation tree of stage 1
+   (:func:`matcher.stage1.generate.generate`): always.
+2. :class:`SecondSearch`, the tree again keeping sets one smaller than the
+   largest (``match_slack`` 1), when stage 2 doubts the answer: nothing was
+   accepted, or the best hypothesis kept fewer matches than the largest set
+   had (a clutter line may have padded the largest sets past the true one).
+3. :class:`Resection`, poses resected from triples of vertical edges
+   (:mod:`matcher.stage1.resection`), when the tree ran out of budget or
+   nothing it found held: where vertical edges leave the position loose the
+   tree meets thousands of sets.
+
+A source that adds hypotheses replaces the current ones and stage 2
+(:func:`matcher.stage2.rank.verify_hypotheses`) ranks them; the answer that
+no later source doubts stands. The time budget stops the sources after the
+first (``Deadlines.search``); a source skipped or dropped for want of time
+marks the answer as cut short.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from matcher.budget import Deadlines
+from matcher.candidates import Candidates
+from matcher.frame import ImageLines
+from matcher.stage1.generate import Hypotheses, generate, search_again
+from matcher.stage1.resection import vertical_hypotheses
+from matcher.stage2.rank import Ranked, verify_hypotheses
+from matcher.tolerances import Tolerances
+
+
+@dataclass
+class Frame:
+    """One localisation's fixed inputs: the camera, the frame's lines, the
+    candidates, the prior ``(xe, ye, yaw_e, dt, dyaw)`` (radians), the
+    tolerances and the time budget."""
+
+    camera: object
+    img: ImageLines
+    cands: Candidates
+    prior: tuple
+    tol: Tolerances
+    deadlines: Deadlines
+
+
+@dataclass
+class Answer:
+    """The hypotheses so far (None before the first source), their ranking
+    by stage 2 (None while there are none), whether the time budget cut a
+    source (``spent``) and each source's milliseconds (``times``)."""
+
+    hyps: Hypotheses | None = None
+    ranked: Ranked | None = None
+    spent: bool = False
+    times: dict = field(default_factory=dict)
+
+    def accepted(self, tol: Tolerances) -> bool:
+        """Is the best ranked hypothesis accepted?"""
+        r = self.ranked
+        return r is not None and bool(r.score[r.order[0]] <= tol.e_accept)
+
+
+class TreeSearch:
+    """Stage 1: the interpretation tree on the frame's correspondences."""
+
+    name = "generate"
+    needs_time = False  # the first source runs whatever the budget
+
+    def applies(self, answer: Answer, tol: Tolerances) -> bool:
+        return answer.hyps is None
+
+    def run(self, answer: Answer, frame: Frame) -> Hypotheses | None:
+        return generate(frame.cands, frame.camera, frame.img, frame.prior, frame.tol, frame.deadlines)
+
+
+class SecondSearch:
+    """The tree again, keeping sets one smaller than the largest."""
+
+    name = "second_search"
+    needs_time = True
+
+    def applies(self, answer: Answer, tol: Tolerances) -> bool:
+        return answer.ranked is not None and tol.match_slack == 0 and doubtful(answer.ranked, answer.hyps, tol)
+
+    def run(self, answer: Answer, frame: Frame) -> Hypotheses | None:
+        again = search_again(answer.hyps, replace(frame.tol, match_slack=1))
+        if again.counts["out_of_time"]:  # cut short: the first search's sets stand
+            answer.spent = True
+            return None
+        return again
+
+
+class Resection:
+    """Poses resected from triples of vertical edges, with the best few of
+    the tree's sets that stage 2 kept."""
+
+    name = "resection"
+    needs_time = True
+
+    def applies(self, answer: Answer, tol: Tolerances) -> bool:
+        hyps = answer.hyps
+        if hyps is None or "resection" in hyps.counts:
+            return False
+        return hyps.truncated or (answer.ranked is not None and not answer.accepted(tol))
+
+    def run(self, answer: Answer, frame: Frame) -> Hypotheses | None:
+        ranked, kept = answer.ranked, frame.tol.internals.tree_sets_kept
+        held = [] if ranked is None else [int(h) for h in ranked.order if np.isfinite(ranked.score[h])][:kept]
+        more = with_resection(answer.hyps, held, frame)
+        # With nothing ranked yet the resection's (possibly empty) sets stand,
+        # its count with them; otherwise only if it found some.
+        return more if (more.counts["resection"] or ranked is None) else None
+
+
+#: The strategy: the sources in the order they are tried.
+SOURCES = (TreeSearch(), SecondSearch(), Resection())
+
+
+def run_strategy(frame: Frame, sources=SOURCES) -> Answer:
+    """The answer after each source of ``sources`` that the answer so far
+    calls for has run, stage 2 after each that added hypotheses.
+    ``times``: the first source's milliseconds under its name, each later
+    one's (with its stage 2) under its own, and ``verify`` from the end of
+    the first source to the end."""
+    answer, tol = Answer(), frame.tol
+    t_first = None
+    for source in sources:
+        if not source.applies(answer, tol):
+            continue
+        if source.needs_time and not frame.deadlines.may_search():
+            answer.spent = True
+            continue
+        t = time.perf_counter()
+        new = source.run(answer, frame)
+        t_run = time.perf_counter()
+        if new is not None:
+            answer.hyps = new
+            answer.ranked = (verify_hypotheses(frame.camera, frame.img, frame.cands, new, frame.prior, tol)
+                             if new.sets else None)
+        if t_first is None:
+            answer.times[source.name] = (t_run - t) * 1e3
+            t_first = t_run
+        else:
+            answer.times[source.name] = (time.perf_counter() - t) * 1e3
+    if t_first is not None and answer.ranked is not None:
+        answer.times["verify"] = (time.perf_counter() - t_first) * 1e3
+    return answer
+
+
+def with_resection(hyps: Hypotheses, held: list[int], frame: Frame) -> Hypotheses:
+    """The sets ``held`` (indices) of ``hyps`` followed by those of
+    :mod:`matcher.stage1.resection` (poses resected from triples of vertical
+    edges), at most ``max_hypotheses`` in all; ``counts["resection"]`` says
+    how many the resection gave."""
+    tol = frame.tol
+    counts = dict(hyps.counts)
+    counts["resection"] = 0
+    inp = hyps.tree_input
+    if inp is None:
+        return replace(hyps, counts=counts)
+    sets, inits = vertical_hypotheses(frame.cands.reps[hyps.segment, 0, :2], hyps.segment, hyps.line, inp.vertical,
+                                      inp.compat, frame.img.alpha, frame.img.alpha_eps, frame.prior,
+                                      frame.cands.free, tol, tol.max_hypotheses - len(held),
+                                      min_lines=tol.min_matches + 1, deadline=frame.deadlines.search)
+    counts["resection"] = len(sets)
+    init = hyps.init.reshape(-1, 3)[held]
+    return replace(hyps, sets=[hyps.sets[h] for h in held] + sets, init=np.concatenate([init, inits]),
+                   counts=counts)
+
+
+def doubtful(ranked: Ranked, hyps: Hypotheses, tol: Tolerances) -> bool:
+    """Nothing accepted, or the best hypothesis kept fewer matches than the
+    largest stage-1 set had (and stage 1 was not cut short): a clutter line
+    may have padded the largest sets past the true one. One match fewer is
+    doubted only when the best also fits loosely (E above ``e_doubt``): a
+    clutter line dropped from the true set leaves it fitting as well as
+    ever, while the remains of a padded set, whose clutter line took a true
+    line's segment, sit at a pose a few centimetres off."""
+    if hyps.truncated:  # a second search would run out of budget too
+        return False
+    best = int(ranked.order[0])
+    if not ranked.score[best] <= tol.e_accept:
+        return True
+    short = max(len(x) for x in hyps.sets) - int((ranked.hyp == best).sum())
+    return short >= 2 or (short == 1 and ranked.score[best] > tol.e_doubt)
