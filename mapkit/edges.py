@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon
 
-from mapkit.assemble import rings_of
+from mapkit.shapes import rings_of
 from linemap.lmap import SegmentKind
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene

@@ -24,8 +24,8 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
-from mapkit.assemble import polygon_parts
-from mapkit.importers.mesh_load import weld
+from mapkit.shapes import polygon_parts
+from mapkit.importers.mesh.load import weld
 from mapkit.scene import Scene
 from mapkit.tolerances import MERGE
 

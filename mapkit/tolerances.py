@@ -40,7 +40,7 @@ CURVE_STEP_DEG = 10.0
 #: degrees of the vertical (horizontal plane) is classified as such.
 AXIS_DEG = 2.0
 
-# ---- plan reconstruction (mapkit.reconstruct) ------------------------------
+# ---- plan reconstruction (mapkit.importers.dxf) -----------------------------
 
 #: Single wall lines that bound no solid are thickened to this total width.
 THIN_WALL = 0.1
@@ -91,7 +91,7 @@ VIR_MIN_CELL = 0.1
 #: list length grows by at most this fraction: fewer regions, smaller maps.
 VIR_MERGE_GROWTH = 0.15
 
-# ---- meshes (mapkit.importers.mesh, mapkit.mesh_edges) -------------------
+# ---- meshes (mapkit.importers.mesh) ------------------------------------------
 
 #: Mesh heights within this of a level (the floor, the top of the walls)
 #: count as on it: modellers leave objects a few millimetres off the floor.

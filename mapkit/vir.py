@@ -32,7 +32,7 @@ import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from mapkit.assemble import polygon_parts
+from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,

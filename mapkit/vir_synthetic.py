@@ -12,7 +12,7 @@ import numpy as np
 import shapely
 from shapely.geometry import box
 
-from mapkit.assemble import polygon_parts
+from mapkit.shapes import polygon_parts
 from linemap.lmap import SegmentKind
 from mapkit.tolerances import CORNER_DEG
 

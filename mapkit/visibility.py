@@ -26,7 +26,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from mapkit.assemble import polygon_parts
+from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
     OVERLAY_GRID,

@@ -41,7 +41,7 @@ def run(args) -> int:
     if kind == "glb":  # glTF's axes are +Y up: turned, so that viewers and simulators show it upright
         import numpy as np
 
-        from mapkit.importers.mesh_load import Y_UP_TO_Z_UP
+        from mapkit.importers.mesh.load import Y_UP_TO_Z_UP
 
         turn = np.eye(4)
         turn[:3, :3] = Y_UP_TO_Z_UP.T

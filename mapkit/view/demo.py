@@ -17,7 +17,8 @@ import numpy as np
 import shapely
 from shapely.geometry import box
 
-from mapkit.assemble import assemble_map, polygon_parts
+from mapkit.assemble import assemble_map
+from mapkit.shapes import polygon_parts
 from linemap.lmap import LineMap, SegmentKind
 
 #: The camera recorded in the synthetic map's build parameters (camera.json shape).

@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from mapkit.importers.mesh_section import MeshSections
+from mapkit.importers.mesh.section import MeshSections
 from linemap.lmap import SegmentKind
 from mapkit.tolerances import MERGE, MESH_LEVEL
 

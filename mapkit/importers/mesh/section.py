@@ -22,7 +22,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiLineString, MultiPolygon
 
-from mapkit.mesh_edges import edge_faces, face_normals
+from mapkit.importers.mesh.edges import edge_faces, face_normals
 from mapkit.tolerances import MERGE, MESH_OPEN_FRACTION, MESH_THIN_WALL
 
 #: Points per chunk in winding-number tests (memory: chunk x segments booleans).

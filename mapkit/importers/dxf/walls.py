@@ -27,8 +27,8 @@ from scipy.sparse.csgraph import connected_components
 from shapely.geometry import LineString, MultiLineString, MultiPolygon, Point, Polygon
 from shapely.ops import nearest_points, unary_union
 
-from mapkit.assemble import polygon_parts
-from mapkit.reconstruct_types import Stroke
+from mapkit.shapes import polygon_parts
+from mapkit.importers.dxf.strokes import Stroke
 from mapkit.tolerances import COLUMN_MAX_AREA, MERGE, SNAP_GAP, THIN_WALL
 
 #: Double-line wall ends are capped only if both lines run within this many

@@ -16,7 +16,7 @@ import numpy as np
 
 from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.mesh_edges import edge_faces, face_normals
+from mapkit.importers.mesh.edges import edge_faces, face_normals
 from mapkit.options import BuildOptions
 from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_FLOOR_RISE, MESH_LEVEL, PLAUSIBLE_EXTENT
 

@@ -18,7 +18,7 @@ triangulation) are never features. Feature edges that continue each other
 in a straight line through a shared vertex are merged into one segment;
 parts below the floor or above the ceiling are cut off (nobody inside sees them); pieces shorter than
 ``min_length`` are dropped. Vertices must be merged first (see
-:func:`mapkit.importers.mesh_load.weld`): split vertices make every edge a
+:func:`mapkit.importers.mesh.load.weld`): split vertices make every edge a
 border.
 """
 

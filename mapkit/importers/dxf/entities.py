@@ -1,4 +1,4 @@
-"""Flatten DXF model-space entities into :class:`~mapkit.reconstruct_types.Stroke` objects.
+"""Flatten DXF model-space entities into :class:`~mapkit.importers.dxf.strokes.Stroke` objects.
 
 Curves (arcs, circles, ellipses, splines, polyline bulges) become polylines
 whose chords stay within ``CURVE_SAGITTA`` of the curve and turn by at most
@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterator
 import numpy as np
 from ezdxf import path as dxfpath
 
-from mapkit.reconstruct_types import Stroke
+from mapkit.importers.dxf.strokes import Stroke
 from mapkit.tolerances import CURVE_STEP_DEG
 
 #: Entities that carry no building geometry: skipped without a word.
