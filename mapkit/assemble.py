@@ -15,9 +15,7 @@ from shapely.geometry import MultiPolygon, Polygon
 
 from linemap.lmap import LineMap
 from mapkit.shapes import rings_of
-
-#: Lookup grid cell size, metres: a few regions per cell keeps queries cheap.
-DEFAULT_GRID_CELL = 0.5
+from mapkit.tolerances import LOOKUP_GRID_CELL
 
 
 def _flatten_rings(rings: list[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -29,7 +27,7 @@ def _flatten_rings(rings: list[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np
 
 
 def lookup_grid(
-    regions: Sequence, cell: float = DEFAULT_GRID_CELL
+    regions: Sequence, cell: float = LOOKUP_GRID_CELL
 ) -> tuple[np.ndarray, float, tuple[int, int], np.ndarray, np.ndarray]:
     """Exact candidate lists: region r is listed in a cell iff it meets the cell.
 
@@ -60,7 +58,7 @@ def assemble_map(
     region_lists: Sequence[np.ndarray],
     walls,
     meta: dict[str, Any],
-    grid_cell: float = DEFAULT_GRID_CELL,
+    grid_cell: float = LOOKUP_GRID_CELL,
 ) -> LineMap:
     """Build a LineMap.
 
