@@ -90,16 +90,8 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
         kinds={name: int(c) for name, c in zip(KIND_NAMES, counts) if c},
         free_area_m2=float(free.area),
     )
-    return Scene(
-        walls=walls,
-        openings=[],
-        free_space=free,
-        wall_height=top,
-        obstacles=obstacles,
-        segments=segments,
-        kinds=kinds,
-        info=info,
-    )
+    return Scene(walls=walls, openings=[], free_space=free, wall_height=top, obstacles=obstacles,
+                 segments=segments, kinds=kinds, info=info)
 
 
 def _warn(warnings: list[str], message: str) -> None:
