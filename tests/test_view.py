@@ -24,7 +24,7 @@ from mapkit.assemble import assemble_map
 from mapkit.errors import MapkitError
 from linemap.lmap import SegmentKind, save_map
 from mapkit.view import geometry, palette
-from mapkit.view.demo import DEMO_CAMERA, synthetic_flat
+from synthetic_building import DEMO_CAMERA, grid_flat
 from mapkit.view.result import load_result, parse_result
 from mapkit.view.pose_tool import camera_wxyz
 from mapkit.view.result_overlay import image_line_rays
@@ -42,7 +42,7 @@ from linemap.geometry import in_field_of_view, wrap
 @pytest.fixture(scope="module")
 def flat():
     """A 3 x 2 room flat: ~250 segments, ~340 regions."""
-    return synthetic_flat()
+    return grid_flat()
 
 
 @pytest.fixture(scope="module")
@@ -449,7 +449,7 @@ def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
 def test_a_large_map_opens_fast():
     """A map the size of the Barcelona pavilion's (about 1500 segments, 4600
     regions) is ready to serve, and a client has every static node, in < 3 s."""
-    big = synthetic_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
+    big = grid_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
     assert big.n_regions > 4000 and big.n_segments > 1000
     t0 = time.perf_counter()
     ins = Inspector(big, port=0)

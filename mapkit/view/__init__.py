@@ -22,5 +22,7 @@ numpy/shapely and testable alone):
 - :mod:`~mapkit.view.snapshot`: a standalone HTML file of the scene.
 - :mod:`~mapkit.view.headless`: a minimal headless-chromium driver (Chrome
   DevTools Protocol) for the browser test and the README screenshot.
-- :mod:`~mapkit.view.demo`: a synthetic flat for tests and demos.
+
+The synthetic flat the inspector's tests and screenshot use is not here:
+it is :func:`grid_flat` in ``tools/synthetic_building.py``.
 """
