@@ -443,33 +443,32 @@ def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
 
 
 # --------------------------------------------------------------------------
-# Performance
+# A large map (timings: tools/bench_view.py; tests assert behaviour, not seconds)
 
 
-def test_a_large_map_opens_fast():
+def test_a_large_map_opens_and_stays_interactive():
     """A map the size of the Barcelona pavilion's (about 1500 segments, 4600
-    regions) is ready to serve, and a client has every static node, in < 3 s."""
+    regions) is served: a client gets every static node, thousands of
+    outlines start hidden behind their toggle, and a click and a pose change
+    work on it."""
     big = grid_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
     assert big.n_regions > 4000 and big.n_segments > 1000
-    t0 = time.perf_counter()
     ins = Inspector(big, port=0)
     try:
         names = _scene_names(ins.port, timeout=10)
-        elapsed = time.perf_counter() - t0
         assert {"/regions/fill", "/regions/outlines", "/walls", "/segments/floor"} <= names
-        assert elapsed < 3.0, f"opening took {elapsed:.2f} s (build {ins.build_seconds:.2f} s)"
         # Thousands of outlines start hidden (first-frame cost); their toggle shows them.
         outlines = ins.server.scene.get_handle_by_name("/regions/outlines")
         assert not outlines.visible and not ins.panel.toggles["region outlines"].value
         ins.panel.toggles["region outlines"].value = True
         assert outlines.visible
-        # Interaction stays quick: a click and a pose change each well under a second.
-        t1 = time.perf_counter()
+        # A click selects the region under it; a pose change redraws the pose tool.
         x, y = big.region_centres()[2000]
-        ins.select_at(x, y)
+        assert ins.select_at(x, y) == int(big.regions_at(x, y)[0])
         ins.panel.pose.dt.value = 1.0
         ins.update_pose()
-        assert time.perf_counter() - t1 < 1.0
+        assert ins.server.scene.get_handle_by_name("/pose/disk") is not None
+        assert "regions** retained" in ins.panel.pose.summary.content
     finally:
         ins.stop()
 
