@@ -14,27 +14,8 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
 from linemap.lmap import LineMap
-
-#: Lookup grid cell size, metres: a few regions per cell keeps queries cheap.
-DEFAULT_GRID_CELL = 0.5
-
-
-def polygon_parts(geom) -> list[Polygon]:
-    """The non-empty polygons of a Polygon, MultiPolygon or GeometryCollection."""
-    if geom is None or geom.is_empty:
-        return []
-    if isinstance(geom, Polygon):
-        return [geom]
-    return [g for g in getattr(geom, "geoms", []) for g in polygon_parts(g)]
-
-
-def rings_of(geom) -> list[tuple[np.ndarray, bool]]:
-    """(points (n, 2) without the closing repeat, is_hole) for every ring of ``geom``."""
-    out = []
-    for poly in polygon_parts(geom):
-        out.append((np.asarray(poly.exterior.coords)[:-1, :2], False))
-        out += [(np.asarray(r.coords)[:-1, :2], True) for r in poly.interiors]
-    return [(p, h) for p, h in out if len(p) >= 3]
+from mapkit.shapes import rings_of
+from mapkit.tolerances import LOOKUP_GRID_CELL
 
 
 def _flatten_rings(rings: list[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -46,7 +27,7 @@ def _flatten_rings(rings: list[tuple[np.ndarray, bool]]) -> tuple[np.ndarray, np
 
 
 def lookup_grid(
-    regions: Sequence, cell: float = DEFAULT_GRID_CELL
+    regions: Sequence, cell: float = LOOKUP_GRID_CELL
 ) -> tuple[np.ndarray, float, tuple[int, int], np.ndarray, np.ndarray]:
     """Exact candidate lists: region r is listed in a cell iff it meets the cell.
 
@@ -77,7 +58,7 @@ def assemble_map(
     region_lists: Sequence[np.ndarray],
     walls,
     meta: dict[str, Any],
-    grid_cell: float = DEFAULT_GRID_CELL,
+    grid_cell: float = LOOKUP_GRID_CELL,
 ) -> LineMap:
     """Build a LineMap.
 
@@ -143,4 +124,4 @@ def wall_geometry(m: LineMap):
     return geom
 
 
-__all__ = ["assemble_map", "lookup_grid", "polygon_parts", "region_geometry", "rings_of", "wall_geometry"]
+__all__ = ["assemble_map", "lookup_grid", "region_geometry", "wall_geometry"]

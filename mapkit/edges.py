@@ -26,15 +26,11 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon
 
-from mapkit.assemble import rings_of
+from mapkit.shapes import rings_of
 from linemap.lmap import SegmentKind
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene
-from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, MERGE
-
-#: Footprints are closed by this much (metres) before outlines are taken, so
-#: that an opening drawn a hair away from its wall does not leave a sliver.
-_CLOSE_GAP = 5 * MERGE
+from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, FOOTPRINT_CLOSE_GAP, MERGE
 
 
 def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -75,7 +71,7 @@ def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np
     opening_corners = _opening_corners(scene)
     for key in sorted(verticals):
         x, y = key[0] * MERGE, key[1] * MERGE
-        is_jamb = bool(len(opening_corners)) and np.hypot(*(opening_corners - (x, y)).T).min() < _CLOSE_GAP * 2
+        is_jamb = bool(len(opening_corners)) and np.hypot(*(opening_corners - (x, y)).T).min() < FOOTPRINT_CLOSE_GAP * 2
         for z0, z1 in verticals[key]:
             if z1 - z0 >= options.min_edge_length:
                 segs.append(np.array([[x, y, z0], [x, y, z1]]))
@@ -105,8 +101,8 @@ def _clean(geom):
     """Close hairline gaps and drop slivers, keeping corners square (mitre joins)."""
     if geom.is_empty:
         return MultiPolygon()
-    g = geom.buffer(_CLOSE_GAP, join_style="mitre").buffer(-2 * _CLOSE_GAP, join_style="mitre")
-    return g.buffer(_CLOSE_GAP, join_style="mitre")
+    g = geom.buffer(FOOTPRINT_CLOSE_GAP, join_style="mitre").buffer(-2 * FOOTPRINT_CLOSE_GAP, join_style="mitre")
+    return g.buffer(FOOTPRINT_CLOSE_GAP, join_style="mitre")
 
 
 def _simplified_ring(pts: np.ndarray) -> np.ndarray:
@@ -174,6 +170,6 @@ def _horizontal_kind(z: float, height: float, a: np.ndarray, b: np.ndarray, door
     if z >= height - MERGE:
         return SegmentKind.CEILING
     mid = shapely.points(0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]))
-    if not doors.is_empty and shapely.distance(mid, doors) < 2 * _CLOSE_GAP:
+    if not doors.is_empty and shapely.distance(mid, doors) < 2 * FOOTPRINT_CLOSE_GAP:
         return SegmentKind.LINTEL
     return SegmentKind.WINDOW

@@ -24,25 +24,13 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
-from mapkit.assemble import polygon_parts
-from mapkit.importers.mesh_load import weld
+from mapkit.shapes import polygon_parts
+from mapkit.importers.mesh.load import weld
 from mapkit.scene import Scene
-from mapkit.tolerances import MERGE
+from mapkit.tolerances import EXTRUDE_CHUNK, EXTRUDE_CLEAN, EXTRUDE_GRID, MERGE
 
 #: Thickness of the floor and ceiling slabs, metres.
 SLAB_THICKNESS = 0.1
-
-#: Footprints are closed and opened by this much, metres, with mitre joins,
-#: so that an opening drawn a hair off its wall leaves no sliver or notch
-#: (the edge stage cleans its footprints the same way).
-_CLEAN = 5 * MERGE
-
-#: Footprints are snapped to this grid, metres, before boolean operations,
-#: so that the differences between bands have no float-noise slivers.
-_GRID = MERGE / 10
-
-#: Ring edges x points per chunk when splitting rings at foreign vertices.
-_CHUNK = 4_000_000
 
 
 def scene_to_mesh(scene: Scene, ceiling: bool = False, robot_radius: float = 0.0):
@@ -127,13 +115,13 @@ def _clean(geom):
     """Close hairline gaps and remove hairline notches, keeping corners square."""
     if geom.is_empty:
         return geom
-    g = geom.buffer(_CLEAN, join_style="mitre").buffer(-2 * _CLEAN, join_style="mitre")
-    return g.buffer(_CLEAN, join_style="mitre")
+    g = geom.buffer(EXTRUDE_CLEAN, join_style="mitre").buffer(-2 * EXTRUDE_CLEAN, join_style="mitre")
+    return g.buffer(EXTRUDE_CLEAN, join_style="mitre")
 
 
 def _snap(geom) -> MultiPolygon:
-    """Polygonal parts of ``geom`` on the ``_GRID`` grid, slivers dropped."""
-    geom = shapely.set_precision(geom, _GRID) if not geom.is_empty else geom
+    """Polygonal parts of ``geom`` on the ``EXTRUDE_GRID`` grid, slivers dropped."""
+    geom = shapely.set_precision(geom, EXTRUDE_GRID) if not geom.is_empty else geom
     parts = [p for p in polygon_parts(geom) if p.area > MERGE * MERGE]
     return MultiPolygon([orient(p, 1.0) for p in parts])
 
@@ -150,12 +138,12 @@ def _rings(geom) -> list[np.ndarray]:
 
 
 def _all_vertices(geoms) -> np.ndarray:
-    """(P, 2) distinct ring vertices of all ``geoms`` (on the ``_GRID`` grid)."""
+    """(P, 2) distinct ring vertices of all ``geoms`` (on the ``EXTRUDE_GRID`` grid)."""
     rings = [r for g in geoms for r in _rings(g)]
     if not rings:
         return np.zeros((0, 2))
     pts = np.concatenate(rings)
-    return np.unique(np.round(pts / _GRID), axis=0) * _GRID
+    return np.unique(np.round(pts / EXTRUDE_GRID), axis=0) * EXTRUDE_GRID
 
 
 def _split_ring(ring: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -175,7 +163,7 @@ def _split_ring(ring: np.ndarray, points: np.ndarray) -> np.ndarray:
     if len(pts) == 0:
         return ring
     hit_edge, hit_t, hit_pt = [], [], []
-    step = max(1, _CHUNK // len(pts))
+    step = max(1, EXTRUDE_CHUNK // len(pts))
     for i in range(0, len(a), step):
         sl = slice(i, i + step)
         rel = pts[None, :, :] - a[sl, None, :]

@@ -1,9 +1,25 @@
 """``mapkit build``: plan or mesh in, :class:`~linemap.lmap.LineMap` out.
 
-    import  ->  Scene  ->  edges  ->  visibility regions (VIR)  ->  LineMap
+The stages, in order, each in its own module and each taking plain data
+from the one before (no module imports a later stage)::
 
-Each stage takes plain data from the one before. This module only wires
-them, times them, and records what was done in the map's META.
+    mapkit.importers   plan.dxf / mesh  ->  Scene  (mapkit.scene)
+                       importers/dxf/: read, units, layers, entities,
+                         reconstruct (walls, openings)
+                       importers/mesh/: load, section, edges, hidden
+    mapkit.edges       Scene  ->  3D segments (N, 2, 3) + kinds
+                       (a mesh importer gives its own segments instead)
+    mapkit.visibility  segments + walls  ->  where each segment is seen from
+    mapkit.vir         ->  view-invariant regions and their segment lists
+    mapkit.assemble    ->  LineMap (flat arrays, region lookup grid)
+    linemap.lmap       LineMap  <->  .lmap file
+
+Shared by the stages: :mod:`mapkit.shapes` (polygon parts and rings),
+:mod:`mapkit.tolerances` (every threshold), :mod:`mapkit.options`,
+:mod:`mapkit.units`, :mod:`mapkit.errors`.
+
+This module only wires the stages, times them, and records what was done
+in the map's META.
 """
 
 from __future__ import annotations
@@ -17,10 +33,11 @@ from pathlib import Path
 import numpy as np
 
 from mapkit import __version__
-from mapkit.assemble import assemble_map, polygon_parts
+from mapkit.assemble import assemble_map
 from mapkit.errors import MapkitError
 from linemap.lmap import LineMap, SegmentKind, file_sha256
 from mapkit.options import BuildOptions
+from mapkit.shapes import polygon_parts
 
 log = logging.getLogger("mapkit")
 

@@ -1,7 +1,8 @@
 """Every geometric tolerance of the map builder, in one documented place.
 
 Lengths in metres, angles in degrees. Import the names, never repeat the
-numbers: a tolerance that lives in two places drifts.
+numbers: a tolerance that lives in two places drifts. The sizes of work
+chunks (memory bounds, not geometry) are at the end, under "work sizes".
 """
 
 #: Points closer than this are the same point (vertex merging, snapping of
@@ -40,7 +41,12 @@ CURVE_STEP_DEG = 10.0
 #: degrees of the vertical (horizontal plane) is classified as such.
 AXIS_DEG = 2.0
 
-# ---- plan reconstruction (mapkit.reconstruct) ------------------------------
+#: Footprints are closed by this much (metres) before outlines are taken, so
+#: that an opening drawn a hair away from its wall does not leave a sliver
+#: (the edge stage, :mod:`mapkit.edges`).
+FOOTPRINT_CLOSE_GAP = 5 * MERGE
+
+# ---- plan reconstruction (mapkit.importers.dxf) -----------------------------
 
 #: Single wall lines that bound no solid are thickened to this total width.
 THIN_WALL = 0.1
@@ -69,6 +75,22 @@ MIN_FREE_AREA = 0.05
 #: units are probably wrong.
 PLAUSIBLE_EXTENT = (1.0, 2000.0)
 
+#: Typical building size, metres: unitless drawings get the unit that puts
+#: their extent closest to this (in log scale).
+TYPICAL_EXTENT = 20.0
+
+#: Double-line wall ends are capped only if both lines run within this many
+#: degrees of parallel and the cap is within this of square to them.
+WALL_CAP_ANGLE_DEG = 15.0
+
+#: Block nesting deeper than this is a reference cycle in a broken file.
+DXF_MAX_BLOCK_DEPTH = 32
+
+#: Arcs and ellipses become at least this many cubic Bezier pieces per full
+#: turn (at most 45 degrees each): a 45-degree cubic strays from its circle by
+#: 4e-6 of the radius (a 90-degree one by 3e-4, 3 mm on a 10 m rotunda).
+CURVE_BEZIER_PER_TURN = 8
+
 # ---- visibility and regions (mapkit.visibility, mapkit.vir) -----------------
 
 #: Visibility polygons cast rays this many degrees either side of each wall
@@ -91,7 +113,20 @@ VIR_MIN_CELL = 0.1
 #: list length grows by at most this fraction: fewer regions, smaller maps.
 VIR_MERGE_GROWTH = 0.15
 
-# ---- meshes (mapkit.importers.mesh, mapkit.mesh_edges) -------------------
+#: Round joins of the region distance (eps) buffer: this many segments per
+#: quarter circle; the radius is scaled so that the chords circumscribe the
+#: true circle.
+VIR_QUAD_SEGS = 4
+
+#: Visibility polygon vertices this close to the line through their
+#: neighbours are dropped, metres.
+VIS_COLLINEAR = 1e-9
+
+#: Region lookup grid cell size, metres (:mod:`mapkit.assemble`): a few
+#: regions per cell keeps queries cheap.
+LOOKUP_GRID_CELL = 0.5
+
+# ---- meshes (mapkit.importers.mesh) ------------------------------------------
 
 #: Mesh heights within this of a level (the floor, the top of the walls)
 #: count as on it: modellers leave objects a few millimetres off the floor.
@@ -129,6 +164,38 @@ MESH_MAX_SECTIONS = 12
 #: further analysis (pathological non-manifold fans).
 MESH_MAX_EDGE_FACES = 8
 
+#: A face rises from an edge (a wall standing on the floor) when its normal
+#: is within this many degrees of horizontal. Loose: walls lean a little in
+#: scans, and a floor junction should stay a floor junction.
+MESH_STEEP_DEG = 45.0
+
+#: Sample spacing, metres, along segments when looking for overlapping
+#: collinear pairs: pairs overlapping by more than this are always found.
+MESH_OVERLAP_STEP = 0.05
+
+#: Needle repair passes; each pass fixes every needle whose neighbour is not
+#: claimed by another needle in the same pass.
+MESH_NEEDLE_PASSES = 8
+
+#: Hidden edges: sections probe this far above and below a horizontal edge,
+#: metres: off the millimetre grid the vertices were welded to, so the plane
+#: misses them.
+MESH_HIDDEN_PROBE = 1.5 * MERGE
+
+#: A horizontal edge is on a probed outline if within this distance of it,
+#: metres. A face sloping away from the edge at angle a moves the outline
+#: by ``MESH_HIDDEN_PROBE / tan(a)``: faces steeper than about 20 degrees
+#: stay within reach. Buried pieces are cut this close to the surface they
+#: enter.
+MESH_HIDDEN_REACH = 4 * MERGE
+
+#: The hidden-edge quadrant test looks this far to either side of an edge, metres.
+MESH_HIDDEN_SIDE = 3 * MESH_HIDDEN_REACH
+
+#: At most this many distinct heights are probed for hidden edges; edges at
+#: other heights are kept unchecked (a warning says so).
+MESH_HIDDEN_MAX_LEVELS = 64
+
 #: Overlay operations on visibility regions snap to this grid, metres: the
 #: fixed precision makes GEOS far faster on the many nearly collinear edges
 #: of overlapping visibility polygons; the shift (< 1e-5 m) is absorbed by
@@ -153,3 +220,29 @@ VIR_MAX_DEPTH = 11
 #: than this; steeper-than-``AXIS_DEG`` but slanted segments are sampled
 #: like any other, so a millimetre of slant never hides a grazing view.
 VIS_VERTICAL_XY = 1e-6
+
+# ---- 3D model of a plan (mapkit.extrude) -------------------------------------
+
+#: Footprints are closed and opened by this much, metres, with mitre joins,
+#: so that an opening drawn a hair off its wall leaves no sliver or notch
+#: (the edge stage cleans its footprints the same way, ``FOOTPRINT_CLOSE_GAP``).
+EXTRUDE_CLEAN = 5 * MERGE
+
+#: Footprints are snapped to this grid, metres, before boolean operations,
+#: so that the differences between bands have no float-noise slivers.
+EXTRUDE_GRID = MERGE / 10
+
+# ---- work sizes ---------------------------------------------------------------
+# Memory bounds of vectorised steps, not geometry: results do not depend on them.
+
+#: Rays x edges per numpy block in the visibility sweep: bounds its
+#: temporaries (~50 MB).
+VIS_BLOCK = 400_000
+
+#: Points per chunk in the mesh sections' winding-number tests (memory:
+#: chunk x segments booleans).
+MESH_SECTION_CHUNK = 2_000_000
+
+#: Ring edges x points per chunk when the extruder splits rings at foreign
+#: vertices.
+EXTRUDE_CHUNK = 4_000_000

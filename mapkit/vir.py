@@ -32,19 +32,16 @@ import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from mapkit.assemble import polygon_parts
+from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,
     VIR_MAX_DEPTH,
     VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
+    VIR_QUAD_SEGS,
 )
 from mapkit.visibility import Occluders, polygonal, segment_regions
-
-# Round joins of the eps buffer: this many segments per quarter circle; the
-# radius is scaled so that the chords circumscribe the true circle.
-_QUAD_SEGS = 4
 
 
 @dataclass
@@ -159,8 +156,8 @@ def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
     by the buffer's chords. ``regions`` (N,) object array; returns (N,) prepared
     geometries (empty where S is never visible)."""
     clipped = polygonal(shapely.intersection(regions, free_space, grid_size=OVERLAY_GRID))
-    radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * _QUAD_SEGS))
-    grown = shapely.buffer(clipped, radius, quad_segs=_QUAD_SEGS)
+    radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS))
+    grown = shapely.buffer(clipped, radius, quad_segs=VIR_QUAD_SEGS)
     shapely.prepare(grown)
     return grown
 

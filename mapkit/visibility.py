@@ -26,20 +26,16 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
-from mapkit.assemble import polygon_parts
+from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
     OVERLAY_GRID,
+    VIS_BLOCK,
     VIS_BUILD_SHRINK,
+    VIS_COLLINEAR,
     VIS_RAY_OFFSET_DEG,
     VIS_VERTICAL_XY,
 )
-
-# Vertices this close to the line through their neighbours are dropped, metres.
-_COLLINEAR = 1e-9
-
-# Rays x edges per numpy block: bounds the temporaries of the sweep (~50 MB).
-_BLOCK = 400_000
 
 
 # --------------------------------------------------------------------------
@@ -152,7 +148,7 @@ def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
     """Distance along unit rays ``d`` (K, 2) from the origin to the nearest of
     the edges ``a + u e``, u in [0, 1] (``a``, ``e`` (E, 2)); inf if none."""
     out = np.empty(len(d))
-    step = max(1, _BLOCK // max(1, len(a)))
+    step = max(1, VIS_BLOCK // max(1, len(a)))
     for i in range(0, len(d), step):
         dd = d[i : i + step, None, :]
         denom = dd[..., 0] * e[None, :, 1] - dd[..., 1] * e[None, :, 0]
@@ -290,7 +286,6 @@ def polygonal(geoms: np.ndarray) -> np.ndarray:
     return out
 
 
-
 @dataclass
 class SegmentRegions:
     """What :func:`segment_regions` returns.
@@ -390,9 +385,9 @@ def segment_regions(
     for k in tqdm(range(len(xy)), desc="visibility polygons", disable=not progress, leave=False):
         vp[k] = visibility_polygon(xy[k], occ, box)
     # Rays hitting one edge give collinear points; each later overlay pays per
-    # vertex, so drop them (the outline moves by at most _COLLINEAR m).
+    # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
     raw = np.array([Polygon(v) for v in vp] + [None])[:-1]
-    vp = shapely.simplify(raw, _COLLINEAR, preserve_topology=False)
+    vp = shapely.simplify(raw, VIS_COLLINEAR, preserve_topology=False)
     bad = ~shapely.is_valid(vp)
     vp[bad] = raw[bad]
     # A point inside a (shrunk) wall is seen from nowhere: every sight line

@@ -1,5 +1,5 @@
 """Fixtures shared by the matcher's tests: the two-room test map of
-tools/_synthetic_map.py and the paper's camera of tools/simulate.py."""
+tools/synthetic_building.py and the paper's camera of tools/simulate.py."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 @pytest.fixture(scope="session")
 def small_map():
-    from _synthetic_map import make_small_flat
+    from synthetic_building import make_small_flat
 
     return make_small_flat()
 

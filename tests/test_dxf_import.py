@@ -15,9 +15,9 @@ import pytest
 
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers.dxf import load_drawing, load_scene
-from mapkit.importers.dxf_units import decide_units
+from mapkit.importers.dxf.units import decide_units
 from mapkit.units import parse_units
-from mapkit.layer_roles import assign_roles, guess_role
+from mapkit.importers.dxf.layer_roles import assign_roles, guess_role
 from mapkit.options import BuildOptions
 from mapkit.tolerances import CURVE_SAGITTA, CURVE_STEP_DEG
 

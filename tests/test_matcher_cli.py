@@ -18,7 +18,7 @@ from matcher.cli import main  # noqa: E402
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    from _synthetic_map import make_small_flat
+    from synthetic_building import make_small_flat
     from linemap.lmap import save_map
     from simulate import make_frame, paper_camera
 

@@ -12,7 +12,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 import matcher  # noqa: E402
-from _synthetic_map import make_small_flat  # noqa: E402
+from synthetic_building import make_small_flat  # noqa: E402
 from render import main as render_main  # noqa: E402
 from render import render_view  # noqa: E402
 from simulate import make_frame, paper_camera, pose_error, visible_lines  # noqa: E402

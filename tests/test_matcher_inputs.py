@@ -14,7 +14,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 import matcher  # noqa: E402
-from _synthetic_map import make_box_map  # noqa: E402
+from synthetic_building import make_box_map  # noqa: E402
 from linemap.camera import Camera, CameraError  # noqa: E402
 from simulate import make_frame, paper_camera  # noqa: E402
 

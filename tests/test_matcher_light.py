@@ -16,7 +16,7 @@ AUTHORING = ("ezdxf", "trimesh", "shapely", "viser")
 
 
 def test_no_authoring_module_after_a_localisation(tmp_path):
-    from _synthetic_map import make_small_flat
+    from synthetic_building import make_small_flat
     from linemap.lmap import save_map
     from simulate import make_frame, paper_camera
 

@@ -1,7 +1,7 @@
 """Recovery of the pose from simulated frames, at every PEQ of the paper.
 
 Frames from tools/simulate.py on the two-room test map of
-tools/_synthetic_map.py: 640x480 camera, f = 900, 1.2 m high; 1 px / 1 deg
+tools/synthetic_building.py: 640x480 camera, f = 900, 1.2 m high; 1 px / 1 deg
 uniform noise on the lines, 3 clutter lines, priors drawn within each PEQ.
 """
 

@@ -202,7 +202,7 @@ def test_three_vertical_edges_alone_are_not_accepted():
     whichever edges they are, so nothing verifies the match. A wide camera
     sees three corners of an empty room and no other line."""
     import matcher
-    from _synthetic_map import make_box_map
+    from synthetic_building import make_box_map
     from linemap.camera import Camera
     from linemap.geometry import segment_is_vertical
 

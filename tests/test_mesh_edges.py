@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import trimesh
 
-from mapkit.importers.mesh_load import weld
+from mapkit.importers.mesh.load import weld
 from linemap.lmap import SegmentKind as K
-from mapkit.mesh_edges import edge_faces, feature_edges, merge_collinear
+from mapkit.importers.mesh.edges import edge_faces, feature_edges, merge_collinear
 
 CREASE, MIN_LEN = 30.0, 0.2
 

@@ -12,8 +12,8 @@ import trimesh
 from mapkit import edges as plan_edges
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers import load_scene
-from mapkit.importers.mesh_load import Y_UP_TO_Z_UP, load_mesh
-from mapkit.importers.mesh_section import MeshSections
+from mapkit.importers.mesh.load import Y_UP_TO_Z_UP, load_mesh
+from mapkit.importers.mesh.section import MeshSections
 from linemap.lmap import SegmentKind as K
 from mapkit.options import BuildOptions
 
@@ -268,7 +268,7 @@ def test_absurd_units_and_options(options, message):
 
 
 def test_needle_at_a_t_junction_keeps_the_box_closed():
-    from mapkit.mesh_edges import edge_faces, feature_edges
+    from mapkit.importers.mesh.edges import edge_faces, feature_edges
 
     mesh, _ = load_mesh(DATA / "mesh" / "t_junction_needle.obj", BuildOptions())
     assert set(edge_faces(mesh.faces).counts) == {2}  # no border left where the needle was

@@ -14,10 +14,10 @@ from shapely.geometry import box
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
-from mapkit.reconstruct import reconstruct_scene
-from mapkit.reconstruct_openings import opening_width
-from mapkit.reconstruct_types import PlanDrawing, Stroke
-from mapkit.reconstruct_walls import build_walls
+from mapkit.importers.dxf.reconstruct import reconstruct_scene
+from mapkit.importers.dxf.openings import opening_width
+from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
+from mapkit.importers.dxf.walls import build_walls
 from mapkit.tolerances import THIN_WALL
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -10,7 +10,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
-from _synthetic_map import make_box_map  # noqa: E402
+from synthetic_building import make_box_map  # noqa: E402
 from simulate import map_range, paper_camera, visible_lines  # noqa: E402
 
 

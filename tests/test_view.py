@@ -24,8 +24,7 @@ from mapkit.assemble import assemble_map
 from mapkit.errors import MapkitError
 from linemap.lmap import SegmentKind, save_map
 from mapkit.view import geometry, palette
-from mapkit.view.demo import DEMO_CAMERA, synthetic_flat
-from mapkit.view.fov import in_horizontal_view, wrap
+from synthetic_building import DEMO_CAMERA, grid_flat
 from mapkit.view.result import load_result, parse_result
 from mapkit.view.pose_tool import camera_wxyz
 from mapkit.view.result_overlay import image_line_rays
@@ -33,6 +32,7 @@ from mapkit.view.server import Inspector, floor_point
 from mapkit.view.stats import map_camera, map_statistics, statistics_markdown
 from mapkit.view.synthetic_image import clip_to_image, project_segments, render_segments
 from linemap.camera import Camera
+from linemap.geometry import in_field_of_view, wrap
 
 
 # --------------------------------------------------------------------------
@@ -42,7 +42,7 @@ from linemap.camera import Camera
 @pytest.fixture(scope="module")
 def flat():
     """A 3 x 2 room flat: ~250 segments, ~340 regions."""
-    return synthetic_flat()
+    return grid_flat()
 
 
 @pytest.fixture(scope="module")
@@ -114,20 +114,28 @@ def test_neighbouring_regions_get_different_colours(flat):
 # Field of view
 
 
+def _camera_with_half_fov(half: float) -> Camera:
+    """A level camera whose horizontal field of view is 2 * ``half`` (radians)."""
+    return Camera.from_fov(math.degrees(2 * half), 640, 480, 1.2, 0.0)
+
+
 def test_fov_keeps_ahead_and_drops_behind():
+    """The inspector's pose tool uses the matcher's field-of-view test
+    (linemap.geometry.in_field_of_view): these are its cases."""
     segs = np.array([
         [[5, -1, 0], [5, 1, 0]],  # ahead (+x)
         [[-5, -1, 0], [-5, 1, 0]],  # behind
         [[0, 5, 0], [0, 5, 2]],  # vertical edge to the left (+y)
     ], dtype=float)
-    half = math.radians(35)
-    assert in_horizontal_view(segs, 0, 0, 0.0, 0.0, 0.0, half).tolist() == [True, False, False]
+    cam = _camera_with_half_fov(math.radians(35))
+    assert cam.horizontal_half_fov() == pytest.approx(math.radians(35))
+    assert in_field_of_view(segs, cam, (0, 0, 0.0), 0.0, 0.0).tolist() == [True, False, False]
     # Turning up to 60 degrees brings the left edge (90 degrees) within 35 + 60.
-    assert in_horizontal_view(segs, 0, 0, 0.0, 0.0, math.radians(60), half).tolist() == [True, False, True]
+    assert in_field_of_view(segs, cam, (0, 0, 0.0), 0.0, math.radians(60)).tolist() == [True, False, True]
     # Heading range plus half FOV covering the whole turn keeps everything.
-    assert in_horizontal_view(segs, 0, 0, 0.0, 0.0, math.radians(150), half).all()
+    assert in_field_of_view(segs, cam, (0, 0, 0.0), 0.0, math.radians(150)).all()
     # A camera that may stand on a segment sees it whatever the heading.
-    assert in_horizontal_view(segs, -4.9, 0, 0.2, 0.0, 0.0, half)[1]
+    assert in_field_of_view(segs, cam, (-4.9, 0, 0.0), 0.2, 0.0)[1]
 
 
 def test_fov_never_drops_a_segment_some_sampled_pose_sees():
@@ -138,7 +146,7 @@ def test_fov_never_drops_a_segment_some_sampled_pose_sees():
     end = start + rng.normal(0, 1.5, (300, 2))
     segs = np.stack([np.c_[start, np.zeros(300)], np.c_[end, rng.uniform(0, 2.5, 300)]], axis=1)
     x, y, dt, yaw, dyaw, half = 0.3, -0.2, 0.8, 0.7, math.radians(20), math.radians(30)
-    keep = in_horizontal_view(segs, x, y, dt, yaw, dyaw, half)
+    keep = in_field_of_view(segs, _camera_with_half_fov(half), (x, y, yaw), dt, dyaw)
     assert 0 < keep.sum() < len(segs)  # the test means something
     r, a = dt * np.sqrt(rng.uniform(0, 1, 400)), rng.uniform(0, 2 * math.pi, 400)
     cams = np.c_[x + r * np.cos(a), y + r * np.sin(a)]
@@ -149,6 +157,14 @@ def test_fov_never_drops_a_segment_some_sampled_pose_sees():
         d = pts - c
         seen = (np.abs(wrap(np.arctan2(d[..., 1], d[..., 0]) - h)) <= half).any(axis=1)
         assert not (seen & ~keep).any()
+
+
+def test_pose_tool_shows_the_matchers_field_of_view_set(inspector, flat):
+    """The pose tool's in-view set is exactly what the matcher's test keeps."""
+    x, y = flat.region_centres()[40]
+    _, cands, in_view = inspector.pose_sets(x, y, 0.3, 0.5, math.radians(10))
+    keep = in_field_of_view(flat.segments[cands], inspector.camera, (x, y, 0.3), 0.5, math.radians(10))
+    assert in_view.tolist() == cands[keep].tolist()
 
 
 # --------------------------------------------------------------------------
@@ -427,33 +443,32 @@ def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
 
 
 # --------------------------------------------------------------------------
-# Performance
+# A large map (timings: tools/bench_view.py; tests assert behaviour, not seconds)
 
 
-def test_a_large_map_opens_fast():
+def test_a_large_map_opens_and_stays_interactive():
     """A map the size of the Barcelona pavilion's (about 1500 segments, 4600
-    regions) is ready to serve, and a client has every static node, in < 3 s."""
-    big = synthetic_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
+    regions) is served: a client gets every static node, thousands of
+    outlines start hidden behind their toggle, and a click and a pose change
+    work on it."""
+    big = grid_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
     assert big.n_regions > 4000 and big.n_segments > 1000
-    t0 = time.perf_counter()
     ins = Inspector(big, port=0)
     try:
         names = _scene_names(ins.port, timeout=10)
-        elapsed = time.perf_counter() - t0
         assert {"/regions/fill", "/regions/outlines", "/walls", "/segments/floor"} <= names
-        assert elapsed < 3.0, f"opening took {elapsed:.2f} s (build {ins.build_seconds:.2f} s)"
         # Thousands of outlines start hidden (first-frame cost); their toggle shows them.
         outlines = ins.server.scene.get_handle_by_name("/regions/outlines")
         assert not outlines.visible and not ins.panel.toggles["region outlines"].value
         ins.panel.toggles["region outlines"].value = True
         assert outlines.visible
-        # Interaction stays quick: a click and a pose change each well under a second.
-        t1 = time.perf_counter()
+        # A click selects the region under it; a pose change redraws the pose tool.
         x, y = big.region_centres()[2000]
-        ins.select_at(x, y)
+        assert ins.select_at(x, y) == int(big.regions_at(x, y)[0])
         ins.panel.pose.dt.value = 1.0
         ins.update_pose()
-        assert time.perf_counter() - t1 < 1.0
+        assert ins.server.scene.get_handle_by_name("/pose/disk") is not None
+        assert "regions** retained" in ins.panel.pose.summary.content
     finally:
         ins.stop()
 

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 import pytest
 
-from mapkit.view.demo import synthetic_flat
+from synthetic_building import grid_flat
 from mapkit.view.headless import BrowserMissing, Chromium, find_chromium, wait_for
 from mapkit.view.server import Inspector
 
@@ -101,7 +101,7 @@ def is_highlight(patch: np.ndarray) -> bool:
 
 
 def test_page_draws_the_map_and_a_click_highlights_a_region(browser):
-    m = synthetic_flat()
+    m = grid_flat()
     with Inspector(m, port=0) as ins:
         img, seconds = open_and_wait(browser, ins)
         view = img[VIEW]
@@ -133,20 +133,21 @@ def test_page_draws_the_map_and_a_click_highlights_a_region(browser):
         assert ins.selected_region is None
 
 
-def test_a_large_map_renders_quickly(browser):
-    """About 1500 segments and 4600 regions: the first complete frame arrives
-    within 3 s on a GPU; software WebGL on a loaded CI machine gets 6."""
-    big = synthetic_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
+def test_a_large_map_renders(browser):
+    """About 1500 segments and 4600 regions: chromium draws the map (the
+    seconds it takes are tools/bench_view.py's table, not a test)."""
+    big = grid_flat(rooms=(7, 5), room_size=(5.0, 4.5), cell=0.4)
     with Inspector(big, port=0) as ins:
-        _, seconds = open_and_wait(browser, ins)
-    assert seconds < 6.0, f"first render took {seconds:.1f} s"
+        img, _ = open_and_wait(browser, ins)
+    assert scene_drawn(img)
+    assert (img[VIEW].min(axis=2) < 235).mean() > 0.15
 
 
 def test_html_snapshot_draws_from_file_without_a_server(browser, tmp_path):
     from mapkit.view.snapshot import write_snapshot
 
     path = tmp_path / "flat.html"
-    write_snapshot(synthetic_flat(), path)  # the server it used is stopped again
+    write_snapshot(grid_flat(), path)  # the server it used is stopped again
     browser.navigate(path.as_uri())
     img = wait_for(lambda: (lambda s: s if scene_drawn(s) else None)(browser.screenshot()), 60, interval=0.1,
                    what="the snapshot to draw the map")

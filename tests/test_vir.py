@@ -14,7 +14,7 @@ from visibility_oracle import VisibilityOracle, random_points
 from mapkit.assemble import assemble_map
 from linemap.lmap import load_map, save_map
 from mapkit.vir import build_regions
-from mapkit.vir_synthetic import apartment, scene_from_walls, single_room
+from synthetic_building import apartment, scene_from_walls, single_room
 from linemap.camera import Camera
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)

@@ -14,7 +14,7 @@ from visibility_oracle import VisibilityOracle, random_points
 
 from linemap.lmap import SegmentKind
 from mapkit.tolerances import OCCLUSION_SHRINK
-from mapkit.vir_synthetic import apartment, l_room, single_room, two_rooms
+from synthetic_building import apartment, l_room, single_room, two_rooms
 from mapkit.visibility import (
     Occluders,
     annuli,

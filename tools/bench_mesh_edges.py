@@ -3,7 +3,7 @@
     python tools/bench_mesh_edges.py [--rooms N] [--subdivide K] [--repeat R]
 
 Prints one row per mesh: faces, edges found (per kind), the time of
-:func:`mapkit.mesh_edges.feature_edges` alone (best of R) and of the whole
+:func:`mapkit.importers.mesh.edges.feature_edges` alone (best of R) and of the whole
 import (:func:`mapkit.importers.load_scene`: weld, sections, free space,
 hidden-edge test). The generated mesh is an N x N grid of 4 x 3 m rooms,
 each wall a separate box subdivided K times (x4 faces each time), so the
@@ -78,9 +78,9 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from mapkit.importers import load_scene
-    from mapkit.importers.mesh_load import load_mesh
+    from mapkit.importers.mesh.load import load_mesh
     from linemap.lmap import KIND_NAMES
-    from mapkit.mesh_edges import feature_edges
+    from mapkit.importers.mesh.edges import feature_edges
     from mapkit.options import BuildOptions
 
     options = BuildOptions()

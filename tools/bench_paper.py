@@ -306,7 +306,7 @@ def plot(all_rows, summary, out_dir: Path, e_accept: float, tag: str = "") -> li
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Reproduce the paper's figures 5 and 6 (see module docstring).")
     ap.add_argument("--map", help=".lmap map (default: maps/flat.lmap if present, else the synthetic flat)")
-    ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of tools/_synthetic_map.py")
+    ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of tools/synthetic_building.py")
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ")
     ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ))
     ap.add_argument("--seed", type=int, nargs="+", default=[0],
@@ -329,18 +329,18 @@ def main(argv=None) -> int:
     if args.quick:
         args.poses, args.baseline_poses = 20, 5
     seeds = ", ".join(str(s) for s in args.seed)
-    from _synthetic_map import cached_flat_map
+    from synthetic_building import cached_flat_map
 
     default_map = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
     tag = ""  # figure names: plain for maps/flat.lmap and seed 0, tagged with the map and seeds otherwise
     if args.synthetic:
-        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)", "_synthetic"
+        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/synthetic_building.py)", "_synthetic"
     elif args.map and Path(args.map).resolve() != default_map:
         linemap, map_name, tag = matcher.load_map(args.map), args.map, "_" + Path(args.map).stem
     elif default_map.exists():
         linemap, map_name = matcher.load_map(default_map), "maps/flat.lmap"
     else:
-        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/_synthetic_map.py)", "_synthetic"
+        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/synthetic_building.py)", "_synthetic"
     if args.seed != [0]:  # the documented figures are seed 0's
         tag += "_seed" + "-".join(str(s) for s in args.seed)
     camera = paper_camera(args.height, args.pitch)

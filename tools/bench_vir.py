@@ -31,9 +31,9 @@ def load_case(path: str | None, opts):
     """(name, segments, kinds, walls, free_space, camera dict); ``path`` None
     is the synthetic apartment, "hall" the synthetic open hall."""
     if path in (None, "hall"):
-        from mapkit import vir_synthetic
+        from synthetic_building import apartment, open_hall
 
-        sc = vir_synthetic.apartment() if path is None else vir_synthetic.open_hall()
+        sc = apartment() if path is None else open_hall()
         name = "synthetic apartment" if path is None else "synthetic open hall"
         return name, sc.segments, sc.kinds, sc.walls, sc.free_space, opts.camera
     from mapkit.edges import extract_edges

@@ -3,7 +3,7 @@
     python tools/screenshot_view.py [MAP] [-o docs/images/inspector.png]
 
 Opens the inspector on MAP (default: maps/flat.lmap if it has been built,
-else the synthetic flat of mapkit.view.demo) in Debian's headless chromium,
+else the grid flat of tools/synthetic_building.py) in Debian's headless chromium,
 clicks a region, sets the pose tool, overlays a simulated matcher result
 (the model's own lines at a nearby pose, so no camera image is needed) and
 saves the page as PNG. Needs ``apt-get install -y chromium``.
@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     import cv2
 
     from linemap.lmap import load_map
-    from mapkit.view.demo import synthetic_flat
+    from synthetic_building import grid_flat
     from mapkit.view.headless import Chromium, wait_for
     from mapkit.view.result import parse_result
     from mapkit.view.server import Inspector
@@ -58,7 +58,7 @@ def main(argv: list[str] | None = None) -> int:
 
     default = ROOT / "maps" / "flat.lmap"
     path = Path(args.map) if args.map else (default if default.exists() else None)
-    m = load_map(path) if path else synthetic_flat()
+    m = load_map(path) if path else grid_flat()
     print(f"map: {path or 'synthetic flat'} ({m.n_segments} segments, {m.n_regions} regions)")
     width, height = (int(v) for v in args.size.lower().split("x"))
 

@@ -1,13 +1,38 @@
 """Import options shared by ``build``, ``preview``, ``extrude`` and ``view --plan``.
 
 One definition, so every command that reads a plan accepts the same flags
-with the same defaults (those of :class:`~mapkit.options.BuildOptions`).
+with the same defaults (those of :class:`~mapkit.options.BuildOptions`),
+and one check of the output file every command that writes one makes.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from mapkit.errors import MapkitError
 from mapkit.options import BuildOptions
+
+
+def add_float_options(group, defaults, options, metavar: str = "M") -> None:
+    """Add float flags ``--name`` that default to the same-named field of
+    ``defaults`` (a :class:`~mapkit.options.BuildOptions`); each help text
+    ends with that default. ``options``: (flag, help text) pairs."""
+    for flag, text in options:
+        default = getattr(defaults, flag.lstrip("-").replace("-", "_"))
+        group.add_argument(flag, type=float, default=default, metavar=metavar, help=f"{text} (default {default})")
+
+
+def output_file(path, suffixes) -> Path:
+    """``path`` as a Path once it ends in one of ``suffixes`` (lower case,
+    with the dot) and a file can be written there; else a one-line error."""
+    from linemap.atomic import check_output_path
+
+    out = Path(path)
+    if out.suffix.lower() not in suffixes:
+        wanted = suffixes[0] if len(suffixes) == 1 else "one of " + ", ".join(suffixes)
+        raise MapkitError(f"output must end in {wanted}, got '{out.name}'")
+    check_output_path(out)
+    return out
 
 
 def add_import_arguments(p) -> None:
@@ -22,13 +47,14 @@ def add_import_arguments(p) -> None:
     g.add_argument("--floor", action="append", default=[], metavar="GLOB", help="layer(s) outlining the floor of an open plan (repeatable)")
     g.add_argument("--ignore", action="append", default=[], metavar="GLOB", help="layer(s) to leave out (repeatable)")
     g.add_argument("--up", choices=("z", "y"), default=d.up, help="mesh up axis (glTF is y-up; default z)")
-    g = p.add_argument_group("reconstruction")
-    g.add_argument("--wall-height", type=float, default=d.wall_height, metavar="M", help=f"wall (ceiling) height (default {d.wall_height})")
-    g.add_argument("--door-height", type=float, default=d.door_height, metavar="M", help=f"door head height (default {d.door_height})")
-    g.add_argument("--window-sill", type=float, default=d.window_sill, metavar="M", help=f"window sill height (default {d.window_sill})")
-    g.add_argument("--window-head", type=float, default=d.window_head, metavar="M", help=f"window head height (default {d.window_head})")
-    g.add_argument("--robot-radius", type=float, default=d.robot_radius, metavar="M", help=f"keep the camera this far from walls (default {d.robot_radius})")
-    g.add_argument("--max-wall-thickness", type=float, default=d.max_wall_thickness, metavar="M", help=f"thicker double lines are not walls (default {d.max_wall_thickness})")
+    add_float_options(p.add_argument_group("reconstruction"), d, [
+        ("--wall-height", "wall (ceiling) height"),
+        ("--door-height", "door head height"),
+        ("--window-sill", "window sill height"),
+        ("--window-head", "window head height"),
+        ("--robot-radius", "keep the camera this far from walls"),
+        ("--max-wall-thickness", "thicker double lines are not walls"),
+    ])
 
 
 def import_options_from_args(args) -> BuildOptions:

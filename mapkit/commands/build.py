@@ -10,7 +10,7 @@ HELP = "build a .lmap map from a DXF floor plan or a 3D mesh"
 
 
 def add_arguments(p) -> None:
-    from mapkit.commands._import_args import add_import_arguments
+    from mapkit.commands._import_args import add_float_options, add_import_arguments
     from mapkit.options import BuildOptions
 
     d = BuildOptions()
@@ -24,11 +24,13 @@ def add_arguments(p) -> None:
     g.add_argument("--hfov", type=float, metavar="DEG", help="horizontal field of view of an ideal camera (default 70)")
     g.add_argument("--image-size", metavar="WxH", help="image size in pixels with --hfov (default 640x480)")
     g = p.add_argument_group("edges and visibility")
-    g.add_argument("--min-edge-length", type=float, default=d.min_edge_length, metavar="M", help=f"drop shorter edges (default {d.min_edge_length})")
-    g.add_argument("--crease-deg", type=float, default=d.crease_deg, metavar="DEG", help=f"mesh feature-edge angle (default {d.crease_deg})")
-    g.add_argument("--max-range", type=float, default=d.max_range, metavar="M", help=f"farthest visible distance (default {d.max_range})")
-    g.add_argument("--min-visible-length", type=float, default=d.min_visible_length, metavar="M", help=f"shortest contiguous visible piece that counts (default {d.min_visible_length})")
-    g.add_argument("--eps", type=float, default=d.eps, metavar="M", help=f"region lists cover everything visible within this distance (default {d.eps})")
+    add_float_options(g, d, [("--min-edge-length", "drop shorter edges")])
+    add_float_options(g, d, [("--crease-deg", "mesh feature-edge angle")], metavar="DEG")
+    add_float_options(g, d, [
+        ("--max-range", "farthest visible distance"),
+        ("--min-visible-length", "shortest contiguous visible piece that counts"),
+        ("--eps", "region lists cover everything visible within this distance"),
+    ])
     g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
@@ -76,17 +78,12 @@ def _image_size(text: str) -> tuple[int, int]:
 
 
 def run(args) -> int:
-    from pathlib import Path
-
-    from linemap.atomic import check_output_path
     from linemap.lmap import save_map
+    from mapkit.commands._import_args import output_file
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)
-    out = Path(args.output)
-    if out.suffix.lower() != ".lmap":
-        raise MapkitError(f"output must end in .lmap, got '{out.name}'")
-    check_output_path(out)
+    out = output_file(args.output, (".lmap",))
     linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty())
     size = save_map(out, linemap)
     if not args.quiet:

@@ -21,18 +21,13 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
-    from pathlib import Path
-
-    from linemap.atomic import check_output_path, write_atomic
-    from mapkit.commands._import_args import import_options_from_args
+    from linemap.atomic import write_atomic
+    from mapkit.commands._import_args import import_options_from_args, output_file
     from mapkit.extrude import scene_to_mesh
     from mapkit.importers import load_scene
 
-    out = Path(args.output)
-    kind = FORMATS.get(out.suffix.lower())
-    if kind is None:
-        raise MapkitError(f"output must end in one of {', '.join(FORMATS)}, got '{out.name}'")
-    check_output_path(out)
+    out = output_file(args.output, tuple(FORMATS))
+    kind = FORMATS[out.suffix.lower()]
     options = import_options_from_args(args)
     scene = load_scene(args.plan, options)
     if scene.walls.is_empty:
@@ -41,7 +36,7 @@ def run(args) -> int:
     if kind == "glb":  # glTF's axes are +Y up: turned, so that viewers and simulators show it upright
         import numpy as np
 
-        from mapkit.importers.mesh_load import Y_UP_TO_Z_UP
+        from mapkit.importers.mesh.load import Y_UP_TO_Z_UP
 
         turn = np.eye(4)
         turn[:3, :3] = Y_UP_TO_Z_UP.T

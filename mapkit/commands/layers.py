@@ -20,9 +20,9 @@ def run(args) -> int:
 
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.errors import MapkitError, NoWallsError
-    from mapkit.importers.dxf_layers import layer_counts, resolve_roles
-    from mapkit.importers.dxf_read import read_dxf
-    from mapkit.layer_roles import assign_roles
+    from mapkit.importers.dxf.layers import layer_counts, resolve_roles
+    from mapkit.importers.dxf.read import read_dxf
+    from mapkit.importers.dxf.layer_roles import assign_roles
 
     options = import_options_from_args(args)
     path = Path(args.plan)

@@ -17,17 +17,13 @@ def add_arguments(p) -> None:
 def run(args) -> int:
     from pathlib import Path
 
-    from linemap.atomic import check_output_path
-    from mapkit.commands._import_args import import_options_from_args
+    from mapkit.commands._import_args import import_options_from_args, output_file
     from mapkit.errors import MapkitError
     from mapkit.importers import load_scene
     from mapkit.preview import render_preview
 
     options = import_options_from_args(args)
-    out = Path(args.output)
-    if out.suffix.lower() != ".png":
-        raise MapkitError(f"output must end in .png, got '{out.name}'")
-    check_output_path(out)
+    out = output_file(args.output, (".png",))
     if not 20 <= args.dpi <= 1200:
         raise MapkitError(f"--dpi must be between 20 and 1200, got {args.dpi}")
     scene = load_scene(args.plan, options)

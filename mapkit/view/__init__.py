@@ -7,14 +7,14 @@ numpy/shapely and testable alone):
 - :mod:`~mapkit.view.geometry`: region polygons, their triangulation, ring
   edges, the wall extrusion: the arrays the scene is drawn from.
 - :mod:`~mapkit.view.palette`: colours of segment kinds and regions.
-- :mod:`~mapkit.view.fov`: which candidate segments a camera can see over a
-  range of headings.
 - :mod:`~mapkit.view.synthetic_image`: the model as the camera would see it.
 - :mod:`~mapkit.view.result`: reading a matcher result and image lines.
 - :mod:`~mapkit.view.stats`: the numbers shown in the panel.
 - :mod:`~mapkit.view.scene_nodes`: the static 3D layers (batched viser calls).
 - :mod:`~mapkit.view.pose_tool`: uncertainty disk, retained regions,
-  candidate segments, frustum and synthetic image for a pose estimate.
+  candidate segments (the matcher's field-of-view test,
+  :func:`linemap.geometry.in_field_of_view`), frustum and synthetic image
+  for a pose estimate.
 - :mod:`~mapkit.view.result_overlay`: a matcher result over the map.
 - :mod:`~mapkit.view.panel`: the GUI panel (legend, toggles, pose controls).
 - :mod:`~mapkit.view.server`: :class:`~mapkit.view.server.Inspector`, which
@@ -22,5 +22,7 @@ numpy/shapely and testable alone):
 - :mod:`~mapkit.view.snapshot`: a standalone HTML file of the scene.
 - :mod:`~mapkit.view.headless`: a minimal headless-chromium driver (Chrome
   DevTools Protocol) for the browser test and the README screenshot.
-- :mod:`~mapkit.view.demo`: a synthetic flat for tests and demos.
+
+The synthetic flat the inspector's tests and screenshot use is not here:
+it is :func:`grid_flat` in ``tools/synthetic_building.py``.
 """

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 import numpy as np
 import viser.transforms as vtf
 
+from linemap.geometry import in_field_of_view
 from linemap.lmap import LineMap
 from mapkit.view import palette, scene_nodes
-from mapkit.view.fov import in_horizontal_view
 from mapkit.view.geometry import Triangles, disk_mesh, disk_outline
 from mapkit.view.synthetic_image import render_segments
 
@@ -35,13 +35,17 @@ class PoseSets:
     in_view: np.ndarray
 
 
-def pose_sets(m: LineMap, x: float, y: float, yaw: float, dt: float, dyaw: float, half_fov: float,
+def pose_sets(m: LineMap, camera, x: float, y: float, yaw: float, dt: float, dyaw: float,
               fov_filter: bool = True) -> PoseSets:
-    """The sets of the pose tool (angles in radians); without ``fov_filter`` all candidates are in view."""
+    """The sets of the pose tool (angles in radians); without ``fov_filter`` all candidates are in view.
+
+    The field-of-view test is the matcher's own
+    (:func:`linemap.geometry.in_field_of_view`), so the set shown is the set it uses.
+    """
     regions = m.regions_near(x, y, dt)
     cands = m.segments_for_regions(regions)
     if fov_filter and len(cands):
-        keep = in_horizontal_view(m.segments[cands], x, y, dt, yaw, dyaw, half_fov)
+        keep = in_field_of_view(m.segments[cands], camera, (x, y, yaw), dt, dyaw)
     else:
         keep = np.ones(len(cands), dtype=bool)
     return PoseSets(regions, cands, cands[keep])
@@ -87,10 +91,11 @@ def remove_pose(scene) -> None:
         scene.remove_by_name(name)
 
 
-def draw_pose(scene, m: LineMap, triangles: Triangles, camera, kind_colours: np.ndarray, half_fov: float,
+def draw_pose(scene, m: LineMap, triangles: Triangles, camera, kind_colours: np.ndarray,
               x: float, y: float, yaw: float, dt: float, dyaw: float, fov_filter: bool) -> tuple[np.ndarray, str]:
     """Draw the pose tool; returns (synthetic image, markdown summary for the panel)."""
-    sets = pose_sets(m, x, y, yaw, dt, dyaw, half_fov, fov_filter)
+    sets = pose_sets(m, camera, x, y, yaw, dt, dyaw, fov_filter)
+    half_fov = camera.horizontal_half_fov()
     out = np.setdiff1d(sets.candidates, sets.in_view)
     r = max(dt, 0.01)  # a zero disk would vanish; show a dot
     scene.add_line_segments("/pose/disk", disk_outline(x, y, r, 0.01), palette.POSE_DISK, thickness=3.0,

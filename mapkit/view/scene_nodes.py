@@ -130,7 +130,7 @@ def add_regions(scene, m: LineMap, tris: Triangles, region_colour: np.ndarray, l
 def add_plan(scene, plan, layers: MapLayers) -> None:
     """Overlay of an imported plan (a :class:`mapkit.scene.Scene`): the
     importer's wall outlines and free-space outline, drawn at floor level."""
-    from mapkit.assemble import rings_of
+    from mapkit.shapes import rings_of
 
     for name, geom, colour in (("/plan/walls", plan.walls, palette.PLAN_WALLS),
                                ("/plan/free", plan.free_space, palette.PLAN_FREE)):

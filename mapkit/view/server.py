@@ -59,7 +59,6 @@ class Inspector:
             self.camera, self.camera_source = camera, "given"
         else:
             self.camera, self.camera_source = map_camera(m)
-        self.half_fov = self.camera.horizontal_half_fov()
         self.polygons = region_polygons(m)
         self.triangles = triangulate(self.polygons)
         self.region_colour = palette.colour_regions(m.n_regions, *region_adjacency(self.polygons))
@@ -208,7 +207,7 @@ class Inspector:
     # ---- pose tool ------------------------------------------------------------
     def pose_sets(self, x: float, y: float, yaw: float, dt: float, dyaw: float, fov_filter: bool = True):
         """(retained regions, candidate segments, the candidates kept in view) for a pose."""
-        sets = pose_tool.pose_sets(self.m, x, y, yaw, dt, dyaw, self.half_fov, fov_filter)
+        sets = pose_tool.pose_sets(self.m, self.camera, x, y, yaw, dt, dyaw, fov_filter)
         return sets.regions, sets.candidates, sets.in_view
 
     def update_pose(self) -> None:
@@ -220,7 +219,7 @@ class Inspector:
                 pc.summary.content = "Pose tool hidden."
                 return
             img, summary = pose_tool.draw_pose(self.server.scene, self.m, self.triangles, self.camera,
-                                               self.kind_colours, self.half_fov, *pc.values(),
+                                               self.kind_colours, *pc.values(),
                                                fov_filter=bool(pc.fov_filter.value))
             pc.image.image = img
             pc.summary.content = summary

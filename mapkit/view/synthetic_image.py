@@ -1,10 +1,9 @@
 """The model as the camera would see it: projected segments drawn into an image.
 
-Segments are clipped to the camera's near plane in 3D (a segment crossing
-the plane through the camera centre would otherwise project through
-infinity), projected with :meth:`linemap.camera.Camera.project` (an ideal
-pinhole: lens distortion is not drawn) and clipped to the image rectangle.
-Image lines are (M, 2, 2) pixel end points (u column, v row).
+Segments are cut at the camera's near plane and projected through the ideal
+pinhole by :func:`linemap.geometry.project_segments`, the projection the
+matcher uses (lens distortion is not drawn), then clipped to the image
+rectangle. Image lines are (M, 2, 2) pixel end points (u column, v row).
 """
 
 from __future__ import annotations
@@ -12,26 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from linemap.camera import Camera
+from linemap.geometry import project_segments as project_at_poses
 
 #: Points nearer than this (metres, along the optical axis) are behind the image.
 NEAR_PLANE_M = 0.05
-
-
-def clip_near(camera: Camera, segments: np.ndarray, x: float, y: float, yaw: float) -> tuple[np.ndarray, np.ndarray]:
-    """Cut the segments (N, 2, 3) to the part in front of the near plane.
-
-    Returns (clipped world segments (M, 2, 3), their indices (M,) in the input).
-    """
-    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 3)
-    R = camera.world2cam(yaw)
-    z = (segments - camera.centre(x, y)) @ R[2]  # (N, 2) depths along the optical axis
-    keep = (z > NEAR_PLANE_M).any(axis=1)
-    seg, z = segments[keep].copy(), z[keep]
-    for end, other in ((0, 1), (1, 0)):
-        behind = z[:, end] <= NEAR_PLANE_M
-        t = (NEAR_PLANE_M - z[behind, end]) / (z[behind, other] - z[behind, end])
-        seg[behind, end] = seg[behind, end] + t[:, None] * (seg[behind, other] - seg[behind, end])
-    return seg, np.nonzero(keep)[0]
 
 
 def clip_to_image(lines: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
@@ -64,9 +47,10 @@ def project_segments(
     Occlusion is not modelled: a segment behind a wall is drawn too (the map's
     lists already say what is visible from where).
     """
-    seg, idx = clip_near(camera, segments, x, y, yaw)
-    uv, _ = camera.project(seg, x, y, yaw)
-    lines, kept = clip_to_image(uv, camera.width, camera.height)
+    segments = np.asarray(segments, dtype=np.float64).reshape(-1, 2, 3)
+    uv, ok = project_at_poses(camera, np.array([[x, y, yaw]], dtype=np.float64), segments, NEAR_PLANE_M)
+    idx = np.nonzero(ok)[0]
+    lines, kept = clip_to_image(uv[idx], camera.width, camera.height)
     return lines, idx[kept]
 
 

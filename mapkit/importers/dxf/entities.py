@@ -1,4 +1,4 @@
-"""Flatten DXF model-space entities into :class:`~mapkit.reconstruct_types.Stroke` objects.
+"""Flatten DXF model-space entities into :class:`~mapkit.importers.dxf.strokes.Stroke` objects.
 
 Curves (arcs, circles, ellipses, splines, polyline bulges) become polylines
 whose chords stay within ``CURVE_SAGITTA`` of the curve and turn by at most
@@ -16,8 +16,8 @@ from collections.abc import Callable, Iterator
 import numpy as np
 from ezdxf import path as dxfpath
 
-from mapkit.reconstruct_types import Stroke
-from mapkit.tolerances import CURVE_STEP_DEG
+from mapkit.importers.dxf.strokes import Stroke
+from mapkit.tolerances import CURVE_BEZIER_PER_TURN, CURVE_STEP_DEG, DXF_MAX_BLOCK_DEPTH
 
 #: Entities that carry no building geometry: skipped without a word.
 SILENT = frozenset(
@@ -37,16 +37,8 @@ FILL_TYPES = frozenset({"HATCH", "SOLID", "TRACE", "MPOLYGON"})
 #: Entities expanded into simpler ones by ezdxf.
 EXPAND_TYPES = frozenset({"INSERT", "MLINE"})
 
-#: Block nesting deeper than this is a reference cycle in a broken file.
-_MAX_DEPTH = 32
-
-#: Arcs and ellipses become at least this many cubic Bezier pieces per full
-#: turn (at most 45 degrees each): a 45-degree cubic strays from its circle by
-#: 4e-6 of the radius (a 90-degree one by 3e-4, 3 mm on a 10 m rotunda).
-_BEZIER_PER_TURN = 8
-
 #: Least flattening steps per Bezier piece, so each step turns at most CURVE_STEP_DEG.
-_MIN_SEGMENTS = math.ceil(360.0 / _BEZIER_PER_TURN / CURVE_STEP_DEG)
+_MIN_SEGMENTS = math.ceil(360.0 / CURVE_BEZIER_PER_TURN / CURVE_STEP_DEG)
 
 
 def flatten_entities(
@@ -84,7 +76,7 @@ def flatten_entities(
 
 def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iterator[tuple[object, str, int]]:
     """Leaf entities of an INSERT/MLINE with their effective layers and MINSERT cell index."""
-    if depth > _MAX_DEPTH:
+    if depth > DXF_MAX_BLOCK_DEPTH:
         skipped["INSERT (nested too deep)"] += 1
         return
     kind = entity.dxftype()
@@ -116,7 +108,7 @@ def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.nda
     if kind in PATH_TYPES:
         filled = False
         try:
-            paths = [dxfpath.make_path(entity, segments=_BEZIER_PER_TURN)]
+            paths = [dxfpath.make_path(entity, segments=CURVE_BEZIER_PER_TURN)]
         except Exception:  # noqa: BLE001 - degenerate geometry (zero-radius arc, bad spline)
             skipped[f"{kind} (degenerate)"] += 1
             return

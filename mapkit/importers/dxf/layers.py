@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections import Counter
 
 from mapkit.errors import MapkitError, NoWallsError
-from mapkit.importers.dxf_entities import SILENT
-from mapkit.layer_roles import assign_roles, unmatched_globs
+from mapkit.importers.dxf.entities import SILENT
+from mapkit.importers.dxf.layer_roles import assign_roles, unmatched_globs
 from mapkit.options import BuildOptions
 
 
@@ -23,7 +23,7 @@ def _has_linework(counter: Counter) -> bool:
 
 
 def resolve_roles(counts: dict[str, Counter], options: BuildOptions) -> tuple[dict[str, str | None], list[str]]:
-    """Role of every layer (see :func:`mapkit.layer_roles.assign_roles`) and warnings.
+    """Role of every layer (see :func:`mapkit.importers.dxf.layer_roles.assign_roles`) and warnings.
 
     When no wall layer is named or recognised but exactly one layer of
     unknown role holds linework, that layer is taken as the walls (simple

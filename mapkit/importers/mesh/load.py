@@ -16,9 +16,17 @@ import numpy as np
 
 from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.mesh_edges import edge_faces, face_normals
+from mapkit.importers.mesh.edges import edge_faces, face_normals
 from mapkit.options import BuildOptions
-from mapkit.tolerances import AXIS_DEG, MERGE, MESH_FLOOR_FRACTION, MESH_FLOOR_RISE, MESH_LEVEL, PLAUSIBLE_EXTENT
+from mapkit.tolerances import (
+    AXIS_DEG,
+    MERGE,
+    MESH_FLOOR_FRACTION,
+    MESH_FLOOR_RISE,
+    MESH_LEVEL,
+    MESH_NEEDLE_PASSES,
+    PLAUSIBLE_EXTENT,
+)
 
 log = logging.getLogger("mapkit")
 
@@ -197,11 +205,6 @@ def _unique_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ordered[new], inverse
 
 
-#: Needle repair passes; each pass fixes every needle whose neighbour is not
-#: claimed by another needle in the same pass.
-_NEEDLE_PASSES = 8
-
-
 def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> np.ndarray:
     """Replace needle triangles (height under ``tol``) by splitting the face
     across their long edge at the needle's middle corner.
@@ -211,7 +214,7 @@ def split_needles(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -
     orientation kept, and the needle goes. Needles with no single plain
     neighbour across the long edge (two needles making a sliver) are kept.
     """
-    for _ in range(_NEEDLE_PASSES):
+    for _ in range(MESH_NEEDLE_PASSES):
         tri = vertices[faces]
         side = np.roll(tri, -1, axis=1) - tri  # side k runs corner k -> k+1
         length = np.linalg.norm(side, axis=2)

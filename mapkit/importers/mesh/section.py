@@ -22,11 +22,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiLineString, MultiPolygon
 
-from mapkit.mesh_edges import edge_faces, face_normals
-from mapkit.tolerances import MERGE, MESH_OPEN_FRACTION, MESH_THIN_WALL
-
-#: Points per chunk in winding-number tests (memory: chunk x segments booleans).
-_CHUNK = 2_000_000
+from mapkit.importers.mesh.edges import edge_faces, face_normals
+from mapkit.tolerances import MERGE, MESH_OPEN_FRACTION, MESH_SECTION_CHUNK, MESH_THIN_WALL
 
 
 @dataclass
@@ -122,7 +119,7 @@ def winding_numbers(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
     if len(segments) == 0 or len(points) == 0:
         return out
     a, b = segments[:, 0], segments[:, 1]
-    step = max(1, _CHUNK // len(segments))
+    step = max(1, MESH_SECTION_CHUNK // len(segments))
     for i in range(0, len(points), step):
         p = points[i : i + step, None, :]
         cross = (b[:, 0] - a[:, 0]) * (p[..., 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (p[..., 0] - a[:, 0])

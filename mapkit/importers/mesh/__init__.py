@@ -1,9 +1,12 @@
 """3D meshes (OBJ, PLY, STL, glTF/GLB, OFF) to a :class:`~mapkit.scene.Scene`.
 
-    file --mesh_load--> welded mesh (metres, z up, floor at 0)
-         --mesh_section--> walls at camera height, low obstacles, rooms
-         --mesh_edges--> 3D feature edges and their kinds
-         --mesh_hidden--> without the parts buried inside other solids
+    file --load--> welded mesh (metres, z up, floor at 0)
+         --section--> walls at camera height, low obstacles, rooms
+         --edges--> 3D feature edges and their kinds
+         --hidden--> without the parts buried inside other solids
+
+(modules of this package: :mod:`.load`, :mod:`.section`, :mod:`.edges`,
+:mod:`.hidden`)
 
 Doors in a mesh are just geometry (gaps and lintels), so ``openings`` is
 empty; the importer provides the edges itself, so the pipeline does not
@@ -20,11 +23,11 @@ import shapely
 from shapely.geometry import MultiPolygon
 
 from mapkit.errors import MapkitError, NoWallsError
-from mapkit.importers.mesh_hidden import drop_hidden
-from mapkit.importers.mesh_load import load_mesh
-from mapkit.importers.mesh_section import MeshSections, as_multipolygon, boundary_outline
+from mapkit.importers.mesh.hidden import drop_hidden
+from mapkit.importers.mesh.load import load_mesh
+from mapkit.importers.mesh.section import MeshSections, as_multipolygon, boundary_outline
 from linemap.lmap import KIND_NAMES
-from mapkit.mesh_edges import face_normals, feature_edges, merge_overlapping
+from mapkit.importers.mesh.edges import face_normals, feature_edges, merge_overlapping
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene
 from mapkit.tolerances import AXIS_DEG, MESH_LEVEL, MESH_MAX_SECTIONS, MESH_OBSTACLE_HEIGHTS, MIN_FREE_AREA
@@ -87,16 +90,8 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
         kinds={name: int(c) for name, c in zip(KIND_NAMES, counts) if c},
         free_area_m2=float(free.area),
     )
-    return Scene(
-        walls=walls,
-        openings=[],
-        free_space=free,
-        wall_height=top,
-        obstacles=obstacles,
-        segments=segments,
-        kinds=kinds,
-        info=info,
-    )
+    return Scene(walls=walls, openings=[], free_space=free, wall_height=top, obstacles=obstacles,
+                 segments=segments, kinds=kinds, info=info)
 
 
 def _warn(warnings: list[str], message: str) -> None:

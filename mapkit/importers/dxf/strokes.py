@@ -1,7 +1,7 @@
 """Plain input of the plan reconstruction: flattened strokes per role.
 
 An importer (DXF today) turns its drawing into :class:`Stroke` objects in
-metres and sorts them by role; :mod:`mapkit.reconstruct` builds the
+metres and sorts them by role; :mod:`mapkit.importers.dxf.reconstruct` builds the
 :class:`~mapkit.scene.Scene` from them and knows nothing of file formats.
 """
 

@@ -2,7 +2,17 @@
 
 Reads the file (recovering damaged ones), decides the units, sorts layers
 into roles, flattens the linework of each role into strokes in metres and
-hands them to :func:`mapkit.reconstruct.reconstruct_scene`.
+hands them to :func:`mapkit.importers.dxf.reconstruct.reconstruct_scene`.
+
+    file --read--> ezdxf document (damaged files recovered)
+         --units--> drawing units to metres
+         --layers, layer_roles--> the role of each layer
+         --entities--> strokes per role (curves flattened, blocks expanded)
+         --reconstruct--> Scene: wall solids (walls), door and window
+                          openings (openings), free space
+
+:mod:`.strokes` holds the plain data the reconstruction takes (``Stroke``,
+``PlanDrawing``); it knows nothing of DXF.
 """
 
 from __future__ import annotations
@@ -13,13 +23,13 @@ from pathlib import Path
 
 from ezdxf import bbox
 
-from mapkit.importers.dxf_entities import flatten_entities
-from mapkit.importers.dxf_layers import layer_counts, resolve_roles
-from mapkit.importers.dxf_read import read_dxf
-from mapkit.importers.dxf_units import decide_units
+from mapkit.importers.dxf.entities import flatten_entities
+from mapkit.importers.dxf.layers import layer_counts, resolve_roles
+from mapkit.importers.dxf.read import read_dxf
+from mapkit.importers.dxf.units import decide_units
 from mapkit.options import BuildOptions
-from mapkit.reconstruct import reconstruct_scene
-from mapkit.reconstruct_types import PlanDrawing
+from mapkit.importers.dxf.reconstruct import reconstruct_scene
+from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
 from mapkit.tolerances import CURVE_SAGITTA
 

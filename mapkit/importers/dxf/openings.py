@@ -13,7 +13,7 @@ import shapely
 from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import nearest_points, unary_union
 
-from mapkit.reconstruct_types import Stroke
+from mapkit.importers.dxf.strokes import Stroke
 from mapkit.tolerances import JAMB_REACH, MERGE, MIN_OPENING_WIDTH, THIN_WALL
 
 

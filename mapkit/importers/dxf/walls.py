@@ -27,13 +27,9 @@ from scipy.sparse.csgraph import connected_components
 from shapely.geometry import LineString, MultiLineString, MultiPolygon, Point, Polygon
 from shapely.ops import nearest_points, unary_union
 
-from mapkit.assemble import polygon_parts
-from mapkit.reconstruct_types import Stroke
-from mapkit.tolerances import COLUMN_MAX_AREA, MERGE, SNAP_GAP, THIN_WALL
-
-#: Double-line wall ends are capped only if both lines run within this many
-#: degrees of parallel and the cap is within this of square to them.
-_CAP_ANGLE_DEG = 15.0
+from mapkit.shapes import polygon_parts
+from mapkit.importers.dxf.strokes import Stroke
+from mapkit.tolerances import COLUMN_MAX_AREA, MERGE, SNAP_GAP, THIN_WALL, WALL_CAP_ANGLE_DEG
 
 
 @dataclass
@@ -179,8 +175,8 @@ def _cap_ends(noded, max_gap: float) -> list[LineString]:
         dirs.append(v / (np.linalg.norm(v) or 1.0))
     dirs = np.array(dirs)
     pts = ends[dangling]
-    cos_par = np.cos(np.radians(_CAP_ANGLE_DEG))
-    sin_off = np.sin(np.radians(_CAP_ANGLE_DEG))
+    cos_par = np.cos(np.radians(WALL_CAP_ANGLE_DEG))
+    sin_off = np.sin(np.radians(WALL_CAP_ANGLE_DEG))
     candidates = []
     for i, j in sorted(cKDTree(pts).query_pairs(max_gap)):
         if dangling[i] // 2 == dangling[j] // 2 and len(parts[dangling[i] // 2].coords) == 2:

@@ -18,7 +18,7 @@ triangulation) are never features. Feature edges that continue each other
 in a straight line through a shared vertex are merged into one segment;
 parts below the floor or above the ceiling are cut off (nobody inside sees them); pieces shorter than
 ``min_length`` are dropped. Vertices must be merged first (see
-:func:`mapkit.importers.mesh_load.weld`): split vertices make every edge a
+:func:`mapkit.importers.mesh.load.weld`): split vertices make every edge a
 border.
 """
 
@@ -32,12 +32,15 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from linemap.lmap import SegmentKind
-from mapkit.tolerances import AXIS_DEG, COLLINEAR_DEG, MERGE, MESH_LEVEL, MESH_MAX_EDGE_FACES
-
-#: A face rises from an edge (a wall standing on the floor) when its normal
-#: is within this many degrees of horizontal. Loose: walls lean a little in
-#: scans, and a floor junction should stay a floor junction.
-_STEEP_DEG = 45.0
+from mapkit.tolerances import (
+    AXIS_DEG,
+    COLLINEAR_DEG,
+    MERGE,
+    MESH_LEVEL,
+    MESH_MAX_EDGE_FACES,
+    MESH_OVERLAP_STEP,
+    MESH_STEEP_DEG,
+)
 
 
 @dataclass
@@ -172,7 +175,7 @@ def _feature_mask(topo: EdgeFaces, vertices: np.ndarray, normals: np.ndarray, cr
 
 def _rising_face(topo: EdgeFaces, vertices: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """(E,) bool: a steep face rises above the edge (a wall standing on it)."""
-    steep = np.abs(normals[topo.face][:, 2]) < math.sin(math.radians(_STEEP_DEG))
+    steep = np.abs(normals[topo.face][:, 2]) < math.sin(math.radians(MESH_STEEP_DEG))
     edge_of_entry = np.repeat(np.arange(len(topo.edges)), topo.counts)
     edge_top = vertices[topo.edges[edge_of_entry]][:, :, 2].max(axis=1)
     above = vertices[topo.opposite, 2] > edge_top + MERGE
@@ -301,11 +304,6 @@ def classify(segments: np.ndarray, rises: np.ndarray, floor_z: float, top_z: flo
     return kinds
 
 
-#: Sample spacing, metres, along segments when looking for overlapping
-#: collinear pairs: pairs overlapping by more than this are always found.
-_OVERLAP_STEP = 0.05
-
-
 def merge_overlapping(segments: np.ndarray, kinds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Merge segments of one kind that lie on one line and overlap or touch.
 
@@ -326,12 +324,12 @@ def merge_overlapping(segments: np.ndarray, kinds: np.ndarray) -> tuple[np.ndarr
     d = b - a
     length = np.linalg.norm(d, axis=1)
     u = d / np.maximum(length, 1e-12)[:, None]
-    count = np.maximum(2, np.ceil(length / _OVERLAP_STEP).astype(np.int64) + 1)
+    count = np.maximum(2, np.ceil(length / MESH_OVERLAP_STEP).astype(np.int64) + 1)
     owner = np.repeat(np.arange(n), count)
     start = np.r_[0, np.cumsum(count)[:-1]]
     t = (np.arange(len(owner)) - np.repeat(start, count)) / np.repeat(count - 1, count)
     pts = a[owner] + t[:, None] * d[owner]
-    pairs = cKDTree(pts).query_pairs(_OVERLAP_STEP / 2 + MERGE, output_type="ndarray")
+    pairs = cKDTree(pts).query_pairs(MESH_OVERLAP_STEP / 2 + MERGE, output_type="ndarray")
     i, j = owner[pairs[:, 0]], owner[pairs[:, 1]]
     ok = (i != j) & (kinds[i] == kinds[j])
     i, j = i[ok], j[ok]

@@ -6,7 +6,7 @@ each box where it pokes into, or lines up with, the other: real edges of the
 triangles, but buried in material or lying in a flat face of the union.
 
 Tests per height level (metres, z up, floor at 0), with sections just above
-and just below a horizontal edge (z +- ``_PROBE``):
+and just below a horizontal edge (z +- ``MESH_HIDDEN_PROBE``):
 
 - a horizontal edge is kept only where it runs along the outline of the
   material above or below, or along an open sheet (single-surface walls);
@@ -25,26 +25,16 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from mapkit.importers.mesh_section import MeshSections
+from mapkit.importers.mesh.section import MeshSections
 from linemap.lmap import SegmentKind
-from mapkit.tolerances import MERGE, MESH_LEVEL
-
-#: Sections probe this far above and below a horizontal edge, metres: off
-#: the millimetre grid the vertices were welded to, so the plane misses them.
-_PROBE = 1.5 * MERGE
-
-#: A horizontal edge is on a probed outline if within this distance of it,
-#: metres. A face sloping away from the edge at angle a moves the outline
-#: by ``_PROBE / tan(a)``: faces steeper than about 20 degrees stay within
-#: reach. Buried pieces are cut this close to the surface they enter.
-_REACH = 4 * MERGE
-
-#: The quadrant test looks this far to either side of an edge, metres.
-_SIDE = 3 * _REACH
-
-#: At most this many distinct heights are probed; edges at other heights
-#: are kept unchecked (a warning says so).
-MAX_LEVELS = 64
+from mapkit.tolerances import (
+    MERGE,
+    MESH_HIDDEN_MAX_LEVELS,
+    MESH_HIDDEN_PROBE,
+    MESH_HIDDEN_REACH,
+    MESH_HIDDEN_SIDE,
+    MESH_LEVEL,
+)
 
 _HORIZONTAL = (SegmentKind.FLOOR, SegmentKind.CEILING, SegmentKind.HORIZONTAL)
 
@@ -64,9 +54,9 @@ def drop_hidden(
     level = np.round(z_mid / MERGE).astype(np.int64)  # millimetre levels: probes must straddle each edge
     checked = horizontal | vertical
     levels = np.unique(level[checked])
-    if len(levels) > MAX_LEVELS:
-        warnings.append(f"{len(levels)} edge heights; only {MAX_LEVELS} checked for hidden edges")
-        levels = levels[:MAX_LEVELS]
+    if len(levels) > MESH_HIDDEN_MAX_LEVELS:
+        warnings.append(f"{len(levels)} edge heights; only {MESH_HIDDEN_MAX_LEVELS} checked for hidden edges")
+        levels = levels[:MESH_HIDDEN_MAX_LEVELS]
 
     keep = ~checked  # obliques pass
     out_segments, out_kinds = [], []
@@ -75,7 +65,7 @@ def drop_hidden(
         z = float(z_mid[at].mean())
         hz = np.nonzero(at & horizontal)[0]
         if len(hz):
-            above, below = sections.section(z + _PROBE), sections.section(z - _PROBE)
+            above, below = sections.section(z + MESH_HIDDEN_PROBE), sections.section(z - MESH_HIDDEN_PROBE)
             outline = _outline_segments([above.solid, below.solid, above.sheets, below.sheets])
             flat, owner = _on_outline(segments[hz], outline, min_length)
             if len(flat):
@@ -115,7 +105,7 @@ def _on_outline(segments: np.ndarray, outline: np.ndarray, min_length: float) ->
     """Pieces of horizontal segments (N, 2, 3) running along outline pieces (K, 2, 2).
 
     A segment runs along an outline piece where the piece lies within
-    ``_REACH`` of the segment's line (both its ends) and their extents
+    ``MESH_HIDDEN_REACH`` of the segment's line (both its ends) and their extents
     overlap; the overlaps of one segment are joined. Returns the pieces
     (M, 2, 3) at least ``min_length`` long and the segment each came from (M,).
     """
@@ -129,7 +119,7 @@ def _on_outline(segments: np.ndarray, outline: np.ndarray, min_length: float) ->
     length = np.linalg.norm(d, axis=1)
     u = d / length[:, None]
     tree = STRtree(shapely.linestrings(outline))
-    seg_i, out_j = tree.query(shapely.linestrings(segments[:, :, :2]), predicate="dwithin", distance=_REACH)
+    seg_i, out_j = tree.query(shapely.linestrings(segments[:, :, :2]), predicate="dwithin", distance=MESH_HIDDEN_REACH)
     p, q = outline[out_j, 0], outline[out_j, 1]
     ua, aa = u[seg_i], a[seg_i]
 
@@ -137,7 +127,7 @@ def _on_outline(segments: np.ndarray, outline: np.ndarray, min_length: float) ->
         rel = pt - aa
         return np.abs(rel[:, 0] * ua[:, 1] - rel[:, 1] * ua[:, 0])
 
-    along = (off(p) <= _REACH) & (off(q) <= _REACH)
+    along = (off(p) <= MESH_HIDDEN_REACH) & (off(q) <= MESH_HIDDEN_REACH)
     seg_i, p, q, ua, aa = seg_i[along], p[along], q[along], ua[along], aa[along]
     tp = np.einsum("ij,ij->i", p - aa, ua) / length[seg_i]
     tq = np.einsum("ij,ij->i", q - aa, ua) / length[seg_i]
@@ -151,7 +141,7 @@ def _on_outline(segments: np.ndarray, outline: np.ndarray, min_length: float) ->
     # parameters by 4 x its index so one running maximum serves all.
     order = np.lexsort((lo, seg_i))
     seg_i, lo, hi = seg_i[order], lo[order] + 4 * seg_i[order], hi[order] + 4 * seg_i[order]
-    gap = _REACH / length[seg_i]
+    gap = MESH_HIDDEN_REACH / length[seg_i]
     reach = np.maximum.accumulate(hi)
     start = np.r_[True, lo[1:] > reach[:-1] + gap[1:]]
     t0 = lo[start] - 4 * seg_i[start]
@@ -170,7 +160,7 @@ def _is_crease(segments: np.ndarray, above, below) -> np.ndarray:
     mid = segments[:, :, :2].mean(axis=1)
     d = segments[:, 1, :2] - segments[:, 0, :2]
     n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.linalg.norm(d, axis=1, keepdims=True)
-    left, right = mid + _SIDE * n, mid - _SIDE * n
+    left, right = mid + MESH_HIDDEN_SIDE * n, mid - MESH_HIDDEN_SIDE * n
 
     def solid(sec, p):
         return shapely.contains_xy(sec.solid, p[:, 0], p[:, 1]) if not sec.solid.is_empty else np.zeros(len(p), bool)
@@ -180,6 +170,6 @@ def _is_crease(segments: np.ndarray, above, below) -> np.ndarray:
     level_face = (ul == ur) & (ll == lr)  # same on both sides: a level face going on
     sheets = shapely.union_all([above.sheets, below.sheets])
     on_sheet = (
-        shapely.dwithin(shapely.points(mid), sheets, _REACH) if not sheets.is_empty else np.zeros(len(mid), bool)
+        shapely.dwithin(shapely.points(mid), sheets, MESH_HIDDEN_REACH) if not sheets.is_empty else np.zeros(len(mid), bool)
     )
     return on_sheet | ~(wall_face | level_face)

@@ -11,7 +11,7 @@ import math
 
 from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.tolerances import PLAUSIBLE_EXTENT
+from mapkit.tolerances import PLAUSIBLE_EXTENT, TYPICAL_EXTENT
 
 #: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
 #: astronomical or micro units no floor plan uses).
@@ -21,10 +21,6 @@ INSUNITS = {1: "in", 2: "ft", 4: "mm", 5: "cm", 6: "m", 7: "km", 10: "yd", 14: "
 #: whose $MEASUREMENT says imperial try inches and feet instead.
 _GUESSES = ("m", "mm", "cm")
 _GUESSES_IMPERIAL = ("in", "ft")
-
-#: Typical building size, metres: unitless drawings get the unit that puts
-#: their extent closest to this (in log scale).
-_TYPICAL_EXTENT = 20.0
 
 
 def _plausible(extent_m: float) -> bool:
@@ -74,7 +70,7 @@ def _likely_units(extent: float, imperial: bool) -> str:
     """The unit that puts an ``extent`` (drawing units) closest to a typical
     building's size, in log scale."""
     guesses = _GUESSES_IMPERIAL if imperial else _GUESSES
-    return min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / _TYPICAL_EXTENT)))
+    return min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / TYPICAL_EXTENT)))
 
 
 def _fmt(metres: float) -> str:

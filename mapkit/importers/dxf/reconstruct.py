@@ -1,8 +1,8 @@
 """Plan reconstruction: strokes per role -> :class:`~mapkit.scene.Scene`.
 
-1. Walls (:mod:`mapkit.reconstruct_walls`): solids from double lines,
+1. Walls (:mod:`mapkit.importers.dxf.walls`): solids from double lines,
    outlines, fills and columns; single lines thickened.
-2. Openings (:mod:`mapkit.reconstruct_openings`): each door or window
+2. Openings (:mod:`mapkit.importers.dxf.openings`): each door or window
    drawing claims the wall gap it sits in; free-standing glass becomes an
    obstacle.
 3. Free space: the interior (what closed outlines enclose once door and
@@ -20,9 +20,9 @@ from shapely.ops import unary_union
 
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.options import BuildOptions
-from mapkit.reconstruct_openings import drawing_items, find_opening, glass_footprint, opening_width
-from mapkit.reconstruct_types import PlanDrawing, Stroke
-from mapkit.reconstruct_walls import build_walls
+from mapkit.importers.dxf.openings import drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
+from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP
 
