@@ -374,6 +374,51 @@ def test_server_sends_the_scene_nodes_to_a_websocket_client(inspector):
         assert expected in names, f"{expected} not among {sorted(names)}"
 
 
+@pytest.mark.parametrize("origin,accepted", [
+    (None, True),  # a script, not a browser page
+    ("http://127.0.0.1:{port}", True),  # the inspector's own page
+    ("http://localhost:{port}", True),
+    ("http://evil.example", False),  # another site's page open in the same browser
+    ("http://127.0.0.1:9", False),  # another local service's page
+])
+def test_websocket_accepts_only_the_inspectors_own_pages(inspector, origin, accepted):
+    import viser
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    port = inspector.port
+    headers = {} if origin is None else {"Origin": origin.format(port=port)}
+    try:
+        with connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None,
+                     additional_headers=headers, open_timeout=10):
+            got_in = True
+    except InvalidStatus as exc:
+        assert exc.response.status_code == 403
+        got_in = False
+    assert got_in == accepted
+
+
+def test_cli_warns_when_listening_beyond_this_machine():
+    from mapkit.commands.view import _loopback
+
+    assert _loopback("127.0.0.1") and _loopback("localhost") and _loopback("::1") and _loopback("[::1]")
+    assert not _loopback("0.0.0.0") and not _loopback("192.168.1.5") and not _loopback("myhost")
+
+
+def test_result_with_a_negative_line_index_or_deep_nesting_is_refused(tmp_path):
+    from mapkit.errors import MapkitError
+    from mapkit.view.result import load_result
+
+    bad = tmp_path / "neg.json"
+    bad.write_text('{"ok": true, "pose": {"x": 0, "y": 0, "yaw_deg": 0}, "matches": [[1, -2]]}')
+    with pytest.raises(MapkitError, match="line indices start at 0"):
+        load_result(bad, 10)
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100000 + "]" * 100000)
+    with pytest.raises(MapkitError, match="nested too deeply"):
+        load_result(deep, 10)
+
+
 def test_server_page_is_served_and_stops(flat):
     ins = Inspector(flat, port=0)
     port = ins.port

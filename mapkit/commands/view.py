@@ -18,6 +18,18 @@ def add_arguments(p) -> None:
                    help="write a standalone HTML snapshot of the 3D scene (opens from file://, no server) and exit")
 
 
+def _loopback(host: str) -> bool:
+    """Is ``host`` an address only this machine reaches?"""
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False
+
+
 def run(args) -> int:
     import sys
     import time
@@ -29,6 +41,10 @@ def run(args) -> int:
         raise MapkitError("--lines needs --result (the lines are drawn at the result's pose)")
     if not 0 <= args.port <= 65535:
         raise MapkitError(f"--port must be in [0, 65535], got {args.port}")
+    if not _loopback(args.host) and not args.html:
+        print(f"mapkit view: warning: listening on {args.host}: anyone who can reach this machine can see the "
+              "plan and use the inspector (there is no password); use the default 127.0.0.1 to keep it local",
+              file=sys.stderr)
     if args.html:
         from linemap.atomic import check_output_path
 

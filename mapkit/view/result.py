@@ -49,6 +49,10 @@ def _read_json(path: Path, what: str) -> dict:
         raise MapkitError(f"{what} file {path} not found; check the path") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise MapkitError(f"{what} file {path} is not valid JSON ({exc})") from None
+    except RecursionError:
+        raise MapkitError(f"{what} file {path} is not valid JSON (nested too deeply)") from None
+    except OSError as exc:
+        raise MapkitError(f"{what} file {path} could not be read ({exc.strerror or exc})") from None
     if not isinstance(d, dict):
         raise MapkitError(f"{what} file {path} must hold a JSON object")
     return d
@@ -103,6 +107,8 @@ def parse_result(d: dict, source: str = "result", n_segments: int | None = None)
     if n_segments is not None and len(m) and (m[:, 0].min() < 0 or m[:, 0].max() >= n_segments):
         raise MapkitError(f"{source}: a match names segment {int(m[:, 0].max())}, but the map has {n_segments}; "
                           "was the result computed on another map?")
+    if len(m) and m[:, 1].min() < 0:
+        raise MapkitError(f"{source}: a match names image line {int(m[:, 1].min())}; line indices start at 0")
     res.matches = m
     if d.get("lines") is not None:
         res.lines = parse_lines(d["lines"], source)

@@ -26,6 +26,7 @@ import viser
 from linemap.lmap import LineMap, SegmentKind
 from mapkit.view import palette, pose_tool, scene_nodes
 from mapkit.view.geometry import lift, map_bounds, region_adjacency, region_polygons, ring_edges, triangulate
+from mapkit.view.origin_guard import free_port, origin_checked_servers
 from mapkit.view.panel import SELECTION_HINT, build_panel, id_list_markdown
 from mapkit.view.result import MatchResult
 from mapkit.view.result_overlay import draw_result
@@ -70,8 +71,9 @@ class Inspector:
         self._result_handles: list = []
 
         # viser prints its own banner; the command prints one line with the URL instead.
-        with contextlib.redirect_stdout(io.StringIO()):
-            self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        # Its websocket accepts pages of the inspector only (origin_guard).
+        with contextlib.redirect_stdout(io.StringIO()), origin_checked_servers():
+            self.server = viser.ViserServer(host=host, port=port or free_port(host), verbose=False)
         self.host = host
         scene = self.server.scene
         # No shadows (nothing here needs them; they are costly in software
