@@ -18,13 +18,14 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.geometry import wrap
 from linemap.lmap import LineMap
+from matcher import ambiguity
 from matcher.budget import NO_LIMIT, Deadlines
 from matcher.candidates import Candidates, select_candidates
 from matcher.checks import check_lines, check_prior
 from matcher.frame import ImageLines, prepare_lines, too_few_lines
 from matcher.result import LocalizeResult
 from matcher.stage2.covariance import pose_std_of
-from matcher.strategy import Answer, Frame, run_strategy
+from matcher.strategy import SOURCES, Answer, Frame, run_strategy
 from matcher.tolerances import DEFAULT, Tolerances
 
 
@@ -58,12 +59,13 @@ def checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, Imag
 
 
 def localize_prepared(linemap, camera: Camera, img: ImageLines, px, tol: Tolerances, t0: float,
-                      deadlines: Deadlines = NO_LIMIT, candidate_ids=None) -> LocalizeResult:
+                      deadlines: Deadlines = NO_LIMIT, candidate_ids=None, sources=SOURCES) -> LocalizeResult:
     """One prior ``px`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians) on prepared
     lines, within the time budget's ``deadlines``: the candidates
     (:mod:`matcher.candidates`), then the strategy (:mod:`matcher.strategy`),
     then the result. ``candidate_ids``: the segments to consider instead of
-    those of the regions the prior disk meets (lost mode: a region's list)."""
+    those of the regions the prior disk meets (lost mode: a region's list);
+    ``sources`` the strategy's hypothesis sources (:data:`matcher.strategy.SOURCES`)."""
     times: dict[str, float] = {}
     cands = select_candidates(linemap, camera, px, tol, candidate_ids)
     times["select"] = (time.perf_counter() - t0) * 1e3
@@ -71,7 +73,7 @@ def localize_prepared(linemap, camera: Camera, img: ImageLines, px, tol: Toleran
     if reason:
         times["total"] = (time.perf_counter() - t0) * 1e3
         return LocalizeResult(False, reason, time_ms=times, stage1={})
-    answer = run_strategy(Frame(camera, img, cands, px, tol, deadlines))
+    answer = run_strategy(Frame(camera, img, cands, px, tol, deadlines), sources)
     times.update(answer.times)
     return _result(answer, camera, img, cands, tol, t0, times)
 
@@ -114,6 +116,12 @@ def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, 
     # Worked out when first read (a few tenths of a millisecond a robot
     # that only wants the pose does not spend).
     res.pose_std_from(lambda: pose_std_of(camera, img, cands.segments, ranked_h, best, tol))
+    n_fin = np.bincount(ranked_h.hyp, minlength=n_h)
+    answers = [(pose_deg(ranked_h.poses[h]), int(n_fin[h]), float(E[h])) for h in order if np.isfinite(E[h])]
+    if len(answers) > 1 and answers[1][1] == answers[0][1]:  # a rival explains as many lines: is it elsewhere?
+        kept = ambiguity.rivals(answers, tol.internals, ambiguity.spread_of(res.pose_std))
+        if len(kept) > 1:
+            return LocalizeResult(False, ambiguity.reason(kept), candidates=ambiguity.candidates_of(kept), **common)
     return res
 
 

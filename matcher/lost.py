@@ -14,10 +14,11 @@ from dataclasses import replace
 import numpy as np
 
 from linemap.camera import Camera
-from matcher import from_prior
+from matcher import ambiguity, from_prior
 from matcher.budget import Deadlines
 from matcher.frame import too_few_lines
 from matcher.result import LocalizeResult
+from matcher.strategy import SOURCES, TreeSearch
 from matcher.tolerances import Tolerances
 
 
@@ -31,7 +32,13 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     paper's loop).
     Otherwise every region is tried and the accepted result that explains
     the most lines wins, then the smallest E: a wrong room can hold a few
-    lines that fit well, the right one explains more of the image.
+    lines that fit well, the right one explains more of the image. So once
+    a region has given an answer, the later regions' trees look only for
+    sets that could beat it (at least its matches less one: stage 2 adds a
+    line or so). The regions are first searched with the tree alone
+    (:class:`~matcher.strategy.TreeSearch`); only when none gives an answer
+    does a second pass run the whole strategy (second search, resection),
+    which costs most on the many regions where the robot is not.
     ``time_ms['total']`` covers all tries (the other entries are the winning
     region's); ``time_ms['regions_tried']`` counts them. ``progress``, if
     given, is called as ``progress(done, total)`` as the regions are done,
@@ -46,42 +53,98 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     too_few = too_few_lines(img, tol)
     if too_few:  # the same for every region
         return LocalizeResult(False, too_few, time_ms={"total": (time.perf_counter() - t0) * 1e3, "regions_tried": 0})
-    # The robot is stopped: a larger search budget per region.
+    # The robot is stopped: the whole strategy gets a larger search budget
+    # per region than when tracking.
     factor = tol.internals.lost_budget_factor
-    tol = replace(tol, max_nodes=tol.max_nodes * factor, max_sets=tol.max_sets * factor)
-    centres, radii = linemap.region_centres(), linemap.region_radii()
+    wide = replace(tol, max_nodes=tol.max_nodes * factor, max_sets=tol.max_sets * factor)
+    search = _RegionSearch(linemap, camera, img, deadlines, progress)
     # Largest region first: with no estimate, the robot stands most likely
     # on the most floor, and a budget spent early has searched the most.
-    order = np.argsort(-linemap.region_areas(), kind="stable")
-    tried, best, out_of_time = 0, None, False
-    for done, r in enumerate(order.tolist()):
-        if progress is not None and done:
-            progress(done, linemap.n_regions)
-        if not deadlines.may_search():
-            out_of_time = True
-            break
-        cx, cy = (float(v) for v in centres[r])
-        dt = float(radii[r])
-        if not (math.isfinite(cx) and math.isfinite(cy) and dt > 0):
-            continue
-        tried += 1
-        res = from_prior.localize_prepared(linemap, camera, img, (cx, cy, 0.0, min(dt, 100.0), math.pi), tol,
-                                         time.perf_counter(), deadlines, candidate_ids=linemap.region_list(r))
-        out_of_time |= bool(res.stage1.get("out_of_time"))
-        if res and (best is None or (len(res.matches), -res.score) > (len(best.matches), -best.score)):
-            best = res
-            if first_accepted:
-                break
+    order = np.argsort(-linemap.region_areas(), kind="stable").tolist()
+    found = search.run(order, (TreeSearch(),), tol, first_accepted)
+    if found and not first_accepted:
+        # The whole strategy where the tree's answers contend: a view the
+        # second search or the resection completes gets its other lines back.
+        most = {r: max(a[1] for a in _answers(res)) for r, res in found.items()}
+        top = max(most.values())
+        found.update(search.run([r for r in found if most[r] >= top - 1], SOURCES, wide))
+    elif not found:
+        found = search.run(order, SOURCES, wide, first_accepted)
     if progress is not None:
         progress(linemap.n_regions, linemap.n_regions)
-    total = (time.perf_counter() - t0) * 1e3
-    if best is None:
-        spent = f"; the time budget of {tol.time_budget_ms:g} ms ran out" if out_of_time else ""
-        return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} of {linemap.n_regions} "
-                              f"tried{spent})",
-                              time_ms={"total": total, "regions_tried": tried})
-    best.time_ms["total"] = total
+    return _decide(found, search, tol, (time.perf_counter() - t0) * 1e3)
+
+
+class _RegionSearch:
+    """Searches of lost mode, one per region, sharing the frame's lines, the
+    call's time budget and what has been searched."""
+
+    def __init__(self, linemap, camera, img, deadlines, progress) -> None:
+        self.linemap, self.camera, self.img = linemap, camera, img
+        self.deadlines, self.progress = deadlines, progress
+        self.centres, self.radii = linemap.region_centres(), linemap.region_radii()
+        self.tried: set[int] = set()
+        self.out_of_time = False
+
+    def run(self, regions: list[int], sources, tol: Tolerances, first_accepted: bool = False) -> dict:
+        """Region id -> accepted result, for ``regions`` in order, each with
+        the strategy's ``sources`` and tolerances ``tol``. Once a region has given an answer, the
+        later ones look only for sets that could beat it (its matches less
+        one: stage 2 may add a line)."""
+        found: dict[int, LocalizeResult] = {}
+        best = 0
+        for done, r in enumerate(regions):
+            if self.progress is not None and done:
+                self.progress(done, len(regions))
+            if not self.deadlines.may_search():
+                self.out_of_time = True
+                break
+            cx, cy = (float(v) for v in self.centres[r])
+            dt = float(self.radii[r])
+            if not (math.isfinite(cx) and math.isfinite(cy) and dt > 0):
+                continue
+            self.tried.add(r)
+            tol_r = replace(tol, min_matches=max(tol.min_matches, best - 1)) if best else tol
+            res = from_prior.localize_prepared(self.linemap, self.camera, self.img,
+                                               (cx, cy, 0.0, min(dt, 100.0), math.pi), tol_r, time.perf_counter(),
+                                               self.deadlines, candidate_ids=self.linemap.region_list(r),
+                                               sources=sources)
+            self.out_of_time |= bool(res.stage1.get("out_of_time"))
+            if res or res.candidates:  # accepted, or poses the region cannot tell apart
+                found[r] = res
+                best = max(best, max([len(res.matches)] + [c["matches"] for c in res.candidates]))
+                if first_accepted and res:
+                    break
+        return found
+
+
+def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float) -> LocalizeResult:
+    """The answer of lost mode from the regions' accepted results: the one
+    that explains the most lines, then the smallest E; falsy, naming them,
+    when others that explain as many lines at a pose elsewhere fit about as
+    well (:mod:`matcher.ambiguity`: a symmetric room, a row of like rooms)."""
+    n, tried = search.linemap.n_regions, len(search.tried)
+    if not found:
+        spent = f"; the time budget of {tol.time_budget_ms:g} ms ran out" if search.out_of_time else ""
+        return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} of {n} tried{spent})",
+                              time_ms={"total": total_ms, "regions_tried": tried})
+    # Every answer: each region's pose, or the poses it could not tell apart.
+    answers = sorted(((c, res) for res in found.values() for c in _answers(res)), key=lambda a: (-a[0][1], a[0][2]))
+    best = answers[0][1]
+    kept = ambiguity.rivals([a for a, _ in answers], tol.internals, ambiguity.spread_of(best.pose_std) if best else None)
+    best.time_ms["total"] = total_ms
     best.time_ms["regions_tried"] = tried
     # The best of the regions searched, not of all: the result says so.
-    best.stage1["out_of_time"] = out_of_time
+    best.stage1["out_of_time"] = search.out_of_time
+    if len(kept) > 1:
+        best.candidates, best.ok, best.reason = ambiguity.candidates_of(kept), False, ambiguity.reason(kept)
     return best
+
+
+def _answers(res: LocalizeResult) -> list:
+    """``(pose, matches, score)`` of a region's accepted answer, or of each
+    pose it could not tell apart."""
+    if res:
+        return [(res.pose, len(res.matches), res.score)]
+    return [((c["x"], c["y"], c["yaw_deg"]), c["matches"], c["score"]) for c in res.candidates]
+

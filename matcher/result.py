@@ -31,6 +31,10 @@ class LocalizeResult:
     sets_found: int = 0
     stage1: dict = field(default_factory=dict, repr=False)
 
+    #: The poses the evidence cannot tell apart, when that is why the result
+    #: is falsy: dicts of x, y, yaw_deg, matches and score (lost mode).
+    candidates: list[dict] = field(default_factory=list)
+
     _pose_std: object = field(default=None, repr=False, compare=False)
 
     def __bool__(self) -> bool:
@@ -73,6 +77,9 @@ class LocalizeResult:
             # Did the time budget cut the search (Tolerances.time_budget_ms)?
             "out_of_time": bool(self.stage1.get("out_of_time", False)),
         }
+        if self.candidates:
+            d["candidates"] = [{k: (float(v) if k != "matches" else int(v)) for k, v in c.items()}
+                               for c in self.candidates]
         if not self.ok:
             d["reason"] = self.reason
         return d

@@ -114,6 +114,17 @@ class Internals:
     #: robot is stopped, and one search covers a whole region at any heading.
     lost_budget_factor: int = 10
 
+    #: Lost mode names the poses it cannot tell apart instead of picking one:
+    #: accepted answers explaining as many lines as the best, fitting within
+    #: this factor of its E, at poses farther apart than these (metres,
+    #: degrees) make the answer ambiguous (a symmetric room, like rooms).
+    ambiguous_score_ratio: float = 3.0
+    ambiguous_m: float = 0.5
+    ambiguous_deg: float = 10.0
+    #: ...and farther than this many of the best pose's standard deviations
+    #: (a loosely fixed pose's near rivals are the same answer, imprecise).
+    ambiguous_sigmas: float = 3.0
+
     # ---- stage 1: resection from vertical edges ----------------------------
     #: A line counts as explained at a resected pose if its bearing is within
     #: this many times its noise bound of a candidate edge's: the pose comes

@@ -104,5 +104,6 @@ def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
     assert not res and res.time_ms["regions_tried"] == linemap.n_regions
     areas = linemap.region_areas()
     assert not (np.diff(areas) <= 0).all()  # id order is not area order
-    assert sorted(seen) == list(range(linemap.n_regions))
-    assert (np.diff(areas[seen]) <= 0).all()
+    first_pass = seen[:linemap.n_regions]  # (nothing accepted: a second pass runs the whole strategy)
+    assert sorted(first_pass) == list(range(linemap.n_regions))
+    assert (np.diff(areas[first_pass]) <= 0).all()

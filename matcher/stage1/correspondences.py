@@ -70,8 +70,8 @@ def find_correspondences(segments: np.ndarray, camera: Camera, img: ImageLines, 
     """The correspondences of candidate ``segments`` (N, 2, 3) and the
     frame's lines ``img`` under ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``
     (radians): a :class:`Correspondences`, or ``(seg_k, line_k)`` of the
-    unary survivors when fewer than ``min_matches`` have a feasible grid
-    pose. ``sight`` the walls' :class:`~matcher.scene.occlusion.SightRays`
+    survivors when fewer than ``min_matches`` of them, or of their lines,
+    have a feasible grid pose. ``sight`` the walls' :class:`~matcher.scene.occlusion.SightRays`
     (None: no walls); ``faces`` (N, 2) the room-side normal of each
     candidate's wall face (zeros: none) or None. ``counts``, a dict, gets
     the numbers of each step."""
@@ -127,7 +127,9 @@ def find_correspondences(segments: np.ndarray, camera: Camera, img: ImageLines, 
                            ce, fwd).subset(keep)
     corr.single_fit = single_fit
     counts["correspondences"] = int(len(corr))
-    if len(corr) < tol.min_matches:
+    # A set takes one correspondence per image line: with fewer lines than
+    # min_matches left, no set can form (and the pairwise tests are spared).
+    if len(corr) < tol.min_matches or len(np.unique(corr.line_k)) < tol.min_matches:
         return corr.seg_k, corr.line_k
     return corr
 

@@ -1,0 +1,65 @@
+"""When the evidence does not single out one pose.
+
+A symmetric room shows the same lines from two or four poses; a row of like
+rooms, from one pose in each. The matcher then has hypotheses that explain
+as many lines and fit about as well, at places far apart, and picking one
+would be a guess told as a fact. Such an answer is falsy and names every
+pose the evidence cannot tell apart (``LocalizeResult.candidates``).
+"""
+
+from __future__ import annotations
+
+import math
+
+from matcher.tolerances import Internals
+
+
+def rivals(answers: list[tuple[tuple[float, float, float], int, float]], work: Internals,
+           spread: tuple[float, float, float] | None = None) -> list:
+    """The answers of ``answers`` (each ``(pose (x, y, yaw_deg), matches,
+    score E)``, best first) that the first cannot be told from: as many
+    matches, E within ``ambiguous_score_ratio`` of its, each at a pose apart
+    from the others kept. Apart means farther than ``ambiguous_m`` and
+    ``ambiguous_sigmas`` of the best pose's standard deviations ``spread``
+    ``(x, y, yaw_deg)`` (metres, degrees; None: not known; see
+    :func:`spread_of` for a pose its matches do not fix), or turned more
+    than ``ambiguous_deg`` and as many of its yaw's: a pose its lines fix
+    loosely (a far column's corners) has near rivals along the loose
+    direction, which are the same answer told imprecisely, not another
+    place. The first is always kept: one answer means no ambiguity."""
+    best = answers[0]
+    reach_m, reach_deg = work.ambiguous_m, work.ambiguous_deg
+    if spread is not None:
+        reach_m = max(reach_m, work.ambiguous_sigmas * max(spread[0], spread[1]))
+        reach_deg = max(reach_deg, work.ambiguous_sigmas * spread[2])
+    kept = [best]
+    for a in answers[1:]:
+        if a[1] < best[1] or not a[2] <= work.ambiguous_score_ratio * best[2]:
+            continue
+        if all(_apart(a[0], k[0], reach_m, reach_deg) for k in kept):
+            kept.append(a)
+    return kept
+
+
+def spread_of(pose_std) -> tuple[float, float, float]:
+    """:func:`rivals`' ``spread`` from a result's ``pose_std``: a pose its
+    matches do not fix (None) is loose in position without bound, so only a
+    rival turned away from it is another answer."""
+    return (math.inf, math.inf, 0.0) if pose_std is None else tuple(pose_std)
+
+
+def candidates_of(kept: list) -> list[dict]:
+    """The result's ``candidates``: dicts of x, y, yaw_deg, matches, score."""
+    return [dict(x=p[0], y=p[1], yaw_deg=p[2], matches=int(n), score=float(e)) for p, n, e in kept]
+
+
+def reason(kept: list) -> str:
+    """A failure's reason for ``kept`` poses that cannot be told apart."""
+    return (f"{len(kept)} poses fit the lines about equally well (each explains {kept[0][1]} lines: a symmetric "
+            "room or like rooms); the candidates name them")
+
+
+def _apart(a, b, reach_m: float, reach_deg: float) -> bool:
+    """Are poses ``a`` and ``b`` ``(x, y, yaw_deg)`` different places?"""
+    dyaw = abs((a[2] - b[2] + 180.0) % 360.0 - 180.0)
+    return math.hypot(a[0] - b[0], a[1] - b[1]) > reach_m or dyaw > reach_deg
