@@ -14,12 +14,13 @@ import math
 from matcher.tolerances import Internals
 
 
-def rivals(answers: list[tuple[tuple[float, float, float], int, float]], work: Internals,
-           spread: tuple[float, float, float] | None = None) -> list:
+def rivals(answers: list[tuple], work: Internals, spread: tuple[float, float, float] | None = None) -> list:
     """The answers of ``answers`` (each ``(pose (x, y, yaw_deg), matches,
-    score E)``, best first) that the first cannot be told from: as many
-    matches, E within ``ambiguous_score_ratio`` of its, each at a pose apart
-    from the others kept. Apart means farther than ``ambiguous_m`` and
+    score E)``, or with a fourth item, the reprojection cost of stage 2's
+    ranking; best first) that the first cannot be told from: as many
+    matches, E within ``ambiguous_score_ratio`` of its (and the cost, when
+    given, within ``ambiguous_cost_ratio``), each at a pose apart from the
+    others kept. Apart means farther than ``ambiguous_m`` and
     ``ambiguous_sigmas`` of the best pose's standard deviations ``spread``
     ``(x, y, yaw_deg)`` (metres, degrees; None: not known; see
     :func:`spread_of` for a pose its matches do not fix), or turned more
@@ -36,6 +37,8 @@ def rivals(answers: list[tuple[tuple[float, float, float], int, float]], work: I
     for a in answers[1:]:
         if a[1] < best[1] or not a[2] <= work.ambiguous_score_ratio * best[2]:
             continue
+        if len(a) > 3 and not a[3] <= work.ambiguous_cost_ratio * best[3]:
+            continue
         if all(_apart(a[0], k[0], reach_m, reach_deg) for k in kept):
             kept.append(a)
     return kept
@@ -50,7 +53,7 @@ def spread_of(pose_std) -> tuple[float, float, float]:
 
 def candidates_of(kept: list) -> list[dict]:
     """The result's ``candidates``: dicts of x, y, yaw_deg, matches, score."""
-    return [dict(x=p[0], y=p[1], yaw_deg=p[2], matches=int(n), score=float(e)) for p, n, e in kept]
+    return [dict(x=a[0][0], y=a[0][1], yaw_deg=a[0][2], matches=int(a[1]), score=float(a[2])) for a in kept]
 
 
 def reason(kept: list) -> str:

@@ -26,8 +26,14 @@ from matcher.tolerances import Tolerances
 def check_lines(lines, camera: Camera, tol: Tolerances) -> np.ndarray:
     """Image lines as a finite ``(M, 2, 2)`` float64 array inside the image.
 
-    Raises ValueError for a wrong shape, a non-finite value, a zero-length
-    line or an end point outside the image (beyond ``tol.image_margin_px``).
+    End points up to ``tol.image_margin_px`` outside the image are taken as
+    they are (noise on lines clipped at the border); a line reaching farther
+    out, but no farther than ``tol.image_reach`` of the image's size (an
+    undistorted line, a detector's unclipped output), is cut at the image
+    border plus that margin, keeping its index. Raises ValueError for a
+    wrong shape, a non-finite value, more than ``tol.max_lines`` lines, a
+    line farther out (lines of another camera) or wholly outside, and a
+    zero-length line.
     """
     try:
         arr = np.asarray(lines, dtype=np.float64)
@@ -39,6 +45,9 @@ def check_lines(lines, camera: Camera, tol: Tolerances) -> np.ndarray:
         arr = arr.reshape(0, 2, 2)
     if arr.ndim != 3 or arr.shape[1:] != (2, 2):
         raise ValueError(f"lines: Expected shape (M, 2, 2) or (M, 4), got {arr.shape}")
+    if len(arr) > tol.max_lines:
+        raise ValueError(f"{len(arr)} image lines given, the matcher takes at most {tol.max_lines} "
+                         "(Tolerances.max_lines): keep the longest")
     bad = ~np.isfinite(arr).all(axis=(1, 2))
     if bad.any():
         raise ValueError(f"lines[{int(np.argmax(bad))}] is not finite (NaN or inf pixel coordinates)")
@@ -46,25 +55,54 @@ def check_lines(lines, camera: Camera, tol: Tolerances) -> np.ndarray:
     # overflow the length below.
     u0, u1, v0, v1 = camera.ideal_bounds
     m = tol.image_margin_px
-    out = (
-        (arr[..., 0] < u0 - m).any(axis=1)
-        | (arr[..., 0] > u1 + m).any(axis=1)
-        | (arr[..., 1] < v0 - m).any(axis=1)
-        | (arr[..., 1] > v1 + m).any(axis=1)
-    )
-    if out.any():
-        j = int(np.argmax(out))
-        where = (f"u in [0, {camera.width}], v in [0, {camera.height}]" if not camera.distortion else
-                 f"undistorted: u in [{u0:.1f}, {u1:.1f}], v in [{v0:.1f}, {v1:.1f}]")
-        raise ValueError(
-            f"lines[{j}] = {[float(f'{v:.6g}') for v in arr[j].ravel()]} lies outside the "
-            f"{camera.width}x{camera.height} image ({where}); were the lines detected with another camera?"
-        )
+    box = (u0 - m, u1 + m, v0 - m, v1 + m)
+    reach_u, reach_v = tol.image_reach * (u1 - u0), tol.image_reach * (v1 - v0)
+    far = ((arr[..., 0] < u0 - reach_u) | (arr[..., 0] > u1 + reach_u) | (arr[..., 1] < v0 - reach_v)
+           | (arr[..., 1] > v1 + reach_v)).any(axis=1)
+    if far.any():
+        raise ValueError(_outside(arr, int(np.argmax(far)), camera, "lies outside"))
+    stick_out = ((arr[..., 0] < box[0]) | (arr[..., 0] > box[1]) | (arr[..., 1] < box[2])
+                 | (arr[..., 1] > box[3])).any(axis=1)
+    if stick_out.any():
+        clipped, inside = _clip(arr[stick_out], box)
+        if not inside.all():
+            j = int(np.flatnonzero(stick_out)[np.argmin(inside)])
+            raise ValueError(_outside(arr, j, camera, "lies wholly outside"))
+        arr = arr.copy()
+        arr[stick_out] = clipped
     length = np.linalg.norm(arr[:, 1] - arr[:, 0], axis=1)
     zero = length < 1e-6
     if zero.any():
         raise ValueError(f"lines[{int(np.argmax(zero))}] has zero length (both end points equal)")
     return arr
+
+
+def _outside(arr: np.ndarray, j: int, camera: Camera, how: str) -> str:
+    """The error for line ``j`` outside the image."""
+    u0, u1, v0, v1 = camera.ideal_bounds
+    where = (f"u in [0, {camera.width}], v in [0, {camera.height}]" if not camera.distortion else
+             f"undistorted: u in [{u0:.1f}, {u1:.1f}], v in [{v0:.1f}, {v1:.1f}]")
+    return (f"lines[{j}] = {[float(f'{v:.6g}') for v in arr[j].ravel()]} {how} the "
+            f"{camera.width}x{camera.height} image ({where}); were the lines detected with another camera?")
+
+
+def _clip(lines: np.ndarray, box) -> tuple[np.ndarray, np.ndarray]:
+    """Lines (K, 2, 2) cut to ``box`` ``(u_min, u_max, v_min, v_max)``
+    (Liang-Barsky), and (K,) bool: some part of the line is inside."""
+    p0, d = lines[:, 0], lines[:, 1] - lines[:, 0]
+    t0, t1 = np.zeros(len(lines)), np.ones(len(lines))
+    ok = np.ones(len(lines), dtype=bool)
+    for p, q in ((-d[:, 0], p0[:, 0] - box[0]), (d[:, 0], box[1] - p0[:, 0]),
+                 (-d[:, 1], p0[:, 1] - box[2]), (d[:, 1], box[3] - p0[:, 1])):
+        parallel = p == 0
+        ok &= ~(parallel & (q < 0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(parallel, 0.0, q / np.where(parallel, 1.0, p))
+        t0 = np.where(~parallel & (p < 0), np.maximum(t0, r), t0)
+        t1 = np.where(~parallel & (p > 0), np.minimum(t1, r), t1)
+    ok &= t1 > t0
+    out = np.stack([p0 + t0[:, None] * d, p0 + t1[:, None] * d], axis=1)
+    return np.where(ok[:, None, None], out, lines), ok
 
 
 def check_prior(prior, dt, dyaw) -> tuple[float, float, float, float, float]:

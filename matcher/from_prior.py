@@ -117,7 +117,8 @@ def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, 
     # that only wants the pose does not spend).
     res.pose_std_from(lambda: pose_std_of(camera, img, cands.segments, ranked_h, best, tol))
     n_fin = np.bincount(ranked_h.hyp, minlength=n_h)
-    answers = [(pose_deg(ranked_h.poses[h]), int(n_fin[h]), float(E[h])) for h in order if np.isfinite(E[h])]
+    answers = [(pose_deg(ranked_h.poses[h]), int(n_fin[h]), float(E[h]), float(ranked_h.cost[h])) for h in order
+               if np.isfinite(E[h])]
     if len(answers) > 1 and answers[1][1] == answers[0][1]:  # a rival explains as many lines: is it elsewhere?
         kept = ambiguity.rivals(answers, tol.internals, ambiguity.spread_of(res.pose_std))
         if len(kept) > 1:

@@ -15,20 +15,13 @@ import numbers
 import cv2
 import numpy as np
 
-from linemap.camera import Camera
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
-#: Lines shorter than this many pixels are dropped: their orientation is
-#: too uncertain for the constraints (same default as ``Tolerances.min_line_px``).
-MIN_LENGTH_PX = 15.0
-#: Fragments merge when their directions differ by less than this many
-#: degrees (LSD's own angle tolerance is 22.5 degrees per pixel, its lines
-#: are good to about a degree)...
-MERGE_ANGLE_DEG = 2.0
-#: ...each one's end points lie within this many pixels of the other's line
-#: (both edges of a stroke up to about 4 px wide)...
-MERGE_OFFSET_PX = 4.0
-#: ...and the gap between them along the line is under this many pixels.
-MERGE_GAP_PX = 10.0
+from linemap.camera import Camera
+from matcher.tolerances import DETECTION, LineDetection
+
 
 
 def to_grey(image: np.ndarray) -> np.ndarray:
@@ -63,34 +56,74 @@ def to_grey(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(img)
 
 
-def merge_collinear(lines: np.ndarray) -> np.ndarray:
+def merge_collinear(lines: np.ndarray, settings: LineDetection = DETECTION) -> np.ndarray:
     """Merge collinear fragments of lines (M, 2, 2) until none is left; each
     merged line spans the extreme projections of its parts on their
-    length-weighted mean direction."""
+    length-weighted mean direction.
+
+    Two fragments merge when their directions differ by less than
+    ``merge_angle_deg``, each one's end points lie within
+    ``merge_offset_px`` of the other's line and the gap between them along
+    it is at most ``merge_gap_px``. Candidate pairs come from a k-d tree of
+    points sampled along the lines (fragments that can merge come that
+    close somewhere), the exact test runs on those pairs only, and every
+    connected group merges at once; rounds repeat while anything merges (a
+    merged line may reach another fragment). Time grows with the number of
+    fragments, not its square."""
     lines = np.asarray(lines, dtype=np.float64).reshape(-1, 2, 2)
-    cos_tol = math.cos(math.radians(MERGE_ANGLE_DEG))
-    changed = True
-    while changed and len(lines) > 1:
-        changed = False
-        d = lines[:, 1] - lines[:, 0]
-        L = np.linalg.norm(d, axis=1)
-        u = d / L[:, None]
-        nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
-        par = np.abs(u @ u.T) >= cos_tol
-        # Offset of j's end points from i's line, and gap along i's direction.
-        rel = lines[None, :, :, :] - lines[:, None, None, 0, :]  # (i, j, 2, 2)
-        off = np.abs(np.einsum("ijek,ik->ije", rel, nrm)).max(axis=2)
-        s = np.einsum("ijek,ik->ije", rel, u)
-        gap = np.maximum(s.min(axis=2) - L[:, None], -s.max(axis=2))
-        close = par & (off <= MERGE_OFFSET_PX) & (off.T <= MERGE_OFFSET_PX) & (gap <= MERGE_GAP_PX)
-        np.fill_diagonal(close, False)
-        if not close.any():
+    while len(lines) > 1:
+        i, j = _mergeable_pairs(lines, settings)
+        if not len(i):
             break
-        i, j = np.unravel_index(int(np.argmax(close)), close.shape)
-        merged = _span(lines[[i, j]])
-        lines = np.concatenate([np.delete(lines, [i, j], axis=0), merged[None]])
-        changed = True
+        n = len(lines)
+        graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
+        count, label = connected_components(graph, directed=False)
+        if count == n:
+            break
+        order = np.argsort(label, kind="stable")
+        starts = np.flatnonzero(np.r_[True, np.diff(label[order]) != 0])
+        groups = np.split(order, starts[1:])
+        lines = np.stack([lines[g[0]] if len(g) == 1 else _span(lines[g]) for g in groups])
     return lines
+
+
+def _mergeable_pairs(lines: np.ndarray, settings: LineDetection) -> tuple[np.ndarray, np.ndarray]:
+    """``(i, j)`` (P,) index pairs, i < j, of lines (M, 2, 2) that pass the
+    merge test of :func:`merge_collinear`."""
+    d = lines[:, 1] - lines[:, 0]
+    L = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
+    # Points every `step` pixels along each line (both ends included): two
+    # fragments that may merge have points within `reach` of each other.
+    step = settings.merge_sample_px
+    n_pts = np.ceil(L / step).astype(np.int64) + 1
+    owner = np.repeat(np.arange(len(lines)), n_pts)
+    t = (np.arange(len(owner)) - np.repeat(np.cumsum(n_pts) - n_pts, n_pts)) / np.repeat(n_pts - 1, n_pts)
+    pts = lines[owner, 0] + t[:, None] * d[owner]
+    reach = math.hypot(max(settings.merge_gap_px, settings.merge_offset_px), settings.merge_offset_px) + step
+    pairs = cKDTree(pts).query_pairs(reach, output_type="ndarray")
+    a, b = owner[pairs[:, 0]], owner[pairs[:, 1]]
+    keep = a != b
+    a, b = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+    if not len(a):
+        return a, b
+    ab = np.unique(a * len(lines) + b)
+    i, j = np.divmod(ab, len(lines))
+    u = d / L[:, None]
+    nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
+    par = np.abs((u[i] * u[j]).sum(axis=1)) >= math.cos(math.radians(settings.merge_angle_deg))
+
+    def off_and_gap(p, q):
+        """Offset of q's end points from p's line, and q's gap along p."""
+        rel = lines[q] - lines[p][:, None, 0]  # (P, 2, 2)
+        off = np.abs(np.einsum("pek,pk->pe", rel, nrm[p])).max(axis=1)
+        s_ = np.einsum("pek,pk->pe", rel, u[p])
+        return off, np.maximum(s_.min(axis=1) - L[p], -s_.max(axis=1))
+
+    off_ij, gap_ij = off_and_gap(i, j)
+    off_ji, _ = off_and_gap(j, i)
+    ok = par & (off_ij <= settings.merge_offset_px) & (off_ji <= settings.merge_offset_px) & (
+        gap_ij <= settings.merge_gap_px)
+    return i[ok], j[ok]
 
 
 def _span(parts: np.ndarray) -> np.ndarray:
@@ -107,11 +140,17 @@ def _span(parts: np.ndarray) -> np.ndarray:
     return np.array([c + s.min() * u, c + s.max() * u])
 
 
-def detect_lines(image, camera=None, min_length: float = MIN_LENGTH_PX, merge: bool = True) -> np.ndarray:
+def detect_lines(image, camera=None, min_length: float | None = None, merge: bool = True,
+                 settings: LineDetection = DETECTION) -> np.ndarray:
     """Lines (M, 2, 2) pixels of ``image`` (see module docstring).
 
     ``camera``: a :class:`matcher.Camera`; with distortion coefficients the
-    end points are undistorted; its size must match the image's."""
+    end points are undistorted; its size must match the image's.
+    ``min_length`` (pixels) overrides ``settings.min_length_px``; fragments
+    too short to reach it even merged at full gaps are dropped before the
+    merge (LSD gives many)."""
+    if min_length is None:
+        min_length = settings.min_length_px
     if isinstance(min_length, bool) or not isinstance(min_length, numbers.Real) or not (
             math.isfinite(min_length) and min_length >= 0):
         raise ValueError(f"min_length must be a number of pixels >= 0, got {min_length!r}")
@@ -122,11 +161,15 @@ def detect_lines(image, camera=None, min_length: float = MIN_LENGTH_PX, merge: b
         raise ValueError(
             f"image is {grey.shape[1]}x{grey.shape[0]} but the camera is {camera.width}x{camera.height}"
         )
+    if grey.size > settings.max_image_pixels:
+        raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}, over {settings.max_image_pixels:.0f} pixels "
+                         "(LineDetection.max_image_pixels); scale it down first")
     lsd = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD)
     found = lsd.detect(grey)[0]
     lines = np.zeros((0, 2, 2)) if found is None else found.reshape(-1, 2, 2).astype(np.float64)
     if merge and len(lines) > 1:
-        lines = merge_collinear(lines)
+        lines = lines[np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1) >= settings.merge_keep_px]
+        lines = merge_collinear(lines, settings)
     if camera is not None and camera.distortion:
         lines = camera.undistort_pixels(lines)
     keep = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1) >= min_length

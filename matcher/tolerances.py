@@ -114,11 +114,17 @@ class Internals:
     #: robot is stopped, and one search covers a whole region at any heading.
     lost_budget_factor: int = 10
 
-    #: Lost mode names the poses it cannot tell apart instead of picking one:
-    #: accepted answers explaining as many lines as the best, fitting within
-    #: this factor of its E, at poses farther apart than these (metres,
-    #: degrees) make the answer ambiguous (a symmetric room, like rooms).
+    #: The matcher names the poses it cannot tell apart instead of picking
+    #: one: answers explaining as many lines as the best, fitting within this
+    #: factor of its E...
     ambiguous_score_ratio: float = 3.0
+    #: ...and of its reprojection cost (stage 2's ranking: the summed squared
+    #: pixel distances of the lines to their segments; over seeds 0 to 4 the
+    #: three rivals of a right answer that E alone let through cost 2.2 to
+    #: 10 times more)...
+    ambiguous_cost_ratio: float = 2.0
+    #: ...at poses farther apart than these (metres, degrees) make the answer
+    #: ambiguous (a symmetric room, like rooms)...
     ambiguous_m: float = 0.5
     ambiguous_deg: float = 10.0
     #: ...and farther than this many of the best pose's standard deviations
@@ -338,8 +344,15 @@ class Tolerances:
     #: too uncertain to constrain anything.
     min_line_px: float = 15.0
     #: Image lines may stick out of the image by this many pixels (noise on
-    #: end points of lines clipped at the border).
+    #: end points of lines clipped at the border)...
     image_margin_px: float = 5.0
+    #: ...and reach this share of the image's size beyond it, the part
+    #: beyond the margin cut off (undistorted lines, unclipped detector
+    #: output); lines reaching farther out are another camera's: refused.
+    image_reach: float = 0.25
+    #: Most image lines a call takes (line preparation compares every pair
+    #: of lines): a photo gives a few hundred after merging.
+    max_lines: int = 2000
     #: The method's inner constants (:class:`Internals`).
     internals: Internals = field(default_factory=Internals)
 
@@ -361,3 +374,45 @@ class Tolerances:
 DEFAULT = Tolerances()
 #: The default inner constants (for the per-map structures built before any call's tolerances are known).
 DEFAULT_INTERNALS = DEFAULT.internals
+
+
+@dataclass(frozen=True)
+class LineDetection:
+    """Thresholds of :func:`matcher.detect_lines` (LSD, then the merging of
+    collinear fragments and a minimum length). Pixels and degrees."""
+
+    #: Lines shorter than this many pixels are dropped: their orientation is
+    #: too uncertain for the constraints (as ``Tolerances.min_line_px``).
+    min_length_px: float = 15.0
+    #: Fragments merge when their directions differ by less than this many
+    #: degrees (LSD's own angle tolerance is 22.5 degrees per pixel, its
+    #: lines are good to about a degree)...
+    merge_angle_deg: float = 2.0
+    #: ...each one's end points lie within this many pixels of the other's
+    #: line (both edges of a stroke up to about 4 px wide)...
+    merge_offset_px: float = 4.0
+    #: ...and the gap between them along the line is at most this.
+    merge_gap_px: float = 10.0
+    #: Candidate pairs for merging come from points this far apart along the
+    #: lines (a k-d tree on them; smaller finds the same pairs, slower).
+    merge_sample_px: float = 8.0
+    #: Fragments shorter than this are dropped before merging: LSD returns
+    #: hundreds of 2 to 4 px specks on texture, and a line this short adds
+    #: at most its length to a merged line. (Kept well below
+    #: ``min_length_px``: a line broken in pieces of 5 px still merges.)
+    merge_keep_px: float = 4.0
+    #: Images of more pixels are refused: LSD's time and memory grow with
+    #: the image (a 10000 x 10000 image would need tens of GiB).
+    max_image_pixels: float = 40e6
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not (v == v) or v < 0 or v == math.inf:
+                raise ValueError(f"line detection setting {f.name} must be a finite number >= 0, got {v}")
+        if self.merge_sample_px <= 0:
+            raise ValueError(f"line detection setting merge_sample_px must be > 0, got {self.merge_sample_px}")
+
+
+#: The default line detection.
+DETECTION = LineDetection()

@@ -218,3 +218,30 @@ def test_tolerances_are_validated():
         matcher.Tolerances(yaw_step_deg=0)
     with pytest.raises(ValueError, match="min_matches must be >= 2"):
         matcher.Tolerances(min_matches=1)
+
+
+def test_lines_a_little_outside_the_image_are_cut_and_used(cam):
+    from matcher.checks import check_lines
+    from matcher.tolerances import DEFAULT
+
+    lines = np.array([[[600.0, 100.0], [680.0, 100.0]],  # 40 px past the right border: cut at 640 + 5 margin
+                      [[10.0, -3.0], [200.0, -3.0]],  # within the 5 px margin: as it is
+                      [[100.0, 200.0], [300.0, 400.0]]])
+    out = check_lines(lines, cam, DEFAULT)
+    assert out.shape == lines.shape
+    assert out[0].tolist() == [[600.0, 100.0], [645.0, 100.0]]
+    assert (out[1:] == lines[1:]).all()
+
+
+def test_lines_wholly_outside_or_too_many_are_refused(cam):
+    from dataclasses import replace
+
+    from matcher.checks import check_lines
+    from matcher.tolerances import DEFAULT
+
+    beside = np.array([[[660.0, 100.0], [700.0, 120.0]]])  # near, but no part inside
+    with pytest.raises(ValueError, match=r"lines\[0\] .* lies wholly outside the 640x480 image"):
+        check_lines(beside, cam, DEFAULT)
+    many = np.tile([[[10.0, 10.0], [50.0, 50.0]]], (11, 1, 1))
+    with pytest.raises(ValueError, match="11 image lines given, the matcher takes at most 10"):
+        check_lines(many, cam, replace(DEFAULT, max_lines=10))

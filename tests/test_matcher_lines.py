@@ -67,7 +67,7 @@ def test_unusable_images_are_rejected(bad, msg):
         matcher.detect_lines(bad)
 
 
-@pytest.mark.parametrize("kwargs, msg", [({"min_length": None}, "min_length must be a number"),
+@pytest.mark.parametrize("kwargs, msg", [({"min_length": -1.0}, "min_length must be a number"),
                                          ({"min_length": "15"}, "min_length must be a number"),
                                          ({"camera": {"width": 640}}, "camera must be a matcher.Camera")])
 def test_bad_arguments_are_rejected(kwargs, msg):
@@ -88,8 +88,10 @@ def test_lines_of_a_distorted_image_are_accepted_by_localize():
     u0, u1, v0, v1 = cam.ideal_bounds
     assert u0 < -5 and u1 > 645 and v0 < -5 and v1 > 485
     assert (found[..., 0].min() < 0) and len(check_lines(found, cam, matcher.Tolerances())) == len(found)
-    with pytest.raises(ValueError, match="undistorted: u in"):
-        check_lines([[u0 - 20, 240.0, 320.0, 240.0]], cam, matcher.Tolerances())
+    cut = check_lines([[u0 - 20, 240.0, 320.0, 240.0]], cam, matcher.Tolerances())  # a little out: cut
+    assert cut[0, 0, 0] == pytest.approx(u0 - 5.0)
+    with pytest.raises(ValueError, match="undistorted: u in"):  # far out: another camera's line
+        check_lines([[u0 - 0.3 * (u1 - u0), 240.0, 320.0, 240.0]], cam, matcher.Tolerances())
 
 
 def test_minimum_length_drops_short_lines():
@@ -140,3 +142,71 @@ def test_camera_size_must_match_image():
 def test_bad_image_shape():
     with pytest.raises(ValueError, match=r"Expected shape \(H, W\)"):
         matcher.detect_lines(np.zeros((4, 5, 6, 7)))
+
+
+def test_a_real_photograph():
+    """LSD on a real photograph (tests/data/rocket.jpg, public domain): the
+    launch tower's long straight edges come out whole, every line inside
+    the image and at least the minimum length. (Its time is printed by
+    tools/bench_lines.py, not asserted here.)"""
+    from pathlib import Path
+
+    img = cv2.imread(str(Path(__file__).parent / "data" / "rocket.jpg"))
+    assert img is not None and img.shape == (427, 640, 3)
+    found = matcher.detect_lines(img)
+    assert 80 <= len(found) <= 400
+    # (A merged line spans its parts' projections on their mean direction: a
+    # few pixels past the border at most, within localize's margin.)
+    assert (found[..., 0] >= -5).all() and (found[..., 0] <= 645).all()
+    assert (found[..., 1] >= -5).all() and (found[..., 1] <= 432).all()
+    # The lines pass the matcher's input check as they are.
+    from matcher.checks import check_lines
+    cam = matcher.Camera.from_fov(60.0, 640, 427, 1.2, 0.0)
+    assert (check_lines(found, cam, matcher.Tolerances()) == found).all()
+    length = np.linalg.norm(found[:, 1] - found[:, 0], axis=1)
+    assert length.min() >= 15.0
+    tilt = np.degrees(np.arctan2(np.abs(found[:, 1, 0] - found[:, 0, 0]), np.abs(found[:, 1, 1] - found[:, 0, 1])))
+    assert ((length > 100) & (tilt < 5)).sum() >= 5  # the tower's uprights
+
+
+def test_merging_leaves_no_mergeable_pair():
+    """After merging, no two lines pass the merge test (checked against all
+    pairs), on fragments of random lines broken at random gaps."""
+    import math
+
+    from matcher.lines import _mergeable_pairs
+    from matcher.tolerances import DETECTION
+
+    rng = np.random.default_rng(5)
+    frags = []
+    for _ in range(40):
+        a = rng.uniform(0, 600, 2)
+        ang = rng.uniform(0, math.pi)
+        u = np.array([math.cos(ang), math.sin(ang)])
+        s = 0.0
+        while s < 150:
+            ln = rng.uniform(5, 40)
+            frags.append([a + s * u + rng.normal(0, 0.3, 2), a + (s + ln) * u + rng.normal(0, 0.3, 2)])
+            s += ln + rng.uniform(0, 12)
+    merged = merge_collinear(np.array(frags))
+    assert len(merged) < len(frags)
+    # Brute force: every pair, the same test.
+    n = len(merged)
+    i, j = np.triu_indices(n, 1)
+    d = merged[:, 1] - merged[:, 0]
+    L = np.hypot(d[:, 0], d[:, 1])
+    u = d / L[:, None]
+    nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
+    par = np.abs((u[i] * u[j]).sum(axis=1)) >= math.cos(math.radians(DETECTION.merge_angle_deg))
+
+    def off_gap(p, q):
+        rel = merged[q] - merged[p][:, None, 0]
+        off = np.abs(np.einsum("pek,pk->pe", rel, nrm[p])).max(axis=1)
+        s_ = np.einsum("pek,pk->pe", rel, u[p])
+        return off, np.maximum(s_.min(axis=1) - L[p], -s_.max(axis=1))
+
+    o1, g1 = off_gap(i, j)
+    o2, _ = off_gap(j, i)
+    left = par & (o1 <= DETECTION.merge_offset_px) & (o2 <= DETECTION.merge_offset_px) & (g1 <= DETECTION.merge_gap_px)
+    assert not left.any()
+    assert len(_mergeable_pairs(merged, DETECTION)[0]) == 0

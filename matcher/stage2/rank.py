@@ -47,7 +47,9 @@ class Ranked:
     """Verified hypotheses. Per match t: ``hyp`` (T,), ``local`` (T,) index
     into the candidate segments, ``line`` (T,) image line. Per hypothesis:
     ``poses`` (H, 3) ``(x, y, yaw)``, ``score`` (H,) E (inf when dropped),
-    ``order`` (H,) best first; ``why`` the reason when none is left."""
+    ``order`` (H,) best first; ``why`` the reason when none is left;
+    ``cost`` (H,) the reprojection cost the ranking uses
+    (:func:`reprojection_cost`)."""
 
     hyp: np.ndarray
     local: np.ndarray
@@ -56,6 +58,7 @@ class Ranked:
     score: np.ndarray
     order: np.ndarray
     why: str
+    cost: np.ndarray | None = None
 
 
 def verify_hypotheses(camera, img, cands: Candidates, hyps, prior, tol) -> Ranked:
@@ -171,7 +174,7 @@ def verify_hypotheses(camera, img, cands: Candidates, hyps, prior, tol) -> Ranke
             why = "no hypothesis kept its pose inside the prior bounds and the map's free space"
         else:
             why = f"no hypothesis kept {tol.min_matches} matches that fit at its pose"
-    return Ranked(hyp, local, line_ids, poses, E, order, why)
+    return Ranked(hyp, local, line_ids, poses, E, order, why, cost)
 
 
 def reprojection_cost(camera, img, poses, hyp, segments, line_ids, tol, n_h) -> np.ndarray:

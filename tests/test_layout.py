@@ -1,0 +1,143 @@
+"""The package layout docs/architecture.md describes, held by tests: who may
+import whom, one documented place for the matcher's thresholds, and
+functions short enough to read."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+AUTHORING = ("mapkit", "ezdxf", "trimesh", "shapely", "viser")
+
+#: Module-level numeric constants in matcher/ and linemap/ that are not
+#: thresholds, with the reason. Anything else numeric at module level
+#: belongs in matcher/tolerances.py.
+NOT_THRESHOLDS = {
+    ("linemap/lmap.py", "FORMAT_MAJOR"): "the .lmap format's version",
+    ("linemap/lmap.py", "FORMAT_MINOR"): "the .lmap format's version",
+    ("linemap/lmap.py", "_RAW"): "a chunk codec id of the format",
+    ("linemap/lmap.py", "COORD_QUANTUM_M"): "the format's storage unit for outline vertices",
+    ("matcher/cli.py", "EXIT_OK"): "exit codes",
+    ("matcher/stage1/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
+    ("matcher/stage1/tree.py", "_BIT_LEVELS"): "the bits of an int64, sign spared",
+}
+
+
+def _modules_loaded_by(statement: str) -> set[str]:
+    """Top-level package names in sys.modules after ``statement`` in a
+    fresh interpreter."""
+    code = f"import sys; {statement}; print(' '.join(sorted({{m.split('.')[0] for m in sys.modules}})))"
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+    return set(out.stdout.split())
+
+
+def _python_files(package: str):
+    return sorted((ROOT / package).rglob("*.py"))
+
+
+def _imported_packages(path: Path) -> set[str]:
+    """Top-level names of every module ``path`` imports, anywhere in it."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {a.name.split(".")[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module.split(".")[0])
+    return names
+
+
+def test_import_matcher_loads_no_authoring_stack():
+    loaded = _modules_loaded_by("import matcher, matcher.cli")
+    assert "linemap" in loaded
+    assert not loaded & set(AUTHORING), sorted(loaded & set(AUTHORING))
+
+
+def test_import_linemap_loads_neither_half():
+    loaded = _modules_loaded_by("import linemap, linemap.geometry, linemap.regions")
+    assert not loaded & {"mapkit", "matcher", "scipy", "cv2", *AUTHORING}
+
+
+@pytest.mark.parametrize("package,forbidden", [
+    # (linemap.camera imports cv2 inside the one method that undistorts: loading stays numpy-only.)
+    ("linemap", {"mapkit", "matcher", "scipy", "ezdxf", "trimesh", "shapely", "viser"}),
+    ("matcher", set(AUTHORING)),
+    ("mapkit", {"matcher"}),
+])
+def test_packages_import_only_what_they_may(package, forbidden):
+    bad = {str(p.relative_to(ROOT)): sorted(_imported_packages(p) & forbidden) for p in _python_files(package)}
+    assert not {k: v for k, v in bad.items() if v}
+
+
+def test_mapkit_loads_no_matcher():
+    loaded = _modules_loaded_by("import mapkit, mapkit.cli, mapkit.pipeline, mapkit.view")
+    assert "matcher" not in loaded
+
+
+def test_old_import_paths_still_work():
+    from linemap.camera import Camera
+    from linemap.lmap import load_map
+    from mapkit.lmap import load_map as old_load_map
+    from matcher.camera import Camera as OldCamera
+    from matcher.pipeline import localize, localize_global
+
+    import matcher
+
+    assert old_load_map is load_map and OldCamera is Camera
+    assert localize is matcher.localize and localize_global is matcher.localize_global
+
+
+@pytest.mark.parametrize("package", ["matcher", "linemap"])
+def test_no_function_over_120_lines(package):
+    long = []
+    for p in _python_files(package):
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > 120:
+                    long.append(f"{p.relative_to(ROOT)}:{node.lineno} {node.name} ({n} lines)")
+    assert not long
+
+
+def _numeric(node: ast.AST) -> bool:
+    return any(isinstance(n, ast.Constant) and isinstance(n.value, (int, float)) and not isinstance(n.value, bool)
+               for n in ast.walk(node))
+
+
+@pytest.mark.parametrize("package", ["matcher", "linemap"])
+def test_no_module_level_threshold_outside_tolerances(package):
+    """Every numeric constant at module level lives in matcher/tolerances.py
+    (as a field of Tolerances or Internals), or is named in NOT_THRESHOLDS."""
+    found = []
+    for p in _python_files(package):
+        rel = str(p.relative_to(ROOT))
+        if rel == "matcher/tolerances.py":
+            continue
+        for node in ast.parse(p.read_text()).body:
+            if isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None and _numeric(node.value):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                names = [n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name)]
+                if not any((rel, name) in NOT_THRESHOLDS for name in names):
+                    found.append(f"{rel}:{node.lineno} {names}")
+    assert not found
+
+
+def test_tolerances_document_every_field():
+    """Each field of Tolerances and Internals has a ``#:`` comment."""
+    src = (ROOT / "matcher" / "tolerances.py").read_text().splitlines()
+    tree = ast.parse("\n".join(src))
+    missing = []
+    for cls in (n for n in tree.body if isinstance(n, ast.ClassDef)):
+        for i, node in enumerate(cls.body):
+            if isinstance(node, ast.AnnAssign):
+                above = src[node.lineno - 2].strip()
+                # A field may share the comment of the one above it (a pair such as min and max).
+                prev = cls.body[i - 1] if i else None
+                shares = isinstance(prev, ast.AnnAssign) and prev.end_lineno == node.lineno - 1
+                if not (above.startswith("#:") or shares):
+                    missing.append(f"{cls.name}.{node.target.id}")
+    assert not missing
