@@ -26,8 +26,10 @@ class BuildOptions:
     ignore: list[str] = field(default_factory=list)
     #: Layers whose outlines give the floor (the interior) of an open plan.
     floor: list[str] = field(default_factory=list)
-    #: Mesh up axis: "z" or "y" (glTF is y-up).
-    up: str = "z"
+    #: Mesh up axis: "z", "y" or "auto": the file format's convention (glTF
+    #: is y-up, the others have none and default to z), a glTF file stored
+    #: z-up being told by its faces (:func:`mapkit.importers.mesh.load.guess_up`).
+    up: str = "auto"
 
     # ---- reconstruction -----------------------------------------------
     wall_height: float = 2.5

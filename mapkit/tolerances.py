@@ -132,6 +132,11 @@ LOOKUP_GRID_CELL = 0.5
 #: count as on it: modellers leave objects a few millimetres off the floor.
 MESH_LEVEL = 0.02
 
+#: A glTF file (+Y up by its specification) is read z-up when this many times
+#: more of its face area faces along z than along y: floors, ceilings and
+#: furniture tops face up, and some exporters store z-up anyway.
+MESH_UP_MARGIN = 2.0
+
 #: An upward horizontal surface is (part of) the floor only if the faces at
 #: its height cover at least this fraction of the model's bounding box seen
 #: from above; table tops and wall tops are smaller.

@@ -46,7 +46,8 @@ def add_import_arguments(p) -> None:
     g.add_argument("--windows", action="append", default=[], metavar="GLOB", help="layer(s) holding windows or glass (repeatable)")
     g.add_argument("--floor", action="append", default=[], metavar="GLOB", help="layer(s) outlining the floor of an open plan (repeatable)")
     g.add_argument("--ignore", action="append", default=[], metavar="GLOB", help="layer(s) to leave out (repeatable)")
-    g.add_argument("--up", choices=("z", "y"), default=d.up, help="mesh up axis (glTF is y-up; default z)")
+    g.add_argument("--up", choices=("auto", "z", "y"), default=d.up,
+                   help="mesh up axis (default auto: glTF's y-up, z for the other formats; a glTF stored z-up is told by its faces)")
     add_float_options(p.add_argument_group("reconstruction"), d, [
         ("--wall-height", "wall (ceiling) height"),
         ("--door-height", "door head height"),

@@ -25,6 +25,7 @@ from mapkit.tolerances import (
     MESH_FLOOR_RISE,
     MESH_LEVEL,
     MESH_NEEDLE_PASSES,
+    MESH_UP_MARGIN,
     PLAUSIBLE_EXTENT,
 )
 
@@ -46,9 +47,10 @@ def load_mesh(path: Path, options: BuildOptions):
     import trimesh
 
     vertices, faces = read_triangles(path)
-    if options.up not in ("z", "y"):
-        raise MapkitError(f"--up must be 'z' or 'y', got '{options.up}'")
-    if options.up == "y":
+    if options.up not in ("auto", "z", "y"):
+        raise MapkitError(f"--up must be 'auto', 'z' or 'y', got '{options.up}'")
+    up = options.up if options.up != "auto" else guess_up(vertices, faces, convention_up(path))
+    if up == "y":
         vertices = vertices @ Y_UP_TO_Z_UP.T
     unit = canonical_units(options.units) if options.units else "m"
     if not (options.scale > 0 and math.isfinite(options.scale)):
@@ -76,14 +78,14 @@ def load_mesh(path: Path, options: BuildOptions):
     if height > size_xy:
         warnings.append(
             f"the model is {height:.3g} m tall but only {size_xy:.3g} m wide: is the up axis right? "
-            f"(--up {'z' if options.up == 'y' else 'y'})"
+            f"(--up {'z' if up == 'y' else 'y'})"
         )
     for w in warnings:
         log.warning(w)
     info = {
         "units": unit,
         "scale": factor,
-        "up": options.up,
+        "up": up,
         "floor": "floor faces" if has_floor else "lowest point (no floor faces)",
         "floor_faces": bool(has_floor),
         "floor_offset_m": float(floor_z),
@@ -289,6 +291,28 @@ def find_ceiling(vertices: np.ndarray, faces: np.ndarray, floor_z: float = 0.0) 
     if len(levels):
         return float(levels[0]), True
     return hi, False
+
+
+def convention_up(path: Path) -> str:
+    """The up axis a mesh format declares: glTF's is +y; OBJ, PLY, STL and
+    OFF declare none, and building models in them are mostly z-up."""
+    return "y" if Path(path).suffix.lower() in (".glb", ".gltf") else "z"
+
+
+def guess_up(vertices: np.ndarray, faces: np.ndarray, convention: str) -> str:
+    """``"y"`` or ``"z"``: the format's ``convention``, but for a glTF file
+    whose faces say it was stored z-up against the specification (as some
+    exporters do): floors, ceilings and the tops of furniture face along
+    the up axis, so a file holding ``MESH_UP_MARGIN`` times more face area
+    facing along z than along y is read z-up. Files of the formats without
+    a convention stay z-up (a walls-only model, with no floor, holds more
+    area facing along a horizontal axis; ``--up y`` reads one stored y-up)."""
+    if convention != "y":
+        return convention
+    normals, areas = face_normals(vertices, faces)
+    along = np.abs(normals) >= math.cos(math.radians(AXIS_DEG))
+    area_y, area_z = float(areas[along[:, 1]].sum()), float(areas[along[:, 2]].sum())
+    return "z" if area_z > MESH_UP_MARGIN * area_y else "y"
 
 
 def large_levels(vertices: np.ndarray, faces: np.ndarray, up: bool) -> np.ndarray:
