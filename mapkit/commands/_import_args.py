@@ -22,17 +22,17 @@ def add_float_options(group, defaults, options, metavar: str = "M") -> None:
         group.add_argument(flag, type=float, default=default, metavar=metavar, help=f"{text} (default {default})")
 
 
-def output_file(path, suffixes) -> Path:
+def output_file(path, suffixes, inputs=()) -> Path:
     """``path`` as a Path once it ends in one of ``suffixes`` (lower case,
-    with the dot) and a file can be written there; else a one-line error."""
+    with the dot), a file can be written there and it is none of the
+    ``inputs``; else a one-line error."""
     from linemap.atomic import check_output_path
 
     out = Path(path)
     if out.suffix.lower() not in suffixes:
         wanted = suffixes[0] if len(suffixes) == 1 else "one of " + ", ".join(suffixes)
         raise MapkitError(f"output must end in {wanted}, got '{out.name}'")
-    check_output_path(out)
-    return out
+    return check_output_path(out, inputs)
 
 
 def add_import_arguments(p) -> None:

@@ -83,7 +83,7 @@ def run(args) -> int:
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)
-    out = output_file(args.output, (".lmap",))
+    out = output_file(args.output, (".lmap",), [args.plan])
     linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty())
     size = save_map(out, linemap)
     if not args.quiet:

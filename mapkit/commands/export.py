@@ -57,7 +57,7 @@ def _closed(p, ccw: bool) -> list[list[float]]:
 def run(args) -> int:
     from linemap.lmap import load_map
 
-    out = check_output_path(args.geojson)
+    out = check_output_path(args.geojson, [args.map])
     m = load_map(args.map)
     write_atomic(out, json.dumps(to_geojson(m)))
     print(f"wrote {out}: {m.n_regions} regions, {m.n_segments} segments")

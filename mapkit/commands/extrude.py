@@ -26,7 +26,7 @@ def run(args) -> int:
     from mapkit.extrude import scene_to_mesh
     from mapkit.importers import load_scene
 
-    out = output_file(args.output, tuple(FORMATS))
+    out = output_file(args.output, tuple(FORMATS), [args.plan])
     kind = FORMATS[out.suffix.lower()]
     options = import_options_from_args(args)
     scene = load_scene(args.plan, options)

@@ -23,7 +23,7 @@ def run(args) -> int:
     from mapkit.preview import render_preview
 
     options = import_options_from_args(args)
-    out = output_file(args.output, (".png",))
+    out = output_file(args.output, (".png",), [args.plan])
     if not 20 <= args.dpi <= 1200:
         raise MapkitError(f"--dpi must be between 20 and 1200, got {args.dpi}")
     scene = load_scene(args.plan, options)

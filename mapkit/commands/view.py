@@ -48,7 +48,7 @@ def run(args) -> int:
     if args.html:
         from linemap.atomic import check_output_path
 
-        check_output_path(args.html)
+        check_output_path(args.html, [args.map, args.plan, args.result, args.lines, args.camera])
     m = load_map(args.map)
     camera = None
     if args.camera:
