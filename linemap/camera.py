@@ -11,7 +11,6 @@ numpy only: the map builder imports this too (for the vertical field of view).
 
 from __future__ import annotations
 
-import json
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -68,21 +67,14 @@ class Camera:
         return cls(**vals)
 
     @classmethod
-    def load(cls, path: str | Path) -> "Camera":
-        """Read a camera.json file."""
-        path = Path(path)
-        try:
-            d = json.loads(path.read_text())
-        except FileNotFoundError:
-            raise CameraError(f"camera file {path} not found") from None
-        except IsADirectoryError:
-            raise CameraError(f"camera file {path} is a directory; give the camera.json file in it") from None
-        except OSError as exc:
-            raise CameraError(f"camera file {path} could not be read ({exc.strerror or exc})") from None
-        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
-            why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
-            raise CameraError(f"camera file {path} is not valid JSON ({why})") from None
-        return cls.from_dict(d)
+    def load(cls, path: str | Path, height_m: float | None = None, pitch_deg: float | None = None) -> "Camera":
+        """Read a camera.json, an OpenCV calibration file (YAML, XML, JSON) or a
+        ROS camera_info YAML (:mod:`linemap.camera_files`); ``height_m`` and
+        ``pitch_deg``, when given, override the file's (calibration files
+        have neither)."""
+        from linemap.camera_files import load_camera
+
+        return load_camera(path, height_m, pitch_deg)
 
     @classmethod
     def from_fov(cls, hfov_deg: float, width: int, height: int, height_m: float, pitch_deg: float) -> "Camera":

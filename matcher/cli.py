@@ -43,7 +43,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("localize", help="pose from image lines and a prior",
                        description="Pose of the camera from image lines (or an image) and a pose prior.")
     p.add_argument("--map", required=True, help=".lmap map built by 'mapkit build'")
-    p.add_argument("--camera", required=True, help="camera.json (width, height, fx, fy, cx, cy, height_m, pitch_deg)")
+    cam = p.add_mutually_exclusive_group(required=True)
+    cam.add_argument("--camera", help="camera.json (width, height, fx, fy, cx, cy, height_m, pitch_deg), an OpenCV "
+                     "calibration file (YAML, XML, JSON) or a ROS camera_info YAML")
+    cam.add_argument("--camera-k", metavar="FX,FY,CX,CY", help="pinhole intrinsics in pixels, with --image-size")
+    p.add_argument("--image-size", metavar="WxH", help="image width and height in pixels (with --camera-k)")
+    p.add_argument("--height-m", type=float, help="camera height above the floor, metres (needed with a "
+                   "calibration file or --camera-k; overrides a camera.json's)")
+    p.add_argument("--pitch-deg", type=float, help="camera pitch, degrees, down positive (default 0 with a "
+                   "calibration file or --camera-k; overrides a camera.json's)")
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--lines", help='lines.json {"lines": [[u1, v1, u2, v2], ...]} (undistorted pixels)')
     src.add_argument("--image", help="image file; lines are detected with LSD")
@@ -179,6 +187,33 @@ def _human(res, n_lines: int) -> str:
     )
 
 
+def _camera(args, Camera):
+    """The camera of --camera or of --camera-k and --image-size, with
+    --height-m and --pitch-deg; UsageError for a missing part."""
+    if args.camera:
+        if args.image_size:
+            raise UsageError("--image-size goes with --camera-k (a camera file holds its size)")
+        _input_file(args.camera, "camera file")
+        return Camera.load(args.camera, args.height_m, args.pitch_deg)
+    from linemap.camera_files import camera_from_k
+
+    try:
+        k = tuple(float(v) for v in args.camera_k.split(","))
+    except ValueError:
+        k = ()
+    if len(k) != 4:
+        raise UsageError(f"--camera-k takes FX,FY,CX,CY (pixels), got '{args.camera_k}'")
+    try:
+        size = tuple(int(v) for v in (args.image_size or "").lower().split("x"))
+    except ValueError:
+        size = ()
+    if len(size) != 2:
+        raise UsageError("--camera-k needs --image-size WxH (pixels, e.g. 640x480)")
+    if args.height_m is None:
+        raise UsageError("--camera-k needs --height-m (the camera's height above the floor, metres)")
+    return camera_from_k(k, size, args.height_m, 0.0 if args.pitch_deg is None else args.pitch_deg)
+
+
 def run_localize(args) -> int:
     import matcher
 
@@ -187,8 +222,7 @@ def run_localize(args) -> int:
     prior = _prior_options(args)
     tol = _tolerances(args)
     _input_file(args.map, "map file", "build one with 'mapkit build'")
-    _input_file(args.camera, "camera file")
-    camera = Camera.load(args.camera)
+    camera = _camera(args, Camera)
     linemap = matcher.load_map(args.map)
     lines = _read_lines(args.lines) if args.lines else _read_image(args.image, camera)
     if prior is None:

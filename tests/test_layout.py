@@ -22,6 +22,8 @@ NOT_THRESHOLDS = {
     ("linemap/lmap.py", "FORMAT_MINOR"): "the .lmap format's version",
     ("linemap/lmap.py", "_RAW"): "a chunk codec id of the format",
     ("linemap/lmap.py", "COORD_QUANTUM_M"): "the format's storage unit for outline vertices",
+    ("linemap/camera_files.py", "_MAX_CALIBRATION_CHARS"): "input size limits of a file parser",
+    ("linemap/camera_files.py", "_MAX_CALIBRATION_DEPTH"): "input size limits of a file parser",
     ("linemap/atomic.py", "STALE_TEMP_S"): "file housekeeping (a killed write's leftovers), not a tolerance of the method",
     ("matcher/cli.py", "EXIT_OK"): "exit codes",
     ("matcher/stage1/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
