@@ -49,6 +49,17 @@ _RAW, _ZLIB = 0, 1
 
 #: Region polygon vertices are stored as integers of this many metres.
 COORD_QUANTUM_M = 1e-4
+#: A file's chunks may inflate to this many times the file's size (and at
+#: least the floor below) before anything is allocated: real maps compress
+#: a few tens of times (the visible lists are XOR-ed row to row); a crafted
+#: chunk that claims more is refused instead of inflating to gigabytes.
+MAX_INFLATION = 256
+RAW_FLOOR_BYTES = 64 << 20
+#: The visible lists may hold this many entries per byte of file (real maps:
+#: under 5), and META this many bytes and levels of nesting.
+MAX_LIST_ENTRIES_PER_BYTE = 64
+MAX_META_BYTES = 16 << 20
+MAX_META_DEPTH = 32
 
 
 class LmapError(ValueError):
@@ -333,7 +344,12 @@ def decode(data: bytes, name: str = "<bytes>") -> LineMap:
         raise LmapError(f"{name} has invalid format version {major}.{minor}")
     pos = _HEADER.itemsize
     raw: dict[bytes, bytes] = {}
-    for i in range(int(header["n_chunks"])):
+    budget = max(RAW_FLOOR_BYTES, MAX_INFLATION * len(data))  # bytes all chunks may inflate to
+    n_chunks = int(header["n_chunks"])
+    if n_chunks * _CHUNK.itemsize > len(data):
+        raise LmapError(f"{name} is truncated or corrupt: it claims {n_chunks} chunks, more than its {len(data)} "
+                        "bytes hold; rebuild or re-copy it")
+    for i in range(n_chunks):
         if pos + _CHUNK.itemsize > len(data):
             raise LmapError(f"{name} is truncated (chunk {i} header missing); rebuild or re-copy it")
         ch = np.frombuffer(data, dtype=_CHUNK, count=1, offset=pos)[0]
@@ -348,6 +364,10 @@ def decode(data: bytes, name: str = "<bytes>") -> LineMap:
         if zlib.crc32(stored) != int(ch["crc32"]):
             raise LmapError(f"{name} is corrupt: checksum mismatch in chunk {label}; rebuild or re-copy it")
         raw_size = int(ch["raw_size"])
+        if raw_size > budget:
+            raise LmapError(f"{name} is corrupt: chunk {label} claims {raw_size} bytes, more than a map of "
+                            f"{len(data)} bytes can hold; rebuild or re-copy it")
+        budget -= raw_size
         if int(ch["codec"]) == _ZLIB:
             # At most one byte past the size the header states: a corrupt or
             # hostile chunk cannot inflate to gigabytes before it is rejected.
@@ -387,8 +407,11 @@ def _array(raw, tag, dtype, count, name, width=1) -> np.ndarray:
 
 
 def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -> LineMap:
+    meta_bytes = _need(raw, b"META", name)
+    if len(meta_bytes) > MAX_META_BYTES or _json_depth(meta_bytes) > MAX_META_DEPTH:
+        raise LmapError(f"{name} has an unreadable META chunk (too large or nested too deeply); rebuild it")
     try:
-        meta = json.loads(_need(raw, b"META", name).decode("utf-8"))
+        meta = json.loads(meta_bytes.decode("utf-8"))
         counts, grid = meta["counts"], meta["grid"]
         n, r, k, p = (int(counts[key]) for key in ("segments", "regions", "rings", "points"))
         n_list, n_grid = int(counts["list_entries"]), int(counts["grid_entries"])
@@ -397,10 +420,14 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
         origin = np.asarray(grid["origin"], dtype=np.float64)
         cell = float(grid["cell"])
         quantum = float(meta["coord_quantum_m"])
-    except (ValueError, KeyError, TypeError, OverflowError) as exc:
+    except (ValueError, KeyError, TypeError, OverflowError, RecursionError) as exc:
         raise LmapError(f"{name} has an unreadable META chunk ({exc}); rebuild it") from None
     if min(n, r, k, p, n_list, n_grid, ny, nx, n_wall_rings, n_wall_points) < 0 or origin.shape != (2,) or not cell > 0:
         raise LmapError(f"{name} has impossible counts in META; rebuild it")
+    file_bytes = sum(len(v) for v in raw.values())
+    if n_list > MAX_LIST_ENTRIES_PER_BYTE * max(file_bytes, 1 << 16):
+        raise LmapError(f"{name} claims {n_list} visible-list entries, more than a map of its size holds; rebuild it")
+    _check_meta(meta, name)
 
     segments = _array(raw, b"SEGM", "<f8", n, name, 6).astype(np.float64).reshape(n, 2, 3)
     kinds = _array(raw, b"KIND", "u1", n, name).copy()
@@ -411,12 +438,7 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
     ring_points = np.cumsum(dq, axis=0).astype(np.float64) * quantum
     nbytes = (n + 7) // 8
     xbits = _array(raw, b"VLST", "u1", r, name, nbytes).reshape(r, nbytes)
-    bits = np.bitwise_xor.accumulate(xbits, axis=0) if r else xbits
-    dense = np.unpackbits(bits, axis=1, count=n, bitorder="little").astype(bool)
-    rows, cols = np.nonzero(dense)
-    list_offsets = np.zeros(r + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=r), out=list_offsets[1:])
-    list_indices = cols.astype(np.int64)
+    list_offsets, list_indices = _lists_from_bitsets(xbits, n, n_list, name)
     grid_offsets = _array(raw, b"GOFF", "<u4", ny * nx + 1, name).astype(np.int64)
     grid_regions = _array(raw, b"GREG", "<u4", n_grid, name).astype(np.int64)
     wall_offsets = _array(raw, b"WOFF", "<u4", n_wall_rings + 1, name).astype(np.int64)
@@ -433,6 +455,71 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
         raise LmapError(f"{name} is inconsistent: {len(list_indices)} list entries, META says {n_list}")
     validate(m, name)
     return m
+
+
+def _lists_from_bitsets(xbits: np.ndarray, n: int, n_list: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(offsets (R+1,), indices (n_list,))`` of the visible lists from their
+    XOR-ed bitsets (R, ceil(n / 8)), a block of rows at a time (memory stays
+    near the output's), refusing more entries than META's ``n_list``."""
+    r = len(xbits)
+    counts = np.zeros(r, dtype=np.int64)
+    parts, prev, total = [], None, 0
+    block = max(1, (1 << 22) // max(n, 1))
+    for r0 in range(0, r, block):
+        chunk = xbits[r0:r0 + block]
+        if prev is not None:
+            chunk = chunk.copy()
+            chunk[0] ^= prev
+        bits = np.bitwise_xor.accumulate(chunk, axis=0)
+        prev = bits[-1]
+        rows, cols = np.nonzero(np.unpackbits(bits, axis=1, count=n, bitorder="little"))
+        total += len(cols)
+        if total > n_list:
+            raise LmapError(f"{name} is inconsistent: its visible lists hold more than the {n_list} entries META "
+                            "says; rebuild it with 'mapkit build'")
+        counts[r0:r0 + len(chunk)] = np.bincount(rows, minlength=len(chunk))
+        parts.append(cols.astype(np.int64))
+    offsets = np.zeros(r + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    return offsets, (np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64))
+
+
+def _json_depth(text: bytes) -> int:
+    """The deepest nesting of brackets and braces in JSON ``text`` (an upper
+    bound: brackets inside strings count too)."""
+    depth = best = 0
+    for c in text.translate(None, b'"\\:,0123456789.eE+-truefalsn \n\t'):
+        if c in b"[{":
+            depth += 1
+            best = max(best, depth)
+        elif c in b"]}" and depth:
+            depth -= 1
+    return best
+
+
+def _check_meta(meta, name: str) -> None:
+    """The parts of META that readers use: an object, a positive finite wall
+    height, a camera with its numeric fields."""
+    def bad(msg: str) -> LmapError:
+        return LmapError(f"{name} has an invalid META chunk: {msg}; rebuild it with 'mapkit build'")
+
+    if not isinstance(meta, dict):
+        raise bad("it is not a JSON object")
+    wh = meta.get("wall_height")
+    if wh is not None and not (isinstance(wh, (int, float)) and not isinstance(wh, bool) and math.isfinite(wh)
+                               and wh > 0):
+        raise bad(f"wall_height must be a positive number of metres, got {wh!r}")
+    build = meta.get("build")
+    for where, cam in (("camera", meta.get("camera")), ("build camera", build.get("camera")
+                                                        if isinstance(build, dict) else None)):
+        if cam is None:
+            continue
+        if not isinstance(cam, dict):
+            raise bad(f"{where} must be an object")
+        for key in ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch_deg"):
+            v = cam.get(key)
+            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
+                raise bad(f"{where} lacks a numeric {key}")
 
 
 def validate(m: LineMap, name: str = "map") -> None:
