@@ -21,6 +21,7 @@ import logging
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 from ezdxf import bbox
 
 from mapkit.importers.dxf.entities import flatten_entities
@@ -110,12 +111,19 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
 
 
 def _extent(entities) -> float:
-    """Largest side of the bounding box of ``entities``, drawing units (0 if none)."""
-    box = bbox.extents(entities, fast=True)
-    if not box.has_data:
-        return 0.0
-    size = box.size
-    return float(max(size.x, size.y))
+    """Largest side of the bounding box of ``entities``, drawing units (0 if
+    none), leaving out entities with non-finite coordinates."""
+    lo, hi = None, None
+    for box in (bbox.extents([e], fast=True) for e in entities):
+        if not box.has_data:
+            continue
+        a = np.array((box.extmin.x, box.extmin.y), dtype=float)
+        b = np.array((box.extmax.x, box.extmax.y), dtype=float)
+        if not (np.isfinite(a).all() and np.isfinite(b).all()):
+            continue
+        lo = a if lo is None else np.minimum(lo, a)
+        hi = b if hi is None else np.maximum(hi, b)
+    return 0.0 if lo is None else float((hi - lo).max())
 
 
 def _layer(entity) -> str:

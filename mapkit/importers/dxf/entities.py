@@ -52,13 +52,19 @@ def flatten_entities(
     ``factor``: metres per drawing unit; ``sagitta``: chord tolerance in
     drawing units; ``layer_wanted(layer)`` says whether a layer's geometry is
     needed at all. Returns the strokes and a count of unsupported entity
-    types that were skipped.
+    types that were skipped. An entity with a non-finite coordinate (a
+    damaged file) is left out and counted as ``"<type> (non-finite
+    coordinates, handle H on layer L)"``: its geometry would stall or break
+    the plan's reconstruction.
     """
     strokes: list[Stroke] = []
     skipped: Counter = Counter()
     groups: dict[tuple[int, int], int] = {}
     for index, entity in enumerate(entities):
         layer = entity.dxf.get("layer", "0")
+        if not _finite_placement(entity):
+            skipped[_left_out(entity, layer)] += 1
+            continue
         if entity.dxftype() in EXPAND_TYPES:
             # Each top-level block insert (each MINSERT cell) is one group:
             # one door, one window, one column.
@@ -70,8 +76,35 @@ def flatten_entities(
                 continue
             group = None if cell is None else groups.setdefault((index, cell), len(groups))
             for coords, closed, filled in _outlines(sub, sagitta, skipped):
+                if not np.isfinite(coords).all():
+                    skipped[_left_out(entity, layer)] += 1
+                    continue
                 strokes.append(Stroke(coords * factor, closed, filled, sub_layer, group))
     return strokes, skipped
+
+
+def _finite_placement(entity) -> bool:
+    """False when an entity's placement points (insert, start, end, centre,
+    vertices of a polyline) hold a NaN or an infinity."""
+    try:
+        for name in ("insert", "start", "end", "center"):
+            if entity.dxf.hasattr(name):
+                if not all(math.isfinite(v) for v in entity.dxf.get(name)):
+                    return False
+        for name in ("radius", "xscale", "yscale", "rotation"):
+            if entity.dxf.hasattr(name) and not math.isfinite(float(entity.dxf.get(name))):
+                return False
+        if entity.dxftype() == "LWPOLYLINE":
+            return bool(np.isfinite(np.asarray(entity.get_points("xy"), dtype=float)).all())
+    except (TypeError, ValueError, AttributeError):
+        return False
+    return True
+
+
+def _left_out(entity, layer: str) -> str:
+    """The skipped-entities key of a damaged entity, naming it for the user."""
+    handle = entity.dxf.get("handle", "?")
+    return f"{entity.dxftype()} (non-finite coordinates, handle {handle} on layer {layer})"
 
 
 def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iterator[tuple[object, str, int]]:
