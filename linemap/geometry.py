@@ -108,3 +108,25 @@ def project_segments(camera: Camera, poses: np.ndarray, segments: np.ndarray, ne
     uv[..., 0] = camera.fx * X / Z + camera.cx
     uv[..., 1] = camera.fy * Y / Z + camera.cy
     return uv, ok
+
+
+def clip_lines(lines: np.ndarray, box) -> tuple[np.ndarray, np.ndarray]:
+    """Image lines (M, 2, 2) cut to ``box`` ``(u_min, u_max, v_min, v_max)``
+    pixels (Liang-Barsky), and (M,) bool: the line is finite and some part
+    of it (a point at least) is inside. Lines wholly outside come back as
+    they were."""
+    lines = np.asarray(lines, dtype=np.float64).reshape(-1, 2, 2)
+    p0, d = lines[:, 0], lines[:, 1] - lines[:, 0]
+    t0, t1 = np.zeros(len(lines)), np.ones(len(lines))
+    ok = np.isfinite(lines).all(axis=(1, 2))
+    for p, q in ((-d[:, 0], p0[:, 0] - box[0]), (d[:, 0], box[1] - p0[:, 0]),
+                 (-d[:, 1], p0[:, 1] - box[2]), (d[:, 1], box[3] - p0[:, 1])):
+        parallel = p == 0
+        ok &= ~(parallel & (q < 0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(parallel, 0.0, q / np.where(parallel, 1.0, p))
+        t0 = np.where(~parallel & (p < 0), np.maximum(t0, r), t0)
+        t1 = np.where(~parallel & (p > 0), np.minimum(t1, r), t1)
+    ok &= t0 <= t1
+    out = np.stack([p0 + t0[:, None] * d, p0 + t1[:, None] * d], axis=1)
+    return np.where(ok[:, None, None], out, lines), ok

@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from linemap.camera import Camera
+from linemap.geometry import clip_lines
 from matcher.tolerances import Tolerances
 
 
@@ -64,7 +65,7 @@ def check_lines(lines, camera: Camera, tol: Tolerances) -> np.ndarray:
     stick_out = ((arr[..., 0] < box[0]) | (arr[..., 0] > box[1]) | (arr[..., 1] < box[2])
                  | (arr[..., 1] > box[3])).any(axis=1)
     if stick_out.any():
-        clipped, inside = _clip(arr[stick_out], box)
+        clipped, inside = clip_lines(arr[stick_out], box)
         if not inside.all():
             j = int(np.flatnonzero(stick_out)[np.argmin(inside)])
             raise ValueError(_outside(arr, j, camera, "lies wholly outside"))
@@ -84,25 +85,6 @@ def _outside(arr: np.ndarray, j: int, camera: Camera, how: str) -> str:
              f"undistorted: u in [{u0:.1f}, {u1:.1f}], v in [{v0:.1f}, {v1:.1f}]")
     return (f"lines[{j}] = {[float(f'{v:.6g}') for v in arr[j].ravel()]} {how} the "
             f"{camera.width}x{camera.height} image ({where}); were the lines detected with another camera?")
-
-
-def _clip(lines: np.ndarray, box) -> tuple[np.ndarray, np.ndarray]:
-    """Lines (K, 2, 2) cut to ``box`` ``(u_min, u_max, v_min, v_max)``
-    (Liang-Barsky), and (K,) bool: some part of the line is inside."""
-    p0, d = lines[:, 0], lines[:, 1] - lines[:, 0]
-    t0, t1 = np.zeros(len(lines)), np.ones(len(lines))
-    ok = np.ones(len(lines), dtype=bool)
-    for p, q in ((-d[:, 0], p0[:, 0] - box[0]), (d[:, 0], box[1] - p0[:, 0]),
-                 (-d[:, 1], p0[:, 1] - box[2]), (d[:, 1], box[3] - p0[:, 1])):
-        parallel = p == 0
-        ok &= ~(parallel & (q < 0))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r = np.where(parallel, 0.0, q / np.where(parallel, 1.0, p))
-        t0 = np.where(~parallel & (p < 0), np.maximum(t0, r), t0)
-        t1 = np.where(~parallel & (p > 0), np.minimum(t1, r), t1)
-    ok &= t1 > t0
-    out = np.stack([p0 + t0[:, None] * d, p0 + t1[:, None] * d], axis=1)
-    return np.where(ok[:, None, None], out, lines), ok
 
 
 def check_prior(prior, dt, dyaw) -> tuple[float, float, float, float, float]:

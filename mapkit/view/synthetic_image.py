@@ -11,30 +11,19 @@ from __future__ import annotations
 import numpy as np
 
 from linemap.camera import Camera
-from linemap.geometry import project_segments as project_at_poses
+from linemap.geometry import clip_lines, project_segments as project_at_poses
 
 #: Points nearer than this (metres, along the optical axis) are behind the image.
 NEAR_PLANE_M = 0.05
 
 
 def clip_to_image(lines: np.ndarray, width: float, height: float) -> tuple[np.ndarray, np.ndarray]:
-    """Liang-Barsky clipping of (M, 2, 2) pixel lines to [0, width] x [0, height].
+    """(M, 2, 2) pixel lines clipped to [0, width] x [0, height]
+    (:func:`linemap.geometry.clip_lines`).
 
     Returns (clipped lines (K, 2, 2), indices (K,) of the kept input lines).
     """
-    lines = np.asarray(lines, dtype=np.float64).reshape(-1, 2, 2)
-    p0, d = lines[:, 0], lines[:, 1] - lines[:, 0]
-    t0, t1 = np.zeros(len(lines)), np.ones(len(lines))
-    ok = np.isfinite(lines).all(axis=(1, 2))
-    for p, q in ((-d[:, 0], p0[:, 0]), (d[:, 0], width - p0[:, 0]), (-d[:, 1], p0[:, 1]), (d[:, 1], height - p0[:, 1])):
-        parallel = p == 0
-        ok &= ~(parallel & (q < 0))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(parallel, 0.0, q / np.where(parallel, 1.0, p))
-        t0 = np.where(~parallel & (p < 0), np.maximum(t0, t), t0)
-        t1 = np.where(~parallel & (p > 0), np.minimum(t1, t), t1)
-    ok &= t0 <= t1
-    out = np.stack([p0 + t0[:, None] * d, p0 + t1[:, None] * d], axis=1)
+    out, ok = clip_lines(lines, (0.0, width, 0.0, height))
     return out[ok], np.nonzero(ok)[0]
 
 
