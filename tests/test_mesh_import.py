@@ -341,3 +341,22 @@ def test_truncated_binary_stl_says_so(tmp_path):
 def test_wall_height_option_on_a_mesh_is_warned(caplog):
     load_scene(HOSPITAL, BuildOptions(wall_height=10.0))
     assert "--wall-height 10 is for DXF plans; a mesh's walls are as high as the model's (3 m)" in caplog.text
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+def test_truncated_text_meshes_are_refused(tmp_path, suffix):
+    """A cut copy of a text mesh used to build the part that was there
+    without a word (142 of 187 segments); now it is a one-line error."""
+    from mapkit.errors import MapkitError
+
+    mesh = trimesh.util.concatenate(room_walls())
+    whole = tmp_path / f"room{suffix}"
+    data = mesh.export(file_type=suffix[1:], **({"encoding": "ascii"} if suffix == ".ply" else {}))
+    data = data.encode() if isinstance(data, str) else data
+    whole.write_bytes(data)
+    assert load_scene(whole).segments is not None  # the whole file reads
+    cut = tmp_path / f"cut{suffix}"
+    lines = data.decode().splitlines()
+    cut.write_text("\n".join(lines[: int(len(lines) * 0.7)]) + "\n")
+    with pytest.raises(MapkitError, match="truncated"):
+        load_scene(cut)

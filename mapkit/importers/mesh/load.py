@@ -110,6 +110,7 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if path.stat().st_size == 0:  # trimesh's own message for this is an index error
         raise MapkitError(f"{path}: the file is empty; export the model again")
     _check_binary_stl_length(path)
+    _check_text_mesh_counts(path)
     try:
         loaded = trimesh.load(str(path), process=False)
     except FileNotFoundError as exc:  # the file exists (checked by the CLI): a buffer or texture it names does not
@@ -155,6 +156,53 @@ def _check_binary_stl_length(path: Path) -> None:
     if size < 84 + 50 * count:
         raise MapkitError(f"{path}: the file is truncated (its header lists {count} triangles, it holds "
                           f"{max(size - 84, 0) // 50}); copy or export it again")
+
+
+def _check_text_mesh_counts(path: Path) -> None:
+    """MapkitError if a text mesh holds less than it says (a cut copy): an
+    ASCII PLY or an OFF file with fewer data lines than its header's element
+    counts, an OBJ file whose faces name vertices it does not hold. trimesh
+    would build the part that is there without a word."""
+    suffix = path.suffix.lower()
+    if suffix not in (".ply", ".off", ".obj"):
+        return
+    with open(path, "rb") as fh:
+        head = fh.read(5)
+    if suffix == ".ply" and head[:3] != b"ply":
+        return
+    text = path.read_text(errors="replace")
+    lines = text.splitlines()
+    if suffix == ".ply":
+        if "format ascii" not in text[:2000]:
+            return
+        try:
+            end = next(i for i, ln in enumerate(lines) if ln.strip() == "end_header")
+        except StopIteration:
+            raise MapkitError(f"{path}: the PLY header never ends (truncated?); copy or export it again") from None
+        declared = sum(int(ln.split()[2]) for ln in lines[:end] if ln.startswith("element ") and len(ln.split()) == 3
+                       and ln.split()[2].isdigit())
+        held = sum(1 for ln in lines[end + 1:] if ln.strip())
+    elif suffix == ".off":
+        body = [ln.split("#")[0].strip() for ln in lines]
+        body = [ln for ln in body if ln]
+        if not body or not body[0].upper().endswith("OFF") and not body[0].upper().startswith("OFF"):
+            return
+        first = body[0].split()
+        counts = first[1:] if len(first) > 1 else (body[1].split() if len(body) > 1 else [])
+        if len(counts) < 2 or not all(c.isdigit() for c in counts[:2]):
+            return
+        declared = int(counts[0]) + int(counts[1])
+        held = len(body) - (1 if len(first) > 1 else 2)
+    else:  # OBJ
+        n_vertices = sum(1 for ln in lines if ln.startswith("v "))
+        indices = [int(tok.split("/")[0]) for ln in lines if ln.startswith("f ") for tok in ln.split()[1:]
+                   if tok.split("/")[0].lstrip("-").isdigit()]
+        if not indices or max(indices) <= n_vertices:
+            return
+        declared, held = max(indices), n_vertices
+    if held < declared:
+        raise MapkitError(f"{path}: the file is truncated (it declares {declared} vertices and faces, it holds "
+                          f"{held}); copy or export it again")
 
 
 def weld(vertices: np.ndarray, faces: np.ndarray, tol: float = MERGE) -> tuple[np.ndarray, np.ndarray]:
