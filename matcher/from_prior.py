@@ -25,6 +25,7 @@ from matcher.checks import check_lines, check_prior
 from matcher.frame import ImageLines, prepare_lines, too_few_lines
 from matcher.result import LocalizeResult
 from matcher.stage2.covariance import pose_std_of
+from matcher.stage2.fit import coverage
 from matcher.strategy import SOURCES, Answer, Frame, run_strategy
 from matcher.tolerances import DEFAULT, Tolerances
 
@@ -111,6 +112,12 @@ def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, 
         res = LocalizeResult(False, why + _cut_short(hyps, tol, spent), **common)
         res.score = float(E[best]) if np.isfinite(E[best]) else None
         return res
+    predicted, seen = coverage(camera, ranked_h.poses[best], cands.segments, cands.label,
+                               ranked_h.local[ranked_h.hyp == best], cands.walls, tol)
+    work = tol.internals
+    if predicted >= work.coverage_min_predicted and seen < work.coverage_min_share * predicted:
+        return LocalizeResult(False, f"the best pose predicts {predicted} map segments in view and the image shows "
+                              f"{seen} of them: the lines do not look like the map there", **common)
     res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
                          matches=matches_of(best), **common)
     # Worked out when first read (a few tenths of a millisecond a robot

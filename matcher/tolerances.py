@@ -131,6 +131,15 @@ class Internals:
     #: (a loosely fixed pose's near rivals are the same answer, imprecise).
     ambiguous_sigmas: float = 3.0
 
+    #: An accepted pose must show the map: of the segments it predicts in
+    #: view (projected at least this long, pixels, and in plain sight), a
+    #: match's collinear groups must hold this share, once it predicts this
+    #: many (a picture of stripes fits a few vertical edges anywhere, but not
+    #: the floor and ceiling lines those poses would show).
+    coverage_min_px: float = 40.0
+    coverage_min_share: float = 0.25
+    coverage_min_predicted: int = 8
+
     # ---- stage 1: resection from vertical edges ----------------------------
     #: A line counts as explained at a resected pose if its bearing is within
     #: this many times its noise bound of a candidate edge's: the pose comes

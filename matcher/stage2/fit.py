@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from linemap.geometry import project_segments
+from linemap.geometry import clip_lines, project_segments
 from matcher.projection import covered_span, distance_and_overlap, projected_distance_and_overlap
 from matcher.scene.occlusion import sight_clear
 from matcher.tolerances import Internals
@@ -97,3 +97,26 @@ def unit_rays(camera, lines):
     """(T, 2, 3) unit camera-frame rays of the end points of lines (T, 2, 2)."""
     r = camera.pixel_rays(lines)
     return r / np.linalg.norm(r, axis=-1, keepdims=True)
+
+
+def coverage(camera, pose: np.ndarray, segments: np.ndarray, label: np.ndarray, matched: np.ndarray, walls,
+             tol) -> tuple[int, int]:
+    """``(predicted, seen)``: how many of the candidate ``segments`` (N, 2, 3)
+    a camera at ``pose`` (3,) should see as lines of ``coverage_min_px`` or
+    more (projected, cut to the image, in plain sight), and how many of those
+    belong to a collinear group (``label`` (N,)) that a match holds
+    (``matched``: indices into ``segments``). The sight test, the dear part,
+    runs only when the segments in view alone fall short of
+    ``coverage_min_share``: it can only drop unmatched ones (the matched
+    are in sight by stage 2's own test)."""
+    work = tol.internals
+    poses = np.broadcast_to(pose, (len(segments), 3))
+    uv, ahead = project_segments(camera, poses, segments, work.near_plane_m)
+    uv, inside = clip_lines(uv, (0.0, camera.width, 0.0, camera.height))
+    length = np.hypot(*(uv[:, 1] - uv[:, 0]).T)
+    cand = np.nonzero(ahead & inside & (length >= work.coverage_min_px))[0]
+    held = np.isin(label[cand], label[matched])
+    if held.sum() >= work.coverage_min_share * len(cand):
+        return int(len(cand)), int(held.sum())
+    in_sight = visible(camera, poses[cand], segments[cand], uv[cand], walls, work)
+    return int(in_sight.sum()), int((held & in_sight).sum())
