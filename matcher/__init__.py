@@ -22,7 +22,8 @@ from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
-from matcher.tolerances import Tolerances
+from matcher.tolerances import Tolerances, Tracking
+from matcher.tracking import TrackedFrame, Tracker
 
 __all__ = [
     "Camera",
@@ -32,6 +33,9 @@ __all__ = [
     "LocalizeResult",
     "SegmentKind",
     "Tolerances",
+    "TrackedFrame",
+    "Tracker",
+    "Tracking",
     "detect_lines",
     "load_map",
     "localize",

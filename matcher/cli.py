@@ -3,6 +3,9 @@
     matcher localize --map MAP --camera CAM.json (--lines LINES.json | --image IMG)
                      (--prior X,Y,YAW_DEG --dt METRES --dyaw DEG | --lost)
                      [--budget-ms MS] [--json]
+    matcher track --map MAP [--camera CAM] --frames RUN.jsonl|BAG
+                  [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost]
+                  [--out TRAJ.txt] [--plot ROUTE.png] [--json]
 
 Human-readable output by default, one JSON object on stdout with ``--json``
 (the result shape of docs/architecture.md). Errors a user can cause print
@@ -37,21 +40,12 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="matcher", description="Localise a camera in a line map (.lmap) from one image.")
+    parser = _Parser(prog="matcher", description="Localise a camera in a line map (.lmap): one image (localize) or a run (track).")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     p = sub.add_parser("localize", help="pose from image lines and a prior",
                        description="Pose of the camera from image lines (or an image) and a pose prior.")
-    p.add_argument("--map", required=True, help=".lmap map built by 'mapkit build'")
-    cam = p.add_mutually_exclusive_group(required=True)
-    cam.add_argument("--camera", help="camera.json (width, height, fx, fy, cx, cy, height_m, pitch_deg), an OpenCV "
-                     "calibration file (YAML, XML, JSON) or a ROS camera_info YAML")
-    cam.add_argument("--camera-k", metavar="FX,FY,CX,CY", help="pinhole intrinsics in pixels, with --image-size")
-    p.add_argument("--image-size", metavar="WxH", help="image width and height in pixels (with --camera-k)")
-    p.add_argument("--height-m", type=float, help="camera height above the floor, metres (needed with a "
-                   "calibration file or --camera-k; overrides a camera.json's)")
-    p.add_argument("--pitch-deg", type=float, help="camera pitch, degrees, down positive (default 0 with a "
-                   "calibration file or --camera-k; overrides a camera.json's)")
+    add_map_and_camera(p, camera_required=True)
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--lines", help='lines.json {"lines": [[u1, v1, u2, v2], ...]} (undistorted pixels)')
     src.add_argument("--image", help="image file; lines are detected with LSD")
@@ -64,7 +58,24 @@ def build_parser() -> argparse.ArgumentParser:
                    help="time budget: stop searching after MS milliseconds and verify what was found "
                         "(default: no limit)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    from matcher.cli_track import add_track_parser
+
+    add_track_parser(sub)
     return parser
+
+
+def add_map_and_camera(p: argparse.ArgumentParser, camera_required: bool) -> None:
+    """The --map and camera options (shared by localize and track)."""
+    p.add_argument("--map", required=True, help=".lmap map built by 'mapkit build'")
+    cam = p.add_mutually_exclusive_group(required=camera_required)
+    cam.add_argument("--camera", help="camera.json (width, height, fx, fy, cx, cy, height_m, pitch_deg), an OpenCV "
+                     "calibration file (YAML, XML, JSON) or a ROS camera_info YAML")
+    cam.add_argument("--camera-k", metavar="FX,FY,CX,CY", help="pinhole intrinsics in pixels, with --image-size")
+    p.add_argument("--image-size", metavar="WxH", help="image width and height in pixels (with --camera-k)")
+    p.add_argument("--height-m", type=float, help="camera height above the floor, metres (needed with a "
+                   "calibration file or --camera-k; overrides a camera.json's)")
+    p.add_argument("--pitch-deg", type=float, help="camera pitch, degrees, down positive (default 0 with a "
+                   "calibration file or --camera-k; overrides a camera.json's)")
 
 
 def _parse_prior(text: str) -> tuple[float, float, float]:
@@ -242,6 +253,10 @@ def main(argv: list[str] | None = None) -> int:
     # '--prior -1.5,2,30': a negative X would read as an option.
     args = parser.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv), ("--prior",)))
     try:
+        if args.command == "track":
+            from matcher.cli_track import run_track
+
+            return run_track(args)
         return run_localize(args)
     except UsageError as exc:
         return _fail(str(exc))

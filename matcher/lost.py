@@ -23,7 +23,7 @@ from matcher.tolerances import Tolerances
 
 
 def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None,
-                    first_accepted: bool = False, progress=None):
+                    first_accepted: bool = False, progress=None, regions=None):
     """Lost mode (method.md section 3): one prior per region (its centre,
     ``dt`` its radius, any heading, the region's own visible list).
 
@@ -43,8 +43,10 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     region's); ``time_ms['regions_tried']`` counts them. ``progress``, if
     given, is called as ``progress(done, total)`` as the regions are done,
     last with ``done == total``. The tolerances' ``time_budget_ms`` bounds
-    the whole call: regions are tried until it is spent. Returns a falsy
-    result if no region gives one."""
+    the whole call: regions are tried until it is spent. ``regions``: the
+    region ids to try, in that order (default: all, largest first; a caller
+    whose budget covers part of the map each call passes the rest next).
+    Returns a falsy result if no region gives one."""
     t0 = time.perf_counter()
     tol, img = from_prior.checked_inputs(linemap, camera, lines, tolerances)
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
@@ -60,7 +62,8 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     search = _RegionSearch(linemap, camera, img, deadlines, progress)
     # Largest region first: with no estimate, the robot stands most likely
     # on the most floor, and a budget spent early has searched the most.
-    order = np.argsort(-linemap.region_areas(), kind="stable").tolist()
+    order = np.argsort(-linemap.region_areas(), kind="stable").tolist() if regions is None else [
+        int(r) for r in regions if 0 <= int(r) < linemap.n_regions]
     found = search.run(order, (TreeSearch(),), tol, first_accepted)
     if found and not first_accepted:
         # The whole strategy where the tree's answers contend: a view the

@@ -425,3 +425,79 @@ class LineDetection:
 
 #: The default line detection.
 DETECTION = LineDetection()
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """Settings of :class:`matcher.Tracker` (following a moving robot with
+    odometry). Metres and degrees.
+
+    The odometry noise model is deliberately pessimistic: the errors of a
+    wheel odometry are mostly systematic (a wheel radius off by a percent, a
+    gyro bias), so the standard deviations it adds grow linearly with the
+    distance and the turn, not with their square roots."""
+
+    #: Position error of the odometry per metre driven (a fraction: 0.05 is
+    #: 5 cm per metre; wheel odometry on a hard floor is good to 1 to 5 %).
+    odom_distance_fraction: float = 0.05
+    #: Heading drift of the odometry per metre driven, degrees.
+    odom_deg_per_m: float = 2.0
+    #: Heading error of the odometry per degree turned (a fraction).
+    odom_deg_per_deg: float = 0.05
+    #: A frame's search bounds (``dt``, ``dyaw`` of :func:`matcher.localize`)
+    #: are this many standard deviations of the estimate.
+    bound_sigmas: float = 3.0
+    #: The search bounds are never smaller than these (metres, degrees):
+    #: the stage 1 pose grid and the image noise leave a few centimetres
+    #: and a degree whatever the estimate's own spread.
+    min_dt_m: float = 0.1
+    min_dyaw_deg: float = 3.0
+    #: After an accepted frame, the estimate's standard deviations are at
+    #: least these (metres, degrees): ``pose_std`` counts the image noise
+    #: only, not the map's own error or a camera mounted a little off.
+    accepted_std_floor_m: float = 0.02
+    accepted_std_floor_deg: float = 0.3
+    #: The tracker is lost, and relocalises with no prior, when the search
+    #: bounds grow past these (metres, degrees)...
+    max_dt_m: float = 1.0
+    max_dyaw_deg: float = 45.0
+    #: ...or after this many frames in a row were not localised...
+    max_failed_frames: int = 3
+    #: ...counting only frames with at least this many usable image lines
+    #: (``Tolerances.min_line_px`` long): a view of a bare wall says nothing
+    #: against the estimate, and a search of the whole map on it is time lost.
+    judging_lines: int = 5
+    #: A pose found with no prior is trusted only after this many frames in a
+    #: row have been localised from it (one frame's word does not move the robot).
+    confirm_frames: int = 2
+    #: A frame confirms a pose found with no prior only when the pose
+    #: explains at least this share of the frame's usable lines (clutter
+    #: leaves the rest). A search of part of the map (the time budget) can
+    #: return a pose in the wrong room that explains a few lines well and
+    #: the rest not at all, and the frames after it, seen from nearly the
+    #: same place, agree with it for the same reason.
+    confirm_share: float = 0.6
+    #: A pose found with no prior is dropped after this many frames it fails to explain.
+    max_candidate_misses: int = 2
+    #: At most this many poses are followed at once while relocalising (the
+    #: twins of a symmetric room, kept until a frame tells them apart).
+    max_candidates: int = 8
+    #: Time budget of one relocalisation (lost mode), milliseconds.
+    relocalise_budget_ms: float = 1000.0
+    #: A bag's image is given the odometry interpolated at its time stamp;
+    #: farther than this many seconds from any odometry message, it has none.
+    odom_max_gap_s: float = 0.2
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise ValueError(f"tracking setting {f.name} must be a finite number >= 0, got {v!r}")
+        if self.max_dt_m < self.min_dt_m or self.max_dyaw_deg < self.min_dyaw_deg:
+            raise ValueError("tracking settings: max_dt_m/max_dyaw_deg must be at least min_dt_m/min_dyaw_deg")
+        if self.max_candidates < 1 or self.relocalise_budget_ms <= 0:
+            raise ValueError("tracking settings: max_candidates must be >= 1 and relocalise_budget_ms > 0")
+
+
+#: The default tracking settings.
+TRACKING = Tracking()

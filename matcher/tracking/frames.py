@@ -1,0 +1,89 @@
+"""Frames of a run from a JSON Lines file: one frame a line.
+
+    {"t": 12.5, "odom": [x, y, yaw_deg], "lines": [[u1, v1, u2, v2], ...]}
+    {"t": 12.7, "odom": [x, y, yaw_deg], "image": "frames/000123.png"}
+
+``t`` in seconds, ``odom`` the robot's pose in the odometry's own frame
+(metres, degrees), ``lines`` undistorted pixels, or ``image`` a path
+(relative to the JSON Lines file) whose lines are detected with LSD. Blank
+lines are passed over. A line that cannot be read is a frame with its
+``error`` set, not the end of the run: a log with one damaged line is
+still worth following.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+
+@dataclass
+class FrameInput:
+    """One frame to track: time ``t`` (seconds), odometry ``odom`` ``(x, y,
+    yaw_deg)`` or None, image ``lines`` (M, 2, 2) pixels, ``where`` it came
+    from (for messages), and ``error``: why it cannot be used, or ''."""
+
+    t: float
+    odom: tuple[float, float, float] | None
+    lines: np.ndarray | list | None
+    where: str
+    error: str = ""
+
+
+def count_frames(path: str | Path) -> int:
+    """Non-blank lines of a JSON Lines file (for a progress bar)."""
+    with open(path, "rb") as f:
+        return sum(1 for line in f if line.strip())
+
+
+def read_jsonl(path: str | Path, detect=None) -> Iterator[FrameInput]:
+    """The frames of a JSON Lines file. ``detect(image_path) -> lines``
+    turns an ``image`` entry into lines (it may raise ValueError, which
+    becomes the frame's error); without it an image frame is an error."""
+    path = Path(path)
+    with open(path, "rb") as f:
+        for number, raw in enumerate(f, 1):
+            if raw.strip():
+                yield _frame(raw, f"{path.name} line {number}", path.parent, detect)
+
+
+def _frame(raw: bytes, where: str, folder: Path, detect) -> FrameInput:
+    def bad(why: str, t=math.nan, odom=None) -> FrameInput:
+        return FrameInput(t, odom, None, where, why)
+
+    try:
+        d = json.loads(raw)
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+        return bad(f"not valid JSON ({'nested too deeply' if isinstance(exc, RecursionError) else exc})")
+    if not isinstance(d, dict):
+        return bad('a frame must be a JSON object {"t": ..., "odom": [...], "lines": [...]}')
+    t = d.get("t")
+    if isinstance(t, bool) or not isinstance(t, (int, float)) or not math.isfinite(t):
+        return bad(f'"t" must be the frame\'s time in seconds, got {t!r}')
+    odom = d.get("odom")
+    if not (isinstance(odom, list) and len(odom) == 3
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in odom)):
+        return bad(f'"odom" must be [x, y, yaw_deg], got {odom!r}' if "odom" in d else 'no "odom" [x, y, yaw_deg]', t)
+    odom = (float(odom[0]), float(odom[1]), float(odom[2]))
+    if ("lines" in d) == ("image" in d):
+        return bad('a frame needs "lines" or "image" (one of them)', t, odom)
+    if "lines" in d:
+        lines = d["lines"]
+        if not isinstance(lines, list) or any(isinstance(v, bool) for row in lines if isinstance(row, list)
+                                              for v in row):
+            return bad('"lines" must be [[u1, v1, u2, v2], ...] pixels', t, odom)
+        return FrameInput(float(t), odom, lines, where)
+    image = d["image"]
+    if not isinstance(image, str) or not image:
+        return bad(f'"image" must be a path, got {image!r}', t, odom)
+    if detect is None:
+        return bad("image frames need a camera to detect lines with", t, odom)
+    try:
+        return FrameInput(float(t), odom, detect(folder / image), where)
+    except ValueError as exc:
+        return bad(str(exc), t, odom)

@@ -1,0 +1,327 @@
+"""Following a moving robot: :class:`Tracker`.
+
+Each frame, the prior is the last estimate moved by the odometry increment
+since the frame before, and its search bounds are a few standard deviations
+of the estimate (:class:`~matcher.tracking.odometry.Spread`), which grow with
+the distance driven and shrink to the accepted pose's own spread when a
+frame is localised. The tracker is in one of three states:
+
+- ``tracking``: this frame was localised from the odometry prior;
+- ``coasting``: it was not; the estimate is the odometry's, its bounds grow;
+- ``relocalising``: the tracker is lost (bounds past
+  ``Tracking.max_dt_m``/``max_dyaw_deg``, ``max_failed_frames`` failures in a
+  row on frames with lines enough to judge, or no prior at the start). It
+  keeps the odometry's estimate and tries it within the largest bounds, and
+  searches the map (lost mode, ``relocalise_budget_ms``, each search going
+  on where the last stopped) for candidate poses, which it follows with the
+  odometry. A candidate is trusted only once ``confirm_frames`` frames in a
+  row have been localised from it and no other candidate explains them: one
+  frame's word never moves the robot. The twins of a symmetric room are all
+  followed until a frame tells them apart.
+
+Settings: :class:`matcher.tolerances.Tracking`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from linemap.camera import Camera
+from matcher.from_prior import localize
+from matcher.lost import localize_global
+from matcher.result import LocalizeResult
+from matcher.tolerances import DEFAULT, TRACKING, Tolerances, Tracking
+from matcher.tracking.odometry import Pose, Spread, compose, increment, wrap_deg
+
+TRACKING_STATE, COASTING, RELOCALISING = "tracking", "coasting", "relocalising"
+
+
+@dataclass
+class TrackedFrame:
+    """What the tracker made of one frame.
+
+    ``ok`` is true when the frame was localised and the pose is trusted
+    (state ``tracking``). ``estimate`` is the tracker's pose after the
+    frame, ``(x, y, yaw_deg)``, whatever the state (the odometry's when
+    coasting; None when lost with nothing to go on), and ``bounds`` its
+    search bounds ``(dt m, dyaw deg)``. ``result`` is the frame's
+    :class:`~matcher.result.LocalizeResult` (from the prior, or from the
+    candidate or lost-mode search), None for a skipped frame;
+    ``candidates`` the poses followed while relocalising."""
+
+    t: float
+    state: str
+    ok: bool
+    reason: str
+    estimate: Pose | None
+    bounds: tuple[float, float] | None
+    result: LocalizeResult | None = None
+    candidates: list[Pose] = field(default_factory=list)
+    time_ms: float = 0.0
+    #: The frame could not be used (its reason says why); the state is unchanged.
+    skipped: bool = False
+
+    def __bool__(self) -> bool:
+        return self.ok
+
+    def to_dict(self) -> dict:
+        """``matcher localize --json``'s shape plus ``t``, ``state``,
+        ``estimate``, ``skipped`` and, while relocalising, ``candidates``
+        (docs/architecture.md). ``pose`` is set only when ``ok``."""
+        d = self.result.to_dict() if self.result is not None else {
+            "ok": False, "pose": None, "pose_std": None, "score": None, "runner_up_score": None,
+            "hypotheses": 0, "matches": [], "time_ms": {}, "out_of_time": False}
+        if not self.ok:
+            d.update(ok=False, pose=None, pose_std=None)
+        d["reason"] = self.reason
+        d["time_ms"] = {**d.get("time_ms", {}), "frame": round(self.time_ms, 3)}
+        d["t"] = self.t
+        d["state"] = self.state
+        d["skipped"] = self.skipped
+        d["estimate"] = None if self.estimate is None else {
+            "x": self.estimate[0], "y": self.estimate[1], "yaw_deg": self.estimate[2],
+            "dt": self.bounds[0], "dyaw_deg": self.bounds[1]}
+        d.pop("candidates", None)
+        if self.candidates:
+            d["candidates"] = [{"x": c[0], "y": c[1], "yaw_deg": c[2]} for c in self.candidates]
+        return d
+
+
+@dataclass
+class _Candidate:
+    """A pose found with no prior, followed until confirmed or dropped."""
+
+    pose: Pose
+    spread: Spread
+    hits: int = 0
+    misses: int = 0
+    last: LocalizeResult | None = None
+
+
+class Tracker:
+    """Localise a moving robot frame after frame with its odometry.
+
+        >>> tracker = matcher.Tracker(linemap, camera, prior=(1.0, 2.0, 90.0), dt=0.3, dyaw=10)
+        >>> for t, odom, lines in frames:
+        ...     out = tracker.step(t, odom, lines)
+        ...     print(out.state, out.estimate if out else out.reason)
+
+    With no ``prior`` the tracker starts lost (``relocalising``). ``odom``
+    is the robot's ``(x, y, yaw_deg)`` in the odometry's own frame; the
+    camera is taken to turn about the robot's odometry point (mount it on
+    the axis, or give the odometry of the camera). ``tolerances`` are the
+    matcher's (:class:`~matcher.tolerances.Tolerances`), ``settings`` the
+    tracker's (:class:`~matcher.tolerances.Tracking`)."""
+
+    def __init__(self, linemap, camera: Camera, prior: Pose | None = None, dt: float | None = None,
+                 dyaw: float | None = None, tolerances: Tolerances | None = None,
+                 settings: Tracking | None = None) -> None:
+        self.linemap, self.camera = linemap, camera
+        self.tolerances = tolerances or DEFAULT
+        self.settings = settings or TRACKING
+        if prior is None:
+            self.estimate, self.spread = None, None
+            self.state = RELOCALISING
+        else:
+            if dt is None or dyaw is None:
+                raise ValueError("a tracker's prior needs its bounds dt (metres) and dyaw (degrees)")
+            x, y, yaw = (float(v) for v in prior)
+            if not all(math.isfinite(v) for v in (x, y, yaw, dt, dyaw)) or dt <= 0 or dyaw <= 0:
+                raise ValueError(f"prior must be finite with dt, dyaw > 0, got {prior}, {dt}, {dyaw}")
+            self.estimate, self.spread = (x, y, wrap_deg(yaw)), Spread.of_bounds(dt, dyaw, self.settings)
+            self.state = TRACKING_STATE
+        self.failed = 0
+        self._last_result, self._last_reason = None, ""
+        # Lost mode's regions, largest first; a search cut by its budget
+        # leaves the rest for the next frame's.
+        self._search_order = np.argsort(-linemap.region_areas(), kind="stable").tolist()
+        self._search_from = 0
+        self.candidates: list[_Candidate] = []
+        self.last_t: float | None = None
+        self.last_odom: Pose | None = None
+
+    # ---- one frame -------------------------------------------------------
+    def step(self, t: float, odom, lines) -> TrackedFrame:
+        """Take one frame: time ``t`` (seconds), odometry ``odom`` (x, y,
+        yaw_deg in the odometry frame) and image ``lines`` (M, 2, 2) or (M, 4)
+        pixels. A frame that cannot be used (time going backwards, missing
+        or invalid odometry or lines) is skipped: the state stays and the
+        returned frame says why."""
+        t0 = time.perf_counter()
+        why = self._unusable(t, odom)
+        if why:
+            return self._skipped(t, why, t0)
+        odom = tuple(float(v) for v in odom)
+        step = increment(self.last_odom, odom) if self.last_odom is not None else (0.0, 0.0, 0.0)
+        self.last_t, self.last_odom = float(t), odom
+        self._move(step)
+        try:
+            if self.estimate is not None:
+                res = self._from_estimate(lines)
+                if res is not None:
+                    return self._out(t, True, "localised from the odometry prior", res, t0)
+            if self.state == RELOCALISING:
+                return self._relocalise(t, lines, t0)
+            return self._out(t, False, f"not localised ({self._last_reason}); pose from odometry",
+                             self._last_result, t0)
+        except ValueError as exc:  # the frame's lines: shapes, NaN, outside the image
+            return self._skipped(t, str(exc), t0)
+
+    def _skipped(self, t, why: str, t0: float) -> TrackedFrame:
+        out = self._out(t, False, f"frame skipped: {why}", None, t0)
+        out.skipped = True
+        return out
+
+    def _unusable(self, t, odom) -> str:
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            return f"time stamp {t!r} is not a number"
+        if not math.isfinite(t):
+            return f"time stamp {t} is not finite"
+        if self.last_t is not None and t < self.last_t:
+            return f"time goes backwards ({t:.6f} s after {self.last_t:.6f} s)"
+        try:
+            vals = [float(v) for v in odom]
+        except (TypeError, ValueError):
+            return "no odometry (x, y, yaw_deg) for the frame"
+        if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+            return f"odometry must be three finite numbers x, y, yaw_deg, got {odom!r}"
+        return ""
+
+    def _move(self, step: Pose) -> None:
+        """Every pose the tracker holds moved by the odometry ``step``, its
+        spread grown; lost once the estimate's bounds pass the limits (the
+        estimate stays: it is still the odometry's best guess)."""
+        if self.estimate is not None:
+            self.estimate = compose(self.estimate, step)
+            self.spread = self.spread.grown(step, self.settings)
+            if self.spread.lost(self.settings):
+                self.state = RELOCALISING
+        for c in self.candidates:
+            c.pose, c.spread = compose(c.pose, step), c.spread.grown(step, self.settings)
+
+    def _from_estimate(self, lines) -> LocalizeResult | None:
+        """Localise from the estimate; the accepted result (and the state
+        tracking), or None with the failure counted. While relocalising,
+        the bounds stop at ``max_dt_m``/``max_dyaw_deg`` and the pose must
+        explain ``confirm_share`` of the lines: the estimate may be the
+        odometry's of a robot carried away."""
+        s = self.settings
+        dt, dyaw = self.spread.bounds(s)
+        dt, dyaw = min(dt, s.max_dt_m), min(dyaw, s.max_dyaw_deg)
+        res = localize(self.linemap, self.camera, lines, self.estimate, dt, dyaw, self.tolerances)
+        if res and (self.state != RELOCALISING or self._explains(len(res.matches), lines)):
+            self._accept(res)
+            return res
+        self._last_result, self._last_reason = res, res.reason or (
+            f"the pose explains {len(res.matches)} of {self._usable(lines)} lines, too few while lost")
+        if not self._telling(lines):
+            return None
+        self.failed += 1
+        if self.state == TRACKING_STATE:
+            self.state = COASTING
+        if self.failed >= s.max_failed_frames:
+            self.state = RELOCALISING
+        return None
+
+    def _usable(self, lines) -> int:
+        """Image lines at least ``Tolerances.min_line_px`` long (the lines
+        passed ``localize``'s checks)."""
+        arr = np.asarray(lines, dtype=float).reshape(-1, 4)
+        return int((np.hypot(arr[:, 2] - arr[:, 0], arr[:, 3] - arr[:, 1]) >= self.tolerances.min_line_px).sum())
+
+    def _telling(self, lines) -> bool:
+        """Does the frame hold enough lines for a failure to count
+        (``Tracking.judging_lines``)?"""
+        return self._usable(lines) >= self.settings.judging_lines
+
+    def _explains(self, matches: int, lines) -> bool:
+        """Does a pose that matches ``matches`` lines explain enough of the
+        frame to confirm a relocalisation (``Tracking.confirm_share``)?"""
+        return matches >= self.settings.confirm_share * self._usable(lines)
+
+    def _accept(self, res: LocalizeResult) -> None:
+        self.estimate = tuple(float(v) for v in res.pose)
+        self.spread = Spread.of_accepted(res.pose_std, self.settings)
+        self.state, self.failed, self.candidates = TRACKING_STATE, 0, []
+
+    # ---- lost ------------------------------------------------------------
+    def _relocalise(self, t: float, lines, t0: float) -> TrackedFrame:
+        """Follow the candidates; confirm one, or search the map when none is left."""
+        s = self.settings
+        last = None
+        for c in self.candidates:
+            dt, dyaw = c.spread.bounds(s)
+            c.last = res = localize(self.linemap, self.camera, lines, c.pose, dt, dyaw, self.tolerances)
+            if res and not self._explains(len(res.matches), lines):
+                res = LocalizeResult(False, f"the pose explains {len(res.matches)} of {self._usable(lines)} lines")
+                c.last = None
+            if res:
+                c.pose, c.spread, c.hits, c.misses = tuple(res.pose), Spread.of_accepted(res.pose_std, s), c.hits + 1, 0
+            elif self._telling(lines):  # a view of a bare wall neither confirms nor refutes
+                c.misses += 1
+            last = last or (res if res else None)
+        self.candidates = [c for c in self.candidates
+                           if c.misses < s.max_candidate_misses and not c.spread.lost(s)]
+        self._merge_twins()
+        hit = [c for c in self.candidates if c.misses == 0 and c.last is not None]
+        if len(hit) == 1 and hit[0].hits >= s.confirm_frames:
+            self._accept(hit[0].last)
+            return self._out(t, True, f"relocalised: confirmed by {hit[0].hits} frames", hit[0].last, t0)
+        if hit:
+            why = (f"{len(hit)} poses fit the views; waiting for a frame that tells them apart" if len(hit) > 1 else
+                   f"relocalised pose awaiting confirmation ({hit[0].hits} of {s.confirm_frames} frames)")
+            return self._out(t, False, why, hit[0].last, t0)
+        if self.candidates:
+            return self._out(t, False, "candidate poses not seen in this frame", None, t0)
+        if not self._telling(lines):
+            return self._out(t, False, f"lost; too few lines in this frame to search the map "
+                                       f"(fewer than {s.judging_lines})", None, t0)
+        return self._search_map(t, lines, t0)
+
+    def _search_map(self, t: float, lines, t0: float) -> TrackedFrame:
+        s = self.settings
+        tol = replace(self.tolerances, time_budget_ms=min(self.tolerances.time_budget_ms, s.relocalise_budget_ms))
+        order = self._search_order[self._search_from:] + self._search_order[:self._search_from]
+        res = localize_global(self.linemap, self.camera, lines, tol, regions=order)
+        # The next search goes on where this one stopped.
+        tried = int(res.time_ms.get("regions_tried", len(order)))
+        self._search_from = (self._search_from + (tried if tried < len(order) else 0)) % max(len(order), 1)
+        found = [tuple(res.pose)] if res and self._explains(len(res.matches), lines) else [
+            (c["x"], c["y"], c["yaw_deg"]) for c in res.candidates if self._explains(int(c["matches"]), lines)]
+        spread = Spread(s.accepted_std_floor_m, s.accepted_std_floor_deg)
+        self.candidates = [_Candidate(p, spread) for p in found[: s.max_candidates]]
+        if not self.candidates:
+            why = res.reason if not res else (f"its best pose explains {len(res.matches)} of "
+                                              f"{self._usable(lines)} lines, too few to follow")
+            return self._out(t, False, f"lost; the map search found nothing to follow ({why})", res, t0)
+        return self._out(t, False, f"lost; the map search found {len(self.candidates)} pose(s), "
+                                   f"to be confirmed by {s.confirm_frames} frames", res, t0)
+
+    def _merge_twins(self) -> None:
+        """Candidates that have converged on one pose are one (the one with more hits)."""
+        kept: list[_Candidate] = []
+        for c in sorted(self.candidates, key=lambda c: -c.hits):
+            if not any(math.hypot(c.pose[0] - k.pose[0], c.pose[1] - k.pose[1]) < self.settings.min_dt_m
+                       and abs(wrap_deg(c.pose[2] - k.pose[2])) < self.settings.min_dyaw_deg for k in kept):
+                kept.append(c)
+        self.candidates = kept
+
+    # ---- output ------------------------------------------------------------
+    def _out(self, t, ok: bool, reason: str, res, t0: float) -> TrackedFrame:
+        bounds = None if self.estimate is None else self.spread.bounds(self.settings)
+        return TrackedFrame(float(t) if _finite(t) else float("nan"), self.state, ok, reason, self.estimate, bounds,
+                            res, [c.pose for c in self.candidates] if self.state == RELOCALISING else [],
+                            (time.perf_counter() - t0) * 1e3)
+
+
+def _finite(t) -> bool:
+    try:
+        return math.isfinite(float(t))
+    except (TypeError, ValueError):
+        return False
