@@ -10,7 +10,8 @@ half-way. The table gives per map and kind of run:
 - frames: frames in the runs;
 - localised: frames with a trusted pose (state tracking);
 - within 5 cm/1 deg: frames whose estimate (whatever the state) is that
-  close to the truth;
+  close to the truth; "seeing" the same over the frames that show at least
+  3 map lines (the others can only coast on odometry);
 - ATE m / odometry ATE m: root mean square position error of the
   estimates, and of odometry alone started at the true first pose;
 - wrong: frames with a trusted pose over 50 cm or 10 degrees off;
@@ -69,6 +70,7 @@ def track_run(linemap, camera, run) -> dict:
     """Follow one run from its true first pose; its figures."""
     t = matcher.Tracker(linemap, camera, prior=run.truth[0], dt=0.2, dyaw=10.0)
     est, ok, ms, wrong, close = [], [], [], 0, []
+    seeing = [int((ids >= 0).sum()) >= 3 for ids in run.ids]
     for i in range(len(run.times)):
         out = t.step(run.times[i], run.odom[i], run.lines[i])
         ms.append(out.time_ms)
@@ -86,6 +88,7 @@ def track_run(linemap, camera, run) -> dict:
     if run.kidnap is not None:
         reloc = next((i - run.kidnap for i in range(run.kidnap, len(run.times)) if ok[i] and close[i]), math.inf)
     return {"frames": len(run.times), "ok": sum(ok), "close": sum(close), "wrong": wrong,
+            "seeing": sum(seeing), "close_seeing": sum(c for c, v in zip(close, seeing) if v),
             "se": [float(np.hypot(e[0] - g[0], e[1] - g[1]) ** 2) for e, g in zip(est, run.truth) if e is not None],
             "odo_se": [float(np.hypot(o[0] - g[0], o[1] - g[1]) ** 2) for o, g in zip(odo, run.truth)],
             "ms": ms, "reloc": reloc}
@@ -111,9 +114,9 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=150)
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    print("| map | run | frames | localised | within 5 cm/1 deg | ATE m | odometry ATE m | wrong | "
-          "reloc frames | ms/frame | localize PEQ 1 ms | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| map | run | frames | localised | within 5 cm/1 deg | seeing | within, seeing | ATE m | odometry ATE m | "
+          "wrong | reloc frames | ms/frame | localize PEQ 1 ms | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.maps:
             linemap = load(name, Path(tmp))
@@ -131,8 +134,10 @@ def main(argv=None) -> int:
                 relocs = [r["reloc"] for r in rows if r["reloc"] is not None]
                 ate = math.sqrt(statistics.fmean(s for r in rows for s in r["se"]))
                 odo = math.sqrt(statistics.fmean(s for r in rows for s in r["odo_se"]))
+                seeing = sum(r["seeing"] for r in rows)
                 print(f"| {name} | {kind} | {n} | {100 * sum(r['ok'] for r in rows) / n:.1f} % | "
-                      f"{100 * sum(r['close'] for r in rows) / n:.1f} % | {ate:.3f} | {odo:.3f} | "
+                      f"{100 * sum(r['close'] for r in rows) / n:.1f} % | {seeing} | "
+                      f"{100 * sum(r['close_seeing'] for r in rows) / max(seeing, 1):.1f} % | {ate:.3f} | {odo:.3f} | "
                       f"{sum(r['wrong'] for r in rows)} | {max(relocs) if relocs else '-'} | {ms:.1f} | "
                       f"{statistics.median(peq):.1f} | {ms / statistics.median(peq):.2f} |", flush=True)
     return 0

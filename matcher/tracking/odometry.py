@@ -79,3 +79,27 @@ class Spread:
     def of_bounds(cls, dt: float, dyaw: float, settings: Tracking) -> Spread:
         """The spread whose bounds are ``dt``, ``dyaw`` (a user's prior)."""
         return cls(dt / settings.bound_sigmas, dyaw / settings.bound_sigmas)
+
+
+def fuse(predicted: Pose, spread: Spread, measured: Pose, measured_std, settings: Tracking) -> tuple[Pose, Spread]:
+    """The odometry's ``predicted`` pose (``spread``) and a frame's
+    ``measured`` pose (standard deviations ``measured_std`` x, y, yaw_deg,
+    at least the settings' floors; None: the floors) weighed by their
+    variances, axis by axis, as a Kalman update with the identity
+    measurement does: a frame that fixes the pose well moves the estimate
+    to it, one whose few far lines leave decimetres barely moves it."""
+    floor_m, floor_deg = settings.accepted_std_floor_m, settings.accepted_std_floor_deg
+    if measured_std is None or not all(math.isfinite(v) for v in measured_std):
+        measured_std = (floor_m, floor_m, floor_deg)
+    sx, sy = max(measured_std[0], floor_m), max(measured_std[1], floor_m)
+    syaw = max(abs(measured_std[2]), floor_deg)
+
+    def weight(prior_sd: float, meas_sd: float) -> float:
+        return prior_sd ** 2 / (prior_sd ** 2 + meas_sd ** 2)
+
+    wx, wy, wyaw = weight(spread.position_m, sx), weight(spread.position_m, sy), weight(spread.yaw_deg, syaw)
+    pose = (predicted[0] + wx * (measured[0] - predicted[0]), predicted[1] + wy * (measured[1] - predicted[1]),
+            wrap_deg(predicted[2] + wyaw * wrap_deg(measured[2] - predicted[2])))
+    s_pos = math.sqrt(1.0 / (1.0 / spread.position_m ** 2 + 1.0 / max(sx, sy) ** 2))
+    s_yaw = math.sqrt(1.0 / (1.0 / spread.yaw_deg ** 2 + 1.0 / syaw ** 2))
+    return pose, Spread(max(s_pos, floor_m), max(s_yaw, floor_deg))

@@ -3,8 +3,9 @@
 Each frame, the prior is the last estimate moved by the odometry increment
 since the frame before, and its search bounds are a few standard deviations
 of the estimate (:class:`~matcher.tracking.odometry.Spread`), which grow with
-the distance driven and shrink to the accepted pose's own spread when a
-frame is localised. The tracker is in one of three states:
+the distance driven. A localised frame's pose is weighed against that
+prediction by their spreads (a Kalman update): a frame that fixes the pose
+well sets it, one that leaves decimetres barely moves it. The tracker is in one of three states:
 
 - ``tracking``: this frame was localised from the odometry prior;
 - ``coasting``: it was not; the estimate is the odometry's, its bounds grow;
@@ -35,7 +36,7 @@ from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
 from matcher.tolerances import DEFAULT, TRACKING, Tolerances, Tracking
-from matcher.tracking.odometry import Pose, Spread, compose, increment, wrap_deg
+from matcher.tracking.odometry import Pose, Spread, compose, fuse, increment, wrap_deg
 
 TRACKING_STATE, COASTING, RELOCALISING = "tracking", "coasting", "relocalising"
 
@@ -214,7 +215,7 @@ class Tracker:
         s = self.settings
         dt, dyaw = self.spread.bounds(s)
         dt, dyaw = min(dt, s.max_dt_m), min(dyaw, s.max_dyaw_deg)
-        res = localize(self.linemap, self.camera, lines, self.estimate, dt, dyaw, self.tolerances)
+        res = _fixed(localize(self.linemap, self.camera, lines, self.estimate, dt, dyaw, self.tolerances))
         if res and (self.state != RELOCALISING or self._explains(len(res.matches), lines)):
             self._accept(res)
             return res
@@ -245,9 +246,15 @@ class Tracker:
         frame to confirm a relocalisation (``Tracking.confirm_share``)?"""
         return matches >= self.settings.confirm_share * self._usable(lines)
 
-    def _accept(self, res: LocalizeResult) -> None:
-        self.estimate = tuple(float(v) for v in res.pose)
-        self.spread = Spread.of_accepted(res.pose_std, self.settings)
+    def _accept(self, res: LocalizeResult, predicted: bool = True) -> None:
+        """Take an accepted frame: fused with the odometry's prediction
+        (:func:`~matcher.tracking.odometry.fuse`), or, for a ``predicted=False``
+        relocalisation, as it is."""
+        measured = tuple(float(v) for v in res.pose)
+        if predicted and self.estimate is not None:
+            self.estimate, self.spread = fuse(self.estimate, self.spread, measured, res.pose_std, self.settings)
+        else:
+            self.estimate, self.spread = measured, Spread.of_accepted(res.pose_std, self.settings)
         self.state, self.failed, self.candidates = TRACKING_STATE, 0, []
 
     # ---- lost ------------------------------------------------------------
@@ -257,7 +264,7 @@ class Tracker:
         last = None
         for c in self.candidates:
             dt, dyaw = c.spread.bounds(s)
-            c.last = res = localize(self.linemap, self.camera, lines, c.pose, dt, dyaw, self.tolerances)
+            c.last = res = _fixed(localize(self.linemap, self.camera, lines, c.pose, dt, dyaw, self.tolerances))
             if res and not self._explains(len(res.matches), lines):
                 res = LocalizeResult(False, f"the pose explains {len(res.matches)} of {self._usable(lines)} lines")
                 c.last = None
@@ -271,7 +278,7 @@ class Tracker:
         self._merge_twins()
         hit = [c for c in self.candidates if c.misses == 0 and c.last is not None]
         if len(hit) == 1 and hit[0].hits >= s.confirm_frames:
-            self._accept(hit[0].last)
+            self._accept(hit[0].last, predicted=False)
             return self._out(t, True, f"relocalised: confirmed by {hit[0].hits} frames", hit[0].last, t0)
         if hit:
             why = (f"{len(hit)} poses fit the views; waiting for a frame that tells them apart" if len(hit) > 1 else
@@ -318,6 +325,16 @@ class Tracker:
         return TrackedFrame(float(t) if _finite(t) else float("nan"), self.state, ok, reason, self.estimate, bounds,
                             res, [c.pose for c in self.candidates] if self.state == RELOCALISING else [],
                             (time.perf_counter() - t0) * 1e3)
+
+
+def _fixed(res: LocalizeResult) -> LocalizeResult:
+    """``res``, or a falsy result when it is accepted but its matches do not
+    fix the pose (no ``pose_std``: three vertical edges in a row, say): such a
+    pose weighs nothing against the odometry's."""
+    if res and res.pose_std is None:
+        return LocalizeResult(False, "the matches do not fix the pose (no standard deviation)",
+                              hypotheses=res.hypotheses, matches=res.matches, time_ms=res.time_ms)
+    return res
 
 
 def _finite(t) -> bool:
