@@ -179,9 +179,9 @@ def _region_progress(done: int, total: int) -> None:
 
 
 def _human(res, n_lines: int) -> str:
-    t = ", ".join(f"{k} {v:.1f}" for k, v in res.time_ms.items() if k != "regions_tried")
+    t = ", ".join(f"{k} {v:.1f}" for k, v in res.time_ms.items() if k not in ("regions_tried", "places_tried"))
     if "regions_tried" in res.time_ms:
-        t += f" ({res.time_ms['regions_tried']} regions tried)"
+        t += f" ({res.time_ms.get('places_tried', 0)} voted places, {res.time_ms['regions_tried']} regions tried)"
     if res and res.stage1.get("out_of_time"):
         t += " (search stopped at the time budget)"
     if not res:

@@ -1,7 +1,9 @@
 """Lost mode (method.md section 3): localisation with no prior.
 
-One prior per region of the map (its centre, ``dt`` its radius, any
-heading, the region's own visible list), each searched as
+The places the image's lines vote for (:mod:`matcher.lost_votes`), each a
+narrow prior; then, when none explains most of the image, one prior per
+region of the map (its centre, ``dt`` its radius, any heading, the region's
+own visible list); each searched as
 :func:`matcher.from_prior.localize_prepared` searches a prior.
 """
 
@@ -17,6 +19,7 @@ from linemap.camera import Camera
 from matcher import ambiguity, from_prior
 from matcher.budget import Deadlines
 from matcher.frame import too_few_lines
+from matcher.lost_votes import vote_places
 from matcher.result import LocalizeResult
 from matcher.strategy import SOURCES, TreeSearch
 from matcher.tolerances import Tolerances
@@ -24,8 +27,12 @@ from matcher.tolerances import Tolerances
 
 def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None,
                     first_accepted: bool = False, progress=None, regions=None):
-    """Lost mode (method.md section 3): one prior per region (its centre,
-    ``dt`` its radius, any heading, the region's own visible list).
+    """Lost mode (method.md section 3): first the places the frame's lines
+    vote for (:mod:`matcher.lost_votes`), each a narrow prior; then, unless
+    one of them explains most of the image (``Internals.vote_trust_share``
+    of the usable lines), one prior per region (its centre, ``dt`` its
+    radius, any heading, the region's own visible list), looking only for
+    answers that could beat the voted ones.
 
     Regions are tried largest first. With ``first_accepted`` the search
     stops at the first region that gives an accepted hypothesis (the
@@ -40,7 +47,7 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     does a second pass run the whole strategy (second search, resection),
     which costs most on the many regions where the robot is not.
     ``time_ms['total']`` covers all tries (the other entries are the winning
-    region's); ``time_ms['regions_tried']`` counts them. ``progress``, if
+    region's); ``time_ms['places_tried']`` and ``time_ms['regions_tried']`` count them. ``progress``, if
     given, is called as ``progress(done, total)`` as the regions are done,
     last with ``done == total``. The tolerances' ``time_budget_ms`` bounds
     the whole call: regions are tried until it is spent. ``regions``: the
@@ -60,17 +67,28 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     factor = tol.internals.lost_budget_factor
     wide = replace(tol, max_nodes=tol.max_nodes * factor, max_sets=tol.max_sets * factor)
     search = _RegionSearch(linemap, camera, img, deadlines, progress)
+    # The places the frame's lines vote for first (a few narrow priors,
+    # milliseconds each); the sweep of every region only when none holds.
+    voted = search.run_voted(tol) or search.run_voted(wide, SOURCES)
+    best = max((a[1] for res in voted.values() for a in _answers(res)), default=0)
+    if voted and (first_accepted or best >= tol.internals.vote_trust_share * int(img.usable.sum())):
+        # A voted place explains most of the image: no region can explain
+        # much more, the sweep is not needed.
+        if progress is not None:
+            progress(linemap.n_regions, linemap.n_regions)
+        return _decide(voted, search, tol, (time.perf_counter() - t0) * 1e3)
     # Largest region first: with no estimate, the robot stands most likely
     # on the most floor, and a budget spent early has searched the most.
     order = np.argsort(-linemap.region_areas(), kind="stable").tolist() if regions is None else [
         int(r) for r in regions if 0 <= int(r) < linemap.n_regions]
-    found = search.run(order, (TreeSearch(),), tol, first_accepted)
+    found = search.run(order, (TreeSearch(),), tol, first_accepted, best)
+    found.update(voted)
     if found and not first_accepted:
         # The whole strategy where the tree's answers contend: a view the
         # second search or the resection completes gets its other lines back.
-        most = {r: max(a[1] for a in _answers(res)) for r, res in found.items()}
-        top = max(most.values())
-        found.update(search.run([r for r in found if most[r] >= top - 1], SOURCES, wide))
+        keys = _contenders(found)
+        found.update(search.run([k for k in keys if not isinstance(k, tuple)], SOURCES, wide))
+        found.update(search.run_voted(wide, SOURCES, [k for k in keys if isinstance(k, tuple)]))
     elif not found:
         found = search.run(order, SOURCES, wide, first_accepted)
     if progress is not None:
@@ -88,14 +106,38 @@ class _RegionSearch:
         self.centres, self.radii = linemap.region_centres(), linemap.region_radii()
         self.tried: set[int] = set()
         self.out_of_time = False
+        self.places = None  # the voted places (n, 4), once worked out
+        self.voted = 0  # narrow priors searched at voted places
 
-    def run(self, regions: list[int], sources, tol: Tolerances, first_accepted: bool = False) -> dict:
+    def run_voted(self, tol: Tolerances, sources=(TreeSearch(),), only: list | None = None) -> dict:
+        """Key ``("vote", k)`` -> accepted result (or one naming look-alike
+        poses) of the places the lines vote for
+        (:func:`~matcher.lost_votes.vote_places`), each a narrow prior searched
+        with the strategy's ``sources``; ``only``: just those keys again."""
+        work = tol.internals
+        if not self.deadlines.may_search():
+            self.out_of_time = True
+            return {}
+        if self.places is None:
+            self.places = vote_places(self.linemap, self.camera, self.img, work, work.vote_places)
+        found: dict = {}
+        dt, dyaw = work.vote_prior_m, math.radians(work.vote_prior_deg)
+        for k, (x, y, yaw, _) in enumerate(self.places):
+            if (only is not None and ("vote", k) not in only) or not self.deadlines.may_search():
+                continue
+            res = from_prior.localize_prepared(self.linemap, self.camera, self.img, (x, y, yaw, dt, dyaw), tol,
+                                               time.perf_counter(), self.deadlines, sources=sources)
+            self.voted += 1
+            if res or res.candidates:
+                found[("vote", k)] = res
+        return found
+
+    def run(self, regions: list[int], sources, tol: Tolerances, first_accepted: bool = False, best: int = 0) -> dict:
         """Region id -> accepted result, for ``regions`` in order, each with
         the strategy's ``sources`` and tolerances ``tol``. Once a region has given an answer, the
         later ones look only for sets that could beat it (its matches less
         one: stage 2 may add a line)."""
         found: dict[int, LocalizeResult] = {}
-        best = 0
         for done, r in enumerate(regions):
             if self.progress is not None and done:
                 self.progress(done, len(regions))
@@ -129,19 +171,36 @@ def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float
     n, tried = search.linemap.n_regions, len(search.tried)
     if not found:
         spent = f"; the time budget of {tol.time_budget_ms:g} ms ran out" if search.out_of_time else ""
-        return LocalizeResult(False, f"no region gave an accepted hypothesis ({tried} of {n} tried{spent})",
-                              time_ms={"total": total_ms, "regions_tried": tried})
+        return LocalizeResult(False, f"no region gave an accepted hypothesis ({search.voted} voted places and "
+                              f"{tried} of {n} regions tried{spent})",
+                              time_ms={"total": total_ms, "regions_tried": tried, "places_tried": search.voted})
     # Every answer: each region's pose, or the poses it could not tell apart.
     answers = sorted(((c, res) for res in found.values() for c in _answers(res)), key=lambda a: (-a[0][1], a[0][2]))
     best = answers[0][1]
     kept = ambiguity.rivals([a for a, _ in answers], tol.internals, ambiguity.spread_of(best.pose_std) if best else None)
     best.time_ms["total"] = total_ms
     best.time_ms["regions_tried"] = tried
+    best.time_ms["places_tried"] = search.voted
     # The best of the regions searched, not of all: the result says so.
     best.stage1["out_of_time"] = search.out_of_time
     if len(kept) > 1:
         best.candidates, best.ok, best.reason = ambiguity.candidates_of(kept), False, ambiguity.reason(kept)
+    usable = int(search.img.usable.sum())
+    if best and search.out_of_time and len(best.matches) < tol.internals.vote_trust_share * usable:
+        # Cut short, the best so far explains too little to stand for the
+        # whole map (a place voted by chance, a look-alike room): a candidate.
+        best.candidates, best.ok = ambiguity.candidates_of([answers[0][0]]), False
+        best.reason = (f"the time budget of {tol.time_budget_ms:g} ms ran out before the whole map was searched; the "
+                       f"best pose so far explains {len(best.matches)} of {usable} lines, too few to trust unchecked")
     return best
+
+
+def _contenders(found: dict) -> list:
+    """The keys of ``found`` whose answers explain at least the most lines
+    of any less one (stage 2 may add a line to a set the tree found)."""
+    most = {k: max(a[1] for a in _answers(res)) for k, res in found.items()}
+    top = max(most.values())
+    return [k for k in found if most[k] >= top - 1]
 
 
 def _answers(res: LocalizeResult) -> list:

@@ -78,7 +78,7 @@ def test_lost_mode_budget_bounds_the_whole_call(small_map, cam):
     fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
     res = matcher.localize_global(small_map, cam, fr.lines, SPENT)
     assert not res
-    assert res.reason == (f"no region gave an accepted hypothesis (0 of {small_map.n_regions} tried; "
+    assert res.reason == (f"no region gave an accepted hypothesis (0 voted places and 0 of {small_map.n_regions} regions tried; "
                           "the time budget of 1e-09 ms ran out)")
     assert res.time_ms["regions_tried"] == 0
 
@@ -87,7 +87,7 @@ def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
     """With no estimate the robot most likely stands on the most floor, and a
     budget spent early has searched the most of it. (The example flat's
     region ids do not follow area; each region's search is replaced by a
-    spy that records it.)"""
+    spy that records it; the voted places come first and are not counted.)"""
     import matcher.from_prior as from_prior
     from matcher.result import LocalizeResult
 
@@ -95,7 +95,8 @@ def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
     centres, seen = linemap.region_centres(), []
 
     def spy(linemap, camera, img, px, *args, **kwargs):
-        seen.append(int(np.argmin(np.hypot(*(centres - px[:2]).T))))
+        if kwargs.get("candidate_ids") is not None:  # a region's search, not a voted place's
+            seen.append(int(np.argmin(np.hypot(*(centres - px[:2]).T))))
         return LocalizeResult(False, "not searched")
 
     monkeypatch.setattr(from_prior, "localize_prepared", spy)

@@ -94,8 +94,26 @@ def test_pitched_camera(small_map):
 
 
 def test_global_localisation_when_lost(small_map, cam):
-    """No prior: every region is tried with its centre, its radius and any
-    heading (seconds, not milliseconds: the robot is stopped)."""
+    """No prior: the places the lines vote for are searched first, and one
+    that explains most of the image stands (no region sweep)."""
+    fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
+    calls = []
+    res = matcher.localize_global(small_map, cam, fr.lines, progress=lambda done, total: calls.append((done, total)))
+    assert res, res.reason
+    n = small_map.n_regions
+    assert calls[-1] == (n, n)
+    pos, yaw = pose_error(res.pose, fr.pose)
+    assert pos < 0.05 and yaw < 0.5
+    assert res.time_ms["regions_tried"] == 0 and res.time_ms["places_tried"] >= 1
+
+
+def test_global_localisation_sweeps_the_regions_without_votes(small_map, cam, monkeypatch):
+    """When the lines vote for no place, every region is tried with its
+    centre, its radius and any heading (seconds, not milliseconds: the
+    robot is stopped)."""
+    import matcher.lost as lost
+
+    monkeypatch.setattr(lost, "vote_places", lambda *a, **k: np.zeros((0, 4)))
     fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
     calls = []
     res = matcher.localize_global(small_map, cam, fr.lines, progress=lambda done, total: calls.append((done, total)))
@@ -104,7 +122,7 @@ def test_global_localisation_when_lost(small_map, cam):
     assert calls == [(k, n) for k in range(1, n + 1)]
     pos, yaw = pose_error(res.pose, fr.pose)
     assert pos < 0.05 and yaw < 0.5
-    assert res.time_ms["regions_tried"] == small_map.n_regions
+    assert res.time_ms["regions_tried"] == small_map.n_regions and res.time_ms["places_tried"] == 0
 
 
 def test_clutter_only_is_not_accepted(small_map, cam):
