@@ -10,7 +10,8 @@ heading drift drawn once per run (the systematic part wheel odometry has)
 plus per-step noise. Frames are the visible map lines at the true pose
 (:func:`simulate.visible_lines`) with noise and clutter lines, or images
 rendered by tools/render.py. ``--kidnap K`` carries the robot to a random
-distant pose before frame K, with no odometry for it.
+distant pose that shows at least 6 map lines before frame K, with no
+odometry for it.
 
     python tools/simulate_run.py --map maps/flat.lmap --frames 150 -o run.jsonl --truth truth.txt
     python tools/simulate_run.py --frames 120 --kidnap 60 -o run.jsonl --truth truth.txt
@@ -198,13 +199,8 @@ def simulate_run(linemap, camera, rng, frames: int = 120, step: float = 0.15, ma
     free = FreeSpace(linemap, clearance=clearance)
     truth = route(linemap, free, rng, frames, step, max_turn)
     if kidnap is not None and 0 < kidnap < len(truth):
-        here = np.array(truth[kidnap - 1][:2])
-        while True:
-            p = free.random_point(rng)
-            if np.linalg.norm(p - here) > 3.0:
-                break
         truth = truth[:kidnap] + route(linemap, free, rng, frames - kidnap, step, max_turn,
-                                       (float(p[0]), float(p[1]), float(rng.uniform(-180, 180))))
+                                       _set_down(linemap, camera, free, rng, truth[kidnap - 1]))
     run = Run(kidnap=kidnap)
     scale = 1.0 + rng.normal(0.0, dist_noise)
     drift = drift_deg_per_m * rng.choice([-1.0, 1.0])
@@ -225,6 +221,23 @@ def simulate_run(linemap, camera, rng, frames: int = 120, step: float = 0.15, ma
         run.lines.append(np.concatenate([lines, extra]))
         run.ids.append(np.concatenate([ids, -np.ones(len(extra), dtype=np.int64)]))
     return run
+
+
+def _set_down(linemap, camera, free: FreeSpace, rng, before, min_lines: int = 6, tries: int = 500) -> tuple:
+    """Where a kidnapped robot is set down: a random free pose over 3 m from
+    ``before`` whose view shows at least ``min_lines`` map lines (a robot set
+    down facing a bare wall tests nothing but its patience), else the last
+    pose tried."""
+    here = np.array(before[:2])
+    pose = before
+    for _ in range(tries):
+        p = free.random_point(rng)
+        if np.linalg.norm(p - here) <= 3.0:
+            continue
+        pose = (float(p[0]), float(p[1]), float(rng.uniform(-180, 180)))
+        if len(visible_lines(linemap, camera, pose)[0]) >= min_lines:
+            break
+    return pose
 
 
 def run_camera(linemap) -> matcher.Camera:
