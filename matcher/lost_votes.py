@@ -68,7 +68,7 @@ def sightings(linemap, camera: Camera, img: ImageLines, work: Internals) -> Sigh
     horiz = ~segment_is_vertical(segs, work.vertical_axis_deg)
     flat = np.abs(segs[:, 1, 2] - segs[:, 0, 2]) <= work.vote_flat_m
     sid = np.flatnonzero(horiz & flat)
-    lid = np.flatnonzero(img.usable & ~img.vertical)
+    lid = _longest(img, img.usable & ~img.vertical, work.vote_lines)
     if len(sid) == 0 or len(lid) == 0:
         return _no_sightings()
     # End points of each line on the plane z = segment height, camera frame
@@ -153,7 +153,7 @@ def edge_meetings(linemap, img: ImageLines, s: Sightings, work: Internals) -> np
     the sighting's heading (in front of the edge, within the stretch)."""
     segs = linemap.segments
     vid = np.flatnonzero(segment_is_vertical(segs, work.vertical_axis_deg))
-    lid = np.flatnonzero(img.usable & img.vertical)
+    lid = _longest(img, img.usable & img.vertical, work.vote_lines)
     if len(vid) == 0 or len(lid) == 0 or len(s.yaw) == 0:
         return np.zeros((0, 5))
     edge = segs[vid, 0, :2]  # (E, 2)
@@ -174,6 +174,16 @@ def edge_meetings(linemap, img: ImageLines, s: Sightings, work: Internals) -> np
     return np.concatenate(out) if out else np.zeros((0, 5))
 
 
+def _longest(img: ImageLines, mask: np.ndarray, count: int) -> np.ndarray:
+    """Indices of the ``count`` longest lines of ``mask`` (M,): long lines
+    are the surest, and the votes' cost grows with the lines' product."""
+    idx = np.flatnonzero(mask)
+    if len(idx) <= count:
+        return idx
+    length = np.linalg.norm(img.lines[idx, 1] - img.lines[idx, 0], axis=1)
+    return np.sort(idx[np.argsort(-length, kind="stable")[:count]])
+
+
 def _peaks(votes: np.ndarray, work: Internals, count: int) -> np.ndarray:
     """The ``count`` best places of ``votes`` (V, 5: x, y, yaw, the two
     image lines): a place's score is the number of distinct image lines
@@ -187,10 +197,13 @@ def _peaks(votes: np.ndarray, work: Internals, count: int) -> np.ndarray:
     n_lines = int(lines.max()) + 1
     places = []
     for shift in (0.0, 0.5):
-        key = np.column_stack([np.floor(votes[:, 0] / work.vote_cell_m + shift),
-                               np.floor(votes[:, 1] / work.vote_cell_m + shift),
-                               np.floor(yaw / cell_yaw + shift)]).astype(np.int64)
-        cells, inv = np.unique(key, axis=0, return_inverse=True)
+        ix = np.floor(votes[:, 0] / work.vote_cell_m + shift).astype(np.int64)
+        iy = np.floor(votes[:, 1] / work.vote_cell_m + shift).astype(np.int64)
+        iw = np.floor(yaw / cell_yaw + shift).astype(np.int64)
+        ix -= ix.min()
+        iy -= iy.min()
+        key = (ix * (iy.max() + 1) + iy) * (iw.max() + 1) + iw  # one integer a cell
+        cells, inv = np.unique(key, return_inverse=True)
         inv = inv.ravel()
         n_v = np.bincount(inv, minlength=len(cells))
         # distinct lines per cell

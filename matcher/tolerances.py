@@ -127,6 +127,10 @@ class Internals:
     #: voted answers explained 44 to 50 %, right ones 62 to 100 %); below it
     #: the sweep looks for regions that explain more.
     vote_trust_share: float = 0.6
+    #: Votes use the longest this many horizontal and this many vertical
+    #: image lines (the surest; a close view of a door and its frames has
+    #: 30 lines, and all of them cost a third of a second of votes).
+    vote_lines: int = 12
     #: A voted place's prior: this far (metres) and this many degrees around
     #: it (a cell's half diagonal and half its heading span, with noise).
     vote_prior_m: float = 0.4
