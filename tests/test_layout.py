@@ -32,6 +32,8 @@ NOT_THRESHOLDS = {
     ("linemap/atomic.py", "STALE_TEMP_S"): "file housekeeping (a killed write's leftovers), not a tolerance of the method",
     ("matcher/cli.py", "EXIT_OK"): "exit codes",
     ("matcher/tracking/route_plot.py", "_WALL"): "colours of a picture",
+    ("matcher/tracking/route_plot.py", "_LOST"): "colours of a picture",
+    ("matcher/tracking/route_plot.py", "_JUMP_M"): "where a picture breaks its line",
     ("matcher/stage1/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
     ("matcher/stage1/tree.py", "_BIT_LEVELS"): "the bits of an int64, sign spared",
 }

@@ -19,6 +19,11 @@ from matcher.tracking.odometry import compose, increment
 #: Colours (B, G, R).
 _WALL, _SEGMENT, _ODOM, _TRACK, _COAST, _TRUTH = (150, 150, 150), (215, 215, 215), (200, 90, 30), \
     (40, 160, 40), (0, 140, 255), (0, 0, 0)
+_LOST = (60, 60, 220)
+#: The estimate is not joined across a step longer than this (metres): a
+#: relocalisation's jump, not a road the robot took.
+_JUMP_M = 1.0
+_STATE_COLOUR = {"tracking": _TRACK, "coasting": _COAST, "relocalising": _LOST}
 
 
 def odometry_route(odoms: list, start) -> list:
@@ -72,15 +77,16 @@ def draw_route(linemap, frames: list[dict], odoms: list, truth: list | None = No
             prev = None
             continue
         p = px((e["x"], e["y"]))[0]
-        colour = _TRACK if f["state"] == "tracking" else _COAST
-        if prev is not None:
+        colour = _STATE_COLOUR.get(f["state"], _COAST)
+        if prev is not None and np.hypot(*(p - prev)) <= _JUMP_M * scale:
             cv2.line(img, tuple(prev), tuple(p), colour, 2, cv2.LINE_AA)
         if f.get("ok"):
             tip = p + np.array([math.cos(math.radians(e["yaw_deg"])), -math.sin(math.radians(e["yaw_deg"]))]) * 10
             cv2.circle(img, tuple(p), 3, _TRACK, -1, cv2.LINE_AA)
             cv2.line(img, tuple(p), tuple(tip.round().astype(int)), _TRACK, 1, cv2.LINE_AA)
         prev = p
-    legend = [("walls", _WALL), ("odometry", _ODOM), ("tracking", _TRACK), ("coasting", _COAST)]
+    legend = [("walls", _WALL), ("odometry", _ODOM), ("tracking", _TRACK), ("coasting", _COAST),
+              ("relocalising", _LOST)]
     if truth:
         legend.append(("true route", _TRUTH))
     ok = sum(1 for f in frames if f.get("ok"))
