@@ -244,6 +244,15 @@ EXTRUDE_GRID = MERGE / 10
 #: temporaries (~50 MB).
 VIS_BLOCK = 400_000
 
+#: Region lists are compared and packed this many listed segments (or
+#: segment slots) at a time (bounds the temporaries to tens of MB).
+VIR_LIST_CHUNK = 1_000_000
+
+#: The visibility sweep tries a point's nearest this many occluder edges
+#: first, then batches twice as large (most sight rays end on the nearest
+#: walls; see ``mapkit.visibility._nearest_hits``).
+VIS_FIRST_EDGES = 32
+
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).
 MESH_SECTION_CHUNK = 2_000_000

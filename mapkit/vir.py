@@ -36,6 +36,7 @@ from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,
+    VIR_LIST_CHUNK,
     VIR_MAX_DEPTH,
     VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
@@ -168,20 +169,61 @@ def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
 
 @dataclass
 class Leaves:
-    """Quadtree leaves. Cell (level, ix, iy) spans
-    ``[x0 + ix*s, x0 + (ix+1)*s] x [y0 + iy*s, ...]``, ``s = size / 2**level``.
+    """Quadtree leaves and their lists, kept as the tree decided them.
 
-    - ``level``, ``ix``, ``iy`` (M,) int64; ``bits`` (M, ceil(N/8)) uint8, the
-      packed list of each leaf (little bit order); ``depth`` the finest level.
+    Cell (level, ix, iy) spans ``[x0 + ix*s, x0 + (ix+1)*s] x [y0 + iy*s, ...]``,
+    ``s = size / 2**level``. A leaf's list is the union of the segments its
+    own cell and each of its ancestors were found to be covered by (every
+    segment is decided at one node only, so the sets are disjoint): storing
+    them per node keeps memory linear in the plan, where one row per leaf
+    over all segments would grow with its square.
+
+    - ``level``, ``ix``, ``iy`` (M,) int64; ``node`` (M,) each leaf's node id;
+    - ``parent`` (K,) int64, every node's parent node (-1 for the root);
+    - ``node_ptr`` (K + 1,) int64, ``node_segs`` int32: the segments decided
+      at node k are ``node_segs[node_ptr[k]:node_ptr[k + 1]]``;
+    - ``n_segments``, ``depth`` the finest level, ``origin``, ``size``.
     """
 
     level: np.ndarray
     ix: np.ndarray
     iy: np.ndarray
-    bits: np.ndarray
+    node: np.ndarray
+    parent: np.ndarray
+    node_ptr: np.ndarray
+    node_segs: np.ndarray
+    n_segments: int
     origin: np.ndarray
     size: float
     depth: int
+
+    def lists(self, leaves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The lists of ``leaves`` (L,) leaf indices as ``(owner, seg)``: pairs
+        sorted by position in ``leaves`` then segment id (``owner`` indexes
+        ``leaves``)."""
+        owners, segs = [], []
+        cur = self.node[np.asarray(leaves, dtype=np.int64)]
+        pos = np.arange(len(cur))
+        while len(cur):
+            start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
+            owners.append(np.repeat(pos, count))
+            segs.append(self.node_segs[_ranges(start, count)])
+            up = self.parent[cur]
+            pos, cur = pos[up >= 0], up[up >= 0]
+        owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
+        seg = np.concatenate(segs).astype(np.int64) if segs else np.zeros(0, dtype=np.int64)
+        order = np.lexsort((seg, owner))
+        return owner[order], seg[order]
+
+
+def _ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """Concatenated ``arange(start[i], start[i] + count[i])`` for all i."""
+    total = int(count.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    ends = np.cumsum(count)
+    first = np.repeat(start - (ends - count), count)
+    return first + np.arange(total)
 
 
 def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
@@ -189,8 +231,10 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 
     Per level, every still-undecided (cell, segment) pair is tested at once
     with shapely's vectorised predicates on prepared geometries: ``intersects``
-    (S may be listed) then ``covers`` (S is listed for every child too).
-    Children test only their parent's undecided segments.
+    (S may be listed) then ``covers`` (S is listed for every child too; not
+    asked at the finest level, which lists whatever meets it).
+    Children test only their parent's undecided segments; what a cell is
+    covered by is stored once, at that cell (:class:`Leaves`).
     """
     from tqdm import tqdm
 
@@ -208,11 +252,14 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 
     ix = np.zeros(1, dtype=np.int64)
     iy = np.zeros(1, dtype=np.int64)
-    listed = np.zeros((1, n), dtype=bool)
+    node = np.zeros(1, dtype=np.int64)  # node ids of this level's cells
+    parents = [np.full(1, -1, dtype=np.int64)]
+    n_nodes = 1
     tree = shapely.STRtree(grown)
     ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int64)
     pc = np.zeros(len(ps), dtype=np.int64)
-    out_level, out_ix, out_iy, out_bits = [], [], [], []
+    out_level, out_ix, out_iy, out_node = [], [], [], []
+    dec_node, dec_seg = [], []
     for lev in tqdm(range(depth + 1), desc="region quadtree", disable=not progress, leave=False):
         s = size / 2.0**lev
         bx, by = origin[0] + ix * s, origin[1] + iy * s
@@ -222,20 +269,22 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         remap = np.cumsum(keep) - 1
         alive = keep[pc]
         pc, ps = remap[pc[alive]], ps[alive]
-        ix, iy, listed, boxes = ix[keep], iy[keep], listed[keep], boxes[keep]
+        ix, iy, node, boxes = ix[keep], iy[keep], node[keep], boxes[keep]
         hit = shapely.intersects(grown[ps], boxes[pc])
         pc, ps = pc[hit], ps[hit]
-        full = shapely.covers(grown[ps], boxes[pc])
-        listed[pc[full], ps[full]] = True
+        if lev == depth:  # smallest cells keep every segment that may be seen
+            full = np.ones(len(pc), dtype=bool)
+        else:
+            full = shapely.covers(grown[ps], boxes[pc])
+        dec_node.append(node[pc[full]])
+        dec_seg.append(ps[full].astype(np.int32))
         pc, ps = pc[~full], ps[~full]
         open_count = np.bincount(pc, minlength=len(ix))
         done = open_count == 0 if lev < depth else np.ones(len(ix), dtype=bool)
-        if lev == depth:  # smallest cells keep every segment that may be seen
-            listed[pc, ps] = True
         out_level.append(np.full(int(done.sum()), lev))
         out_ix.append(ix[done])
         out_iy.append(iy[done])
-        out_bits.append(np.packbits(listed[done], axis=1, bitorder="little"))
+        out_node.append(node[done])
         if lev == depth or done.all():
             break
         # Split the undecided cells in four; children inherit the parent's list.
@@ -246,18 +295,26 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         dy = np.array([0, 0, 1, 1])
         ix = (2 * ix[split][:, None] + dx).ravel()
         iy = (2 * iy[split][:, None] + dy).ravel()
-        listed = np.repeat(listed[split], 4, axis=0)
+        parents.append(np.repeat(node[split], 4))
+        node = n_nodes + np.arange(4 * len(split), dtype=np.int64)
+        n_nodes += len(node)
         base = child_of[pc] * 4
         pc = (base[:, None] + np.arange(4)).ravel()
         ps = np.repeat(ps, 4)
-    nbytes = (n + 7) // 8
-    bits = np.concatenate(out_bits) if out_bits else np.zeros((0, nbytes), dtype=np.uint8)
-    level = np.concatenate(out_level).astype(np.int64)
+    dn = np.concatenate(dec_node)
+    ds = np.concatenate(dec_seg)
+    order = np.argsort(dn, kind="stable")
+    node_ptr = np.zeros(n_nodes + 1, dtype=np.int64)
+    np.cumsum(np.bincount(dn, minlength=n_nodes), out=node_ptr[1:])
     return Leaves(
-        level,
+        np.concatenate(out_level).astype(np.int64),
         np.concatenate(out_ix).astype(np.int64),
         np.concatenate(out_iy).astype(np.int64),
-        bits.reshape(len(level), nbytes),
+        np.concatenate(out_node).astype(np.int64),
+        np.concatenate(parents),
+        node_ptr,
+        ds[order],
+        n,
         origin,
         size,
         depth,
@@ -311,6 +368,59 @@ def adjacent_pairs(labels: np.ndarray) -> np.ndarray:
     return np.unique(np.sort(pairs, axis=1), axis=0)
 
 
+def _leaf_fingerprints(leaves: Leaves) -> tuple[np.ndarray, np.ndarray]:
+    """(M,) uint64 sums of a random key per listed segment, and (M,) list lengths:
+    equal lists have equal fingerprints (the sum of disjoint sets adds up)."""
+    key = np.random.default_rng(0).integers(0, 2**63, size=max(leaves.n_segments, 1), dtype=np.uint64)
+    run = np.zeros(len(leaves.node_segs) + 1, dtype=np.uint64)
+    np.cumsum(key[leaves.node_segs], out=run[1:])  # wraps modulo 2**64, as wanted
+    node_hash = run[leaves.node_ptr[1:]] - run[leaves.node_ptr[:-1]]
+    node_count = np.diff(leaves.node_ptr)
+    fp = np.zeros(len(leaves.node), dtype=np.uint64)
+    count = np.zeros(len(leaves.node), dtype=np.int64)
+    cur, pos = leaves.node.copy(), np.arange(len(leaves.node))
+    while len(cur):
+        fp[pos] += node_hash[cur]
+        count[pos] += node_count[cur]
+        up = leaves.parent[cur]
+        pos, cur = pos[up >= 0], up[up >= 0]
+    return fp, count
+
+
+def equal_lists(leaves: Leaves, pairs: np.ndarray) -> np.ndarray:
+    """(P,) bool: whether the leaves of each pair (P, 2) have the same list.
+
+    Fingerprints rule most pairs out; the rest are compared segment by
+    segment, ``VIR_LIST_CHUNK`` listed segments at a time."""
+    fp, count = _leaf_fingerprints(leaves)
+    maybe = np.nonzero((fp[pairs[:, 0]] == fp[pairs[:, 1]]) & (count[pairs[:, 0]] == count[pairs[:, 1]]))[0]
+    out = np.zeros(len(pairs), dtype=bool)
+    step = max(1, VIR_LIST_CHUNK // max(1, int(count.max(initial=1))))
+    for i in range(0, len(maybe), step):
+        k = maybe[i : i + step]
+        owner_a, seg_a = leaves.lists(pairs[k, 0])
+        _, seg_b = leaves.lists(pairs[k, 1])
+        # Equal lengths pair by pair, so the two concatenations line up.
+        differs = np.bincount(owner_a[seg_a != seg_b], minlength=len(k))
+        out[k] = differs == 0
+    return out
+
+
+def list_bitsets(leaves: Leaves, which: np.ndarray) -> list[int]:
+    """The lists of leaves ``which`` as Python int bitsets (bit i: segment i)."""
+    n = leaves.n_segments
+    out: list[int] = []
+    step = max(1, VIR_LIST_CHUNK // max(n, 1))
+    for i in range(0, len(which), step):
+        k = np.asarray(which[i : i + step])
+        owner, seg = leaves.lists(k)
+        rows = np.zeros((len(k), n), dtype=bool)
+        rows[owner, seg] = True
+        packed = np.packbits(rows, axis=1, bitorder="little")
+        out.extend(int.from_bytes(r.tobytes(), "little") for r in packed)
+    return out
+
+
 def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[int]]:
     """Group leaves into regions. Returns ``group`` (M,) region index of each
     leaf and the region lists as Python int bitsets (bit i: segment i).
@@ -323,19 +433,14 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     """
     m = len(leaves.level)
     pairs = adjacent_pairs(leaf_raster(leaves).labels)
-    # Rows as opaque byte strings: a 1-D unique on them is far faster than axis=0.
-    nbytes = leaves.bits.shape[1]
-    rows = np.ascontiguousarray(leaves.bits).view(np.dtype((np.void, nbytes))).ravel() if nbytes else np.zeros(m)
-    _, list_id = np.unique(rows, return_inverse=True)
-    list_id = list_id.ravel()
-    same = pairs[list_id[pairs[:, 0]] == list_id[pairs[:, 1]]]
+    same = pairs[equal_lists(leaves, pairs)]
     graph = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(m, m))
     n_comp, comp = connected_components(graph, directed=False)
     first = np.full(n_comp, -1)
     first[comp[::-1]] = np.arange(m)[::-1]
     cell_area = (leaves.size / 2.0**leaves.level) ** 2
     area = np.bincount(comp, weights=cell_area, minlength=n_comp).tolist()
-    bits = [int.from_bytes(leaves.bits[i].tobytes(), "little") for i in first]
+    bits = list_bitsets(leaves, first)
     count = [b.bit_count() for b in bits]
     cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]

@@ -31,6 +31,7 @@ from mapkit.tolerances import (
     CIRCLE_SIDES,
     OVERLAY_GRID,
     VIS_BLOCK,
+    VIS_FIRST_EDGES,
     VIS_BUILD_SHRINK,
     VIS_COLLINEAR,
     VIS_RAY_OFFSET_DEG,
@@ -146,7 +147,37 @@ def clip_segments(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
 
 def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
     """Distance along unit rays ``d`` (K, 2) from the origin to the nearest of
-    the edges ``a + u e``, u in [0, 1] (``a``, ``e`` (E, 2)); inf if none."""
+    the edges ``a + u e``, u in [0, 1] (``a``, ``e`` (E, 2)); inf if none.
+
+    Edges are tried nearest first, in batches that double in size: a ray
+    whose hit so far is no farther than the next edge's distance from the
+    origin cannot be cut shorter by that edge or any later one, so it stops
+    there. In a room most rays end on its own walls after the first batch:
+    the work grows with what each point sees, not with the whole plan."""
+    out = np.full(len(d), np.inf)
+    if len(a) == 0 or len(d) == 0:
+        return out
+    ee = np.einsum("ij,ij->i", e, e)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.clip(np.where(ee > 0, -np.einsum("ij,ij->i", a, e) / ee, 0.0), 0.0, 1.0)
+    reach = np.hypot(a[:, 0] + u * e[:, 0], a[:, 1] + u * e[:, 1])
+    order = np.argsort(reach, kind="stable")
+    a, e, reach = a[order], e[order], reach[order]
+    rays = np.arange(len(d))
+    start, batch = 0, VIS_FIRST_EDGES
+    while start < len(a) and len(rays):
+        stop = min(len(a), start + batch)
+        out[rays] = _hits_block(d[rays], a[start:stop], e[start:stop], out[rays])
+        start, batch = stop, 2 * batch
+        if start < len(a):
+            rays = rays[out[rays] > reach[start]]
+    return out
+
+
+def _hits_block(d: np.ndarray, a: np.ndarray, e: np.ndarray, best: np.ndarray | None = None) -> np.ndarray:
+    """Nearest hit of rays ``d`` (K, 2) on edges ``a + u e`` (E, 2), or ``best``
+    (K,) where that is nearer (inf by default): the brute-force kernel of
+    :func:`_nearest_hits`, in blocks of at most ``VIS_BLOCK`` ray-edge pairs."""
     out = np.empty(len(d))
     step = max(1, VIS_BLOCK // max(1, len(a)))
     for i in range(0, len(d), step):
@@ -159,7 +190,7 @@ def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
         # not slip between the two edges meeting there.
         ok = (t > 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
         out[i : i + step] = np.where(ok, t, np.inf).min(axis=1)
-    return out
+    return out if best is None else np.minimum(out, best)
 
 
 # --------------------------------------------------------------------------
