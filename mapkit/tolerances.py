@@ -118,6 +118,13 @@ VIR_MERGE_GROWTH = 0.15
 #: true circle.
 VIR_QUAD_SEGS = 4
 
+#: A visibility polygon keeps the rays of a wall vertex unless both stop at
+#: least this much short of it, metres (the vertex is hidden). Near a corner
+#: grazed at a shallow angle a ray may stop a hair short of a visible one;
+#: dropping it moves the outline by less than this, far below
+#: ``OVERLAY_GRID``.
+VIS_HIDDEN_SLACK = 1e-7
+
 #: Visibility polygon vertices this close to the line through their
 #: neighbours are dropped, metres.
 VIS_COLLINEAR = 1e-9

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
+from shapely.geometry import Polygon
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
@@ -156,7 +157,12 @@ def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
     """``(R_S & free_space) + disk(eps + VIR_EPS_SLACK)``, the disk circumscribed
     by the buffer's chords. ``regions`` (N,) object array; returns (N,) prepared
     geometries (empty where S is never visible)."""
-    clipped = polygonal(shapely.intersection(regions, free_space, grid_size=OVERLAY_GRID))
+    # Each region meets the free space only within its own extent: clip that
+    # first (cheap, no overlay), so each overlay sees the few rooms near it
+    # and not the whole plan's outline.
+    bounds = shapely.bounds(regions)
+    local = np.array([shapely.clip_by_rect(free_space, *b) if np.isfinite(b).all() else Polygon() for b in bounds] + [None])[:-1]
+    clipped = polygonal(shapely.intersection(regions, local, grid_size=OVERLAY_GRID))
     radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS))
     grown = shapely.buffer(clipped, radius, quad_segs=VIR_QUAD_SEGS)
     shapely.prepare(grown)

@@ -32,6 +32,7 @@ from mapkit.tolerances import (
     OVERLAY_GRID,
     VIS_BLOCK,
     VIS_FIRST_EDGES,
+    VIS_HIDDEN_SLACK,
     VIS_BUILD_SHRINK,
     VIS_COLLINEAR,
     VIS_RAY_OFFSET_DEG,
@@ -120,11 +121,18 @@ def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarr
     verts = np.concatenate([a, b]) - p
     theta = np.arctan2(verts[:, 1], verts[:, 0])
     off = math.radians(VIS_RAY_OFFSET_DEG)
-    ang = np.concatenate([theta - off, theta + off])
-    ang = np.unique(np.mod(ang + math.pi, 2.0 * math.pi) - math.pi)
+    ang = np.mod(np.concatenate([theta - off, theta + off]) + math.pi, 2.0 * math.pi) - math.pi
     d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
     t = _nearest_hits(d, a - p, b - a)
-    return p + d * t[:, None]
+    # A vertex both of whose rays stop short of it is hidden: the nearest
+    # edge does not change at its angle, so its rays only add points along
+    # an edge already in the polygon. Dropping them keeps the outline (up to
+    # VIS_HIDDEN_SLACK next to grazed corners) with a fraction of the vertices.
+    r = np.hypot(verts[:, 0], verts[:, 1])
+    seen = np.tile((t[: len(r)] >= r - VIS_HIDDEN_SLACK) | (t[len(r) :] >= r - VIS_HIDDEN_SLACK), 2)
+    ang, d, t = ang[seen], d[seen], t[seen]
+    ang, first = np.unique(ang, return_index=True)
+    return p + d[first] * t[first, None]
 
 
 def clip_segments(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
