@@ -67,6 +67,16 @@ MIN_OPENING_WIDTH = 0.3
 #: or the hull instead.
 OPEN_PLAN_FRACTION = 0.25
 
+#: Two wall ends facing each other in line at most this far apart are an
+#: opening (a window whose glass is not drawn, a doorway without a door):
+#: shut to tell the inside from the outside. Wide enough for a wide window
+#: or a double door; farther apart, the walls are two walls.
+BRIDGE_MAX_GAP = 4.0
+
+#: Wall ends are "in line" and "facing" within this many degrees; an end
+#: face is square to its wall within it too.
+BRIDGE_ANGLE_DEG = 15.0
+
 #: Free-space pieces smaller than this, square metres, are slivers between
 #: walls, not places a camera can stand.
 MIN_FREE_AREA = 0.05

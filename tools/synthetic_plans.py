@@ -180,7 +180,7 @@ def office_grid(path: str | Path, n: int = 10, room: float = 5.0, thickness: flo
     doc.saveas(path)
     wall_geom = shapely.union_all(walls)
     interior = box(0, 0, side, side)
-    return PlanFacts(wall_geom, interior, doors, n * n, {"gaps": gaps})
+    return PlanFacts(wall_geom, interior, doors, n * n, {"door_gaps": gaps})
 
 
 # --------------------------------------------------------------------------
@@ -215,7 +215,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
     chair.add_lwpolyline([(-0.25, -0.25), (0.25, -0.25), (0.25, 0.25), (-0.25, 0.25)], close=True)
     chair.add_circle((0, 0), 0.2)
     t, bay = 0.3, 6.0
-    walls, gaps = [], []
+    walls, gaps, door_gaps = [], [], []
     doors = 0
 
     # ---- facade: pieces between piers, a window gap in each bay
@@ -234,7 +234,8 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
         for a, b in _pieces(0.0, length, holes):
             walls.append(add_rect(msp, a, y0, b, y1, STRUCTURE) if horizontal else add_rect(msp, y0, a, y1, b, STRUCTURE))
         for a, b in holes:
-            gaps.append(box(a, y0, b, y1) if horizontal else box(y0, a, y1, b))
+            if (a, b) != entrance or not horizontal or fixed != 0.0:
+                gaps.append(box(a, y0, b, y1) if horizontal else box(y0, a, y1, b))
         # Piers standing inwards from the facade: big ones at every bay line,
         # small mullion piers every ``pier_spacing`` along the wall pieces.
         inward = 1 if fixed == 0.0 else -1
@@ -251,6 +252,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
     # entrance: two leaves hinged at the jambs, swinging in
     add_door(msp, wide_block, (entrance[0], t), (entrance[0] + 0.8, t), 1, DOORS)
     add_door(msp, wide_block, (entrance[1], t), (entrance[1] - 0.8, t), -1, DOORS)
+    door_gaps.append(box(entrance[0], 0.0, entrance[1], t))
     doors += 1
 
     # ---- meeting rooms along the north facade: 5 m deep, partitions 0.1 m
@@ -269,7 +271,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
             add_door(msp, door_block, (a, y), (b, y), 1, DOORS)
         else:
             add_door(msp, door_block, (b, y), (a, y), 1, DOORS)
-        gaps.append(box(x + 1.0, front - pt / 2, x + 1.9, front + pt / 2))
+        door_gaps.append(box(x + 1.0, front - pt / 2, x + 1.9, front + pt / 2))
         doors += 1
         msp.add_mtext(f"Meeting {k + 1}", dxfattribs={"layer": TEXT, "insert": (x + 2.0, front + 2.5), "char_height": 0.3})
 
@@ -287,7 +289,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
             add_door(msp, door_block, (b, cy0 - pt / 2), (a, cy0 - pt / 2), 1, DOORS)
         else:
             add_door(msp, door_block, (a, cy0 - pt / 2), (b, cy0 - pt / 2), -1, DOORS)
-        gaps.append(box(a, cy0 - pt / 2, b, cy0 + pt / 2))
+        door_gaps.append(box(a, cy0 - pt / 2, b, cy0 + pt / 2))
         doors += 1
 
     # ---- columns on the bay grid, clear of the rooms
@@ -309,19 +311,69 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
 
     # ---- furniture: desks with chairs in the open plan
     solid = shapely.union_all(walls)
+    furniture = []
     for x in np.arange(1.5, width - 2.0, 3.0):
         for y in np.arange(1.5, depth - 6.0, 2.5):
             dx, dy = rng.uniform(-0.2, 0.2, 2)
             desk = box(x + dx, y + dy, x + dx + 1.6, y + dy + 0.8)
             if desk.buffer(0.6).intersects(solid) or desk.intersects(rooms_area):
                 continue
-            add_rect(msp, *desk.bounds, FURNITURE)
+            furniture.append(add_rect(msp, *desk.bounds, FURNITURE))
             msp.add_blockref("CHAIR", (x + dx + 0.8, y + dy - 0.35), dxfattribs={"layer": FURNITURE, "rotation": float(rng.uniform(0, 360))})
     msp.add_mtext("Open plan", dxfattribs={"layer": TEXT, "insert": (4.0, 4.0), "char_height": 0.4})
     doc.saveas(path)
     interior = box(t, t, width - t, depth - t)
-    return PlanFacts(shapely.union_all(walls), interior, doors, 7, {"gaps": gaps})
+    return PlanFacts(shapely.union_all(walls), interior, doors, 7,
+                     {"window_gaps": gaps, "door_gaps": door_gaps, "desks_and_lines": furniture})
+
+
+
+
+# --------------------------------------------------------------------------
+# Small plans of the other classes of issue 27
+
+
+def zone_plan(path: str | Path, rooms: tuple[int, int] = (3, 2), room: float = 4.0, wall: float = 0.2) -> PlanFacts:
+    """A plan drawn as room polygons: each room's space boundary a closed
+    polyline on ``ABY_Zone_ZIND`` (``rooms`` = (nx, ny) rooms of ``room``
+    metres, ``wall`` apart), the building's outline on ``ABY_Contour_Facade``
+    at the walls' outer faces, French room names as MTEXT, no wall layer.
+    The free space is the rooms."""
+    doc = new_document()
+    msp = doc.modelspace()
+    nx, ny = rooms
+    zones = []
+    names = ["Séjour", "Cuisine", "Chambre 1", "Chambre 2", "Bureau", "Salle de bains", "Entrée", "Cellier"]
+    for i in range(nx):
+        for j in range(ny):
+            x0, y0 = wall + i * (room + wall), wall + j * (room + wall)
+            zones.append(add_rect(msp, x0, y0, x0 + room, y0 + room, "ABY_Zone_ZIND"))
+            msp.add_mtext(names[(i * ny + j) % len(names)],
+                          dxfattribs={"layer": "ABY_Texte_Pieces", "insert": (x0 + 0.5, y0 + room / 2), "char_height": 0.25})
+    w, h = nx * (room + wall) + wall, ny * (room + wall) + wall
+    msp.add_lwpolyline([(0, 0), (w, 0), (w, h), (0, h)], close=True, dxfattribs={"layer": "ABY_Contour_Facade"})
+    doc.saveas(path)
+    interior = shapely.union_all(zones)
+    walls = box(0, 0, w, h).difference(interior)
+    return PlanFacts(walls, interior, 0, nx * ny)
+
+
+def nested_room(path: str | Path, width: float = 6.0, depth: float = 4.0, thickness: float = 0.2,
+                furniture: bool = True) -> PlanFacts:
+    """One room whose wall is drawn as two nested closed polylines (its outer
+    and inner faces) on ``A-WALL``, with a table and text on other layers."""
+    doc = new_document()
+    msp = doc.modelspace()
+    t = thickness
+    add_rect(msp, 0, 0, width, depth, "A-WALL")
+    add_rect(msp, t, t, width - t, depth - t, "A-WALL")
+    if furniture:
+        add_rect(msp, width / 2 - 0.6, depth / 2 - 0.4, width / 2 + 0.6, depth / 2 + 0.4, "A-FURN")
+        msp.add_text("Living", dxfattribs={"layer": "A-ANNO-TEXT", "insert": (1.0, 1.0), "height": 0.2})
+    doc.saveas(path)
+    return PlanFacts(box(0, 0, width, depth).difference(box(t, t, width - t, depth - t)),
+                     box(t, t, width - t, depth - t), 0, 1)
 
 
 __all__ = ["DOORS", "FURNITURE", "PARTITIONS", "PlanFacts", "STRUCTURE", "TEXT", "VIRTUAL", "add_door", "add_rect",
-           "define_door_block", "new_document", "office_grid", "open_office"]
+           "define_door_block", "nested_room", "new_document", "office_grid", "open_office", "zone_plan"]
