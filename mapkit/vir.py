@@ -33,6 +33,7 @@ from shapely.geometry import Polygon
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     OVERLAY_GRID,
@@ -120,22 +121,27 @@ def build_regions(
     t1 = time.perf_counter()
     stats["time_segment_regions_total_s"] = t1 - t0
 
-    grown = grow_regions(sr.regions, free_space, eps)
+    with step("region growth", progress):
+        grown = grow_regions(sr.regions, free_space, eps)
+    del sr  # memory: each step's input is freed once the next holds what it needs
     t2 = time.perf_counter()
     stats["time_grow_s"] = t2 - t1
 
     leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress)
+    del grown
     t3 = time.perf_counter()
     stats["time_quadtree_s"] = t3 - t2
     stats["quadtree_leaves"] = len(leaves.level)
     stats["quadtree_depth"] = int(leaves.depth)
     stats["smallest_cell_m"] = float(leaves.size / 2.0**leaves.depth)
 
-    groups, bits = merge_leaves(leaves, merge_growth)
+    with step("region merging", progress):
+        groups, bits = merge_leaves(leaves, merge_growth)
     t4 = time.perf_counter()
     stats["time_merge_s"] = t4 - t3
 
-    polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
+    with step("region outlines", progress):
+        polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
     t5 = time.perf_counter()
     stats["time_geometry_s"] = t5 - t4
     stats["time_total_s"] = t5 - t0

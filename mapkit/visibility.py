@@ -26,6 +26,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
+from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
@@ -429,6 +430,7 @@ def segment_regions(
     vp = shapely.simplify(raw, VIS_COLLINEAR, preserve_topology=False)
     bad = ~shapely.is_valid(vp)
     vp[bad] = raw[bad]
+    del raw  # the largest arrays of the stage: free them before the overlays
     # A point inside a (shrunk) wall is seen from nowhere: every sight line
     # from outside crosses the solid. The sweep, which skips edges facing
     # away, would instead see through that wall.
@@ -456,9 +458,11 @@ def segment_regions(
         lo_k, hi_k = np.minimum(pa, pb), np.maximum(pa, pb)
         uniq, inv = np.unique(lo_k * len(xy) + hi_k, return_inverse=True)
         ua, ub = uniq // len(xy), uniq % len(xy)
-        both = polygonal(shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID))
-        ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
-        pieces = polygonal(shapely.intersection(both[inv], ann))
+        with step("visibility overlaps", progress):
+            both = polygonal(shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID))
+            ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
+            pieces = polygonal(shapely.intersection(both[inv], ann))
+        del both, ann, vp
         pair_seg = np.array(pair_seg)
         order = np.argsort(pair_seg, kind="stable")
         bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
