@@ -262,8 +262,11 @@ EXTRUDE_GRID = MERGE / 10
 VIS_BLOCK = 400_000
 
 #: Region lists are compared and packed this many listed segments (or
-#: segment slots) at a time (bounds the temporaries to tens of MB).
-VIR_LIST_CHUNK = 1_000_000
+#: segment slots) at a time (bounds the temporaries to about 10 MB).
+VIR_LIST_CHUNK = 250_000
+
+#: Quadtree (cell, region) pairs tested per call of a shapely predicate.
+VIR_PAIR_CHUNK = 500_000
 
 #: The visibility sweep tries a point's nearest this many occluder edges
 #: first, then batches twice as large (most sight rays end on the nearest

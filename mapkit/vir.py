@@ -33,12 +33,14 @@ from shapely.geometry import Polygon
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from mapkit.memory import release_memory
 from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,
     VIR_LIST_CHUNK,
+    VIR_PAIR_CHUNK,
     VIR_MAX_DEPTH,
     VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
@@ -124,17 +126,20 @@ def build_regions(
     with step("region growth", progress):
         grown = grow_regions(sr.regions, free_space, eps)
     del sr  # memory: each step's input is freed once the next holds what it needs
+    release_memory()
     t2 = time.perf_counter()
     stats["time_grow_s"] = t2 - t1
 
     leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress)
     del grown
+    release_memory()
     t3 = time.perf_counter()
     stats["time_quadtree_s"] = t3 - t2
     stats["quadtree_leaves"] = len(leaves.level)
     stats["quadtree_depth"] = int(leaves.depth)
     stats["smallest_cell_m"] = float(leaves.size / 2.0**leaves.depth)
 
+    release_memory()
     with step("region merging", progress):
         groups, bits = merge_leaves(leaves, merge_growth)
     t4 = time.perf_counter()
@@ -210,20 +215,20 @@ class Leaves:
     depth: int
 
     def lists(self, leaves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The lists of ``leaves`` (L,) leaf indices as ``(owner, seg)``: pairs
-        sorted by position in ``leaves`` then segment id (``owner`` indexes
-        ``leaves``)."""
+        """The lists of ``leaves`` (L,) leaf indices as ``(owner, seg)``, both
+        int32: pairs sorted by position in ``leaves`` then segment id
+        (``owner`` indexes ``leaves``)."""
         owners, segs = [], []
         cur = self.node[np.asarray(leaves, dtype=np.int64)]
-        pos = np.arange(len(cur))
+        pos = np.arange(len(cur), dtype=np.int32)
         while len(cur):
             start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
             owners.append(np.repeat(pos, count))
             segs.append(self.node_segs[_ranges(start, count)])
             up = self.parent[cur]
             pos, cur = pos[up >= 0], up[up >= 0]
-        owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
-        seg = np.concatenate(segs).astype(np.int64) if segs else np.zeros(0, dtype=np.int64)
+        owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int32)
+        seg = np.concatenate(segs) if segs else np.zeros(0, dtype=np.int32)
         order = np.lexsort((seg, owner))
         return owner[order], seg[order]
 
@@ -236,6 +241,15 @@ def _ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
     ends = np.cumsum(count)
     first = np.repeat(start - (ends - count), count)
     return first + np.arange(total)
+
+
+def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, boxes: np.ndarray, bi: np.ndarray) -> np.ndarray:
+    """``predicate(geoms[gi], boxes[bi])`` (P,) bool, ``VIR_PAIR_CHUNK`` pairs at
+    a time: the gathered object arrays would otherwise take 16 bytes a pair."""
+    out = np.empty(len(gi), dtype=bool)
+    for i in range(0, len(gi), VIR_PAIR_CHUNK):
+        out[i : i + VIR_PAIR_CHUNK] = predicate(geoms[gi[i : i + VIR_PAIR_CHUNK]], boxes[bi[i : i + VIR_PAIR_CHUNK]])
+    return out
 
 
 def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
@@ -268,8 +282,8 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     parents = [np.full(1, -1, dtype=np.int64)]
     n_nodes = 1
     tree = shapely.STRtree(grown)
-    ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int64)
-    pc = np.zeros(len(ps), dtype=np.int64)
+    ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int32)
+    pc = np.zeros(len(ps), dtype=np.int32)
     out_level, out_ix, out_iy, out_node = [], [], [], []
     dec_node, dec_seg = [], []
     for lev in tqdm(range(depth + 1), desc="region quadtree", disable=not progress, leave=False):
@@ -278,17 +292,17 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         boxes = shapely.box(bx, by, bx + s, by + s)
         # Cells off the free space are dropped; pairs follow their cells.
         keep = shapely.intersects(free, boxes)
-        remap = np.cumsum(keep) - 1
+        remap = (np.cumsum(keep) - 1).astype(np.int32)
         alive = keep[pc]
         pc, ps = remap[pc[alive]], ps[alive]
         ix, iy, node, boxes = ix[keep], iy[keep], node[keep], boxes[keep]
-        hit = shapely.intersects(grown[ps], boxes[pc])
+        hit = _pairwise(shapely.intersects, grown, ps, boxes, pc)
         pc, ps = pc[hit], ps[hit]
         if lev == depth:  # smallest cells keep every segment that may be seen
             full = np.ones(len(pc), dtype=bool)
         else:
-            full = shapely.covers(grown[ps], boxes[pc])
-        dec_node.append(node[pc[full]])
+            full = _pairwise(shapely.covers, grown, ps, boxes, pc)
+        dec_node.append(node[pc[full]].astype(np.int32))
         dec_seg.append(ps[full].astype(np.int32))
         pc, ps = pc[~full], ps[~full]
         open_count = np.bincount(pc, minlength=len(ix))
@@ -310,14 +324,19 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         parents.append(np.repeat(node[split], 4))
         node = n_nodes + np.arange(4 * len(split), dtype=np.int64)
         n_nodes += len(node)
-        base = child_of[pc] * 4
-        pc = (base[:, None] + np.arange(4)).ravel()
+        base = (child_of[pc] * 4).astype(np.int32)
+        pc = (base[:, None] + np.arange(4, dtype=np.int32)).ravel()
         ps = np.repeat(ps, 4)
+        release_memory()  # this level's cells and tests
+    del pc, ps, boxes
     dn = np.concatenate(dec_node)
-    ds = np.concatenate(dec_seg)
-    order = np.argsort(dn, kind="stable")
+    del dec_node
     node_ptr = np.zeros(n_nodes + 1, dtype=np.int64)
     np.cumsum(np.bincount(dn, minlength=n_nodes), out=node_ptr[1:])
+    node_segs = np.concatenate(dec_seg)
+    del dec_seg
+    node_segs = node_segs[np.argsort(dn, kind="stable")]
+    del dn
     return Leaves(
         np.concatenate(out_level).astype(np.int64),
         np.concatenate(out_ix).astype(np.int64),
@@ -325,7 +344,7 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         np.concatenate(out_node).astype(np.int64),
         np.concatenate(parents),
         node_ptr,
-        ds[order],
+        node_segs,
         n,
         origin,
         size,
@@ -457,7 +476,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
     nbrs: list[set] = [set() for _ in range(n_comp)]
-    for a, b in cpairs.tolist():
+    for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist()):
         nbrs[a].add(b)
         nbrs[b].add(a)
 
@@ -469,12 +488,25 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
         u = (bits[a] | bits[b]).bit_count()
         return area[a] * (u - count[a]) + area[b] * (u - count[b])
 
-    heap = [(cost(a, b), a, b, 0, 0) for a, b in cpairs.tolist()]
+    heap = [(cost(a, b), a, b, 0, 0) for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist())]
     heapq.heapify(heap)
     spent = 0.0
+    live = len(heap)  # pairs of current neighbours, at the last compaction
+
+    def current(entry) -> bool:
+        _, a, b, va, vb = entry
+        return version[a] == va and version[b] == vb and parent[a] == a and parent[b] == b
+
     while heap and budget > 0:
+        if len(heap) > 4 * live + 1024:
+            # Entries outdated by later merges pile up; dropping them keeps
+            # the heap (memory, pops) in proportion to the live pairs. The
+            # current entries, and so the order of merges, are unchanged.
+            heap = [e for e in heap if current(e)]
+            heapq.heapify(heap)
+            live = len(heap)
         c, a, b, va, vb = heapq.heappop(heap)
-        if version[a] != va or version[b] != vb or parent[a] != a or parent[b] != b:
+        if not current((c, a, b, va, vb)):
             continue
         if spent + c > budget:
             break
@@ -483,6 +515,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
         parent[b] = a
         bits[a] |= bits[b]
         count[a] = bits[a].bit_count()
+        bits[b] = 0  # b's list lives on in a's
         area[a] += area[b]
         version[a] += 1
         for x in nbrs[b]:

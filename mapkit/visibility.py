@@ -26,6 +26,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
+from mapkit.memory import release_memory
 from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
@@ -431,6 +432,7 @@ def segment_regions(
     bad = ~shapely.is_valid(vp)
     vp[bad] = raw[bad]
     del raw  # the largest arrays of the stage: free them before the overlays
+    release_memory()
     # A point inside a (shrunk) wall is seen from nowhere: every sight line
     # from outside crosses the solid. The sweep, which skips edges facing
     # away, would instead see through that wall.
@@ -463,6 +465,7 @@ def segment_regions(
             ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
             pieces = polygonal(shapely.intersection(both[inv], ann))
         del both, ann, vp
+        release_memory()
         pair_seg = np.array(pair_seg)
         order = np.argsort(pair_seg, kind="stable")
         bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
