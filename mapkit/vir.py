@@ -475,8 +475,12 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     count = [b.bit_count() for b in bits]
     cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
+    # One int object per component, shared by the sets and heap entries
+    # below (ids from .tolist() would be new objects each: tens of MB).
+    ids = list(range(n_comp))
+    pair_ids = [(ids[a], ids[b]) for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist())]
     nbrs: list[set] = [set() for _ in range(n_comp)]
-    for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist()):
+    for a, b in pair_ids:
         nbrs[a].add(b)
         nbrs[b].add(a)
 
@@ -488,7 +492,8 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
         u = (bits[a] | bits[b]).bit_count()
         return area[a] * (u - count[a]) + area[b] * (u - count[b])
 
-    heap = [(cost(a, b), a, b, 0, 0) for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist())]
+    heap = [(cost(a, b), a, b, 0, 0) for a, b in pair_ids]
+    del pair_ids
     heapq.heapify(heap)
     spent = 0.0
     live = len(heap)  # pairs of current neighbours, at the last compaction
@@ -498,7 +503,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
         return version[a] == va and version[b] == vb and parent[a] == a and parent[b] == b
 
     while heap and budget > 0:
-        if len(heap) > 4 * live + 1024:
+        if len(heap) > 2 * live + 1024:
             # Entries outdated by later merges pile up; dropping them keeps
             # the heap (memory, pops) in proportion to the live pairs. The
             # current entries, and so the order of merges, are unchanged.

@@ -143,7 +143,8 @@ def main(argv: list[str] | None = None) -> int:
             vals = [name, r["floor_m2"], r.get("t_import", 0), r.get("t_edges", 0), r.get("t_regions", 0),
                     r.get("t_assemble", 0), r["t_write"], r["t_total"], r["peak_mb"], r["segments"], r["regions"],
                     r["mean_list"], r["kib"], r["load_ms"]]
-            print(" | ".join(f"{v:<{w}{f}}" if i == 0 else f"{v:>{w}{f}}" for i, (v, (_, w, f)) in enumerate(zip(vals, cols))))
+            print(" | ".join(f"{v:<{w}{f}}" if i == 0 else f"{'-':>{w}}" if v != v else f"{v:>{w}{f}}"
+                             for i, (v, (_, w, f)) in enumerate(zip(vals, cols))))
             sys.stdout.flush()
     return 1 if failed else 0
 
