@@ -174,6 +174,9 @@ def test_door_blocks_at_the_hinge_are_found(tmp_path, rotation_case):
     # Closed for the free space (one region of both rooms joined through it), open for sight.
     assert len(shapely.get_parts(scene.free_space)) == 1
     assert not scene.walls.intersects(gap.buffer(-0.01))
+    # Two rooms drawn alone: their whole floor is free, the door covers no room.
+    rooms = shapely.union_all([box(0.2, 0.2, 4.0, 4.0), box(4.2, 0.2, 8.0, 4.0), box(4.0, 1.5, 4.2, 2.4)])
+    assert scene.free_space.area == pytest.approx(rooms.buffer(-ROBOT, join_style="mitre").area, rel=0.01)
 
 
 def test_door_at_the_end_of_a_wall_is_found(tmp_path):
