@@ -7,3 +7,12 @@ class MapkitError(Exception):
 
 class NoWallsError(MapkitError):
     """The plan has no geometry we recognise as walls."""
+
+
+class NoFreeSpaceError(MapkitError):
+    """The plan was understood but leaves no place for the camera; ``scene``
+    holds what was understood (empty free space), for ``mapkit preview``."""
+
+    def __init__(self, message: str, scene=None):
+        super().__init__(message)
+        self.scene = scene

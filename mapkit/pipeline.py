@@ -5,7 +5,7 @@ from the one before (no module imports a later stage)::
 
     mapkit.importers   plan.dxf / mesh  ->  Scene  (mapkit.scene)
                        importers/dxf/: read, units, layers, entities,
-                         reconstruct (walls, openings)
+                         reconstruct (walls, openings, enclosure)
                        importers/mesh/: load, section, edges, hidden
     mapkit.edges       Scene  ->  3D segments (N, 2, 3) + kinds
                        (a mesh importer gives its own segments instead)
@@ -37,6 +37,7 @@ from mapkit.assemble import assemble_map
 from mapkit.errors import MapkitError
 from linemap.lmap import LineMap, SegmentKind, file_sha256
 from mapkit.options import BuildOptions
+from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 
 log = logging.getLogger("mapkit")
@@ -66,14 +67,16 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     plan = Path(plan)
 
     t = time.perf_counter()
-    scene = load_scene(plan, options)
+    with step("import", progress):
+        scene = load_scene(plan, options)
     report.seconds["import"] = time.perf_counter() - t
 
     t = time.perf_counter()
     if scene.segments is not None:
         segments, kinds = np.asarray(scene.segments, float), np.asarray(scene.kinds, np.uint8)
     else:
-        segments, kinds = extract_edges(scene, options)
+        with step("edges", progress):
+            segments, kinds = extract_edges(scene, options)
     report.seconds["edges"] = time.perf_counter() - t
     if len(segments) == 0:
         raise MapkitError(f"{plan}: no straight wall edges found; check the layer choice with 'mapkit preview'")
@@ -112,7 +115,8 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
         # No timings here: the same plan and options give the same bytes.
         "stats": _rounded({"counts": counts, "regions": {k: v for k, v in part.stats.items() if not k.startswith("time")}}),
     }
-    linemap = assemble_map(segments, kinds, polygons, lists, scene.walls, meta)
+    with step("assemble", progress):
+        linemap = assemble_map(segments, kinds, polygons, lists, scene.walls, meta)
     report.seconds["assemble"] = time.perf_counter() - t
     report.counts = counts
     report.warnings = list(scene.info.get("warnings", []))

@@ -67,6 +67,16 @@ MIN_OPENING_WIDTH = 0.3
 #: or the hull instead.
 OPEN_PLAN_FRACTION = 0.25
 
+#: Two wall ends facing each other in line at most this far apart are an
+#: opening (a window whose glass is not drawn, a doorway without a door):
+#: shut to tell the inside from the outside. Wide enough for a wide window
+#: or a double door; farther apart, the walls are two walls.
+BRIDGE_MAX_GAP = 4.0
+
+#: Wall ends are "in line" and "facing" within this many degrees; an end
+#: face is square to its wall within it too.
+BRIDGE_ANGLE_DEG = 15.0
+
 #: Free-space pieces smaller than this, square metres, are slivers between
 #: walls, not places a camera can stand.
 MIN_FREE_AREA = 0.05
@@ -117,6 +127,13 @@ VIR_MERGE_GROWTH = 0.15
 #: quarter circle; the radius is scaled so that the chords circumscribe the
 #: true circle.
 VIR_QUAD_SEGS = 4
+
+#: A visibility polygon keeps the rays of a wall vertex unless both stop at
+#: least this much short of it, metres (the vertex is hidden). Near a corner
+#: grazed at a shallow angle a ray may stop a hair short of a visible one;
+#: dropping it moves the outline by less than this, far below
+#: ``OVERLAY_GRID``.
+VIS_HIDDEN_SLACK = 1e-7
 
 #: Visibility polygon vertices this close to the line through their
 #: neighbours are dropped, metres.
@@ -243,6 +260,18 @@ EXTRUDE_GRID = MERGE / 10
 #: Rays x edges per numpy block in the visibility sweep: bounds its
 #: temporaries (~50 MB).
 VIS_BLOCK = 400_000
+
+#: Region lists are compared and packed this many listed segments (or
+#: segment slots) at a time (bounds the temporaries to about 10 MB).
+VIR_LIST_CHUNK = 250_000
+
+#: Quadtree (cell, region) pairs tested per call of a shapely predicate.
+VIR_PAIR_CHUNK = 500_000
+
+#: The visibility sweep tries a point's nearest this many occluder edges
+#: first, then batches twice as large (most sight rays end on the nearest
+#: walls; see ``mapkit.visibility._nearest_hits``).
+VIS_FIRST_EDGES = 32
 
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).

@@ -29,13 +29,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
+from shapely.geometry import Polygon
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from mapkit.memory import release_memory
+from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,
+    VIR_LIST_CHUNK,
+    VIR_PAIR_CHUNK,
     VIR_MAX_DEPTH,
     VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
@@ -118,22 +123,30 @@ def build_regions(
     t1 = time.perf_counter()
     stats["time_segment_regions_total_s"] = t1 - t0
 
-    grown = grow_regions(sr.regions, free_space, eps)
+    with step("region growth", progress):
+        grown = grow_regions(sr.regions, free_space, eps)
+    del sr  # memory: each step's input is freed once the next holds what it needs
+    release_memory()
     t2 = time.perf_counter()
     stats["time_grow_s"] = t2 - t1
 
     leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress)
+    del grown
+    release_memory()
     t3 = time.perf_counter()
     stats["time_quadtree_s"] = t3 - t2
     stats["quadtree_leaves"] = len(leaves.level)
     stats["quadtree_depth"] = int(leaves.depth)
     stats["smallest_cell_m"] = float(leaves.size / 2.0**leaves.depth)
 
-    groups, bits = merge_leaves(leaves, merge_growth)
+    release_memory()
+    with step("region merging", progress):
+        groups, bits = merge_leaves(leaves, merge_growth)
     t4 = time.perf_counter()
     stats["time_merge_s"] = t4 - t3
 
-    polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
+    with step("region outlines", progress):
+        polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
     t5 = time.perf_counter()
     stats["time_geometry_s"] = t5 - t4
     stats["time_total_s"] = t5 - t0
@@ -155,7 +168,12 @@ def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
     """``(R_S & free_space) + disk(eps + VIR_EPS_SLACK)``, the disk circumscribed
     by the buffer's chords. ``regions`` (N,) object array; returns (N,) prepared
     geometries (empty where S is never visible)."""
-    clipped = polygonal(shapely.intersection(regions, free_space, grid_size=OVERLAY_GRID))
+    # Each region meets the free space only within its own extent: clip that
+    # first (cheap, no overlay), so each overlay sees the few rooms near it
+    # and not the whole plan's outline.
+    bounds = shapely.bounds(regions)
+    local = np.array([shapely.clip_by_rect(free_space, *b) if np.isfinite(b).all() else Polygon() for b in bounds] + [None])[:-1]
+    clipped = polygonal(shapely.intersection(regions, local, grid_size=OVERLAY_GRID))
     radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS))
     grown = shapely.buffer(clipped, radius, quad_segs=VIR_QUAD_SEGS)
     shapely.prepare(grown)
@@ -168,20 +186,70 @@ def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
 
 @dataclass
 class Leaves:
-    """Quadtree leaves. Cell (level, ix, iy) spans
-    ``[x0 + ix*s, x0 + (ix+1)*s] x [y0 + iy*s, ...]``, ``s = size / 2**level``.
+    """Quadtree leaves and their lists, kept as the tree decided them.
 
-    - ``level``, ``ix``, ``iy`` (M,) int64; ``bits`` (M, ceil(N/8)) uint8, the
-      packed list of each leaf (little bit order); ``depth`` the finest level.
+    Cell (level, ix, iy) spans ``[x0 + ix*s, x0 + (ix+1)*s] x [y0 + iy*s, ...]``,
+    ``s = size / 2**level``. A leaf's list is the union of the segments its
+    own cell and each of its ancestors were found to be covered by (every
+    segment is decided at one node only, so the sets are disjoint): storing
+    them per node keeps memory linear in the plan, where one row per leaf
+    over all segments would grow with its square.
+
+    - ``level``, ``ix``, ``iy`` (M,) int64; ``node`` (M,) each leaf's node id;
+    - ``parent`` (K,) int64, every node's parent node (-1 for the root);
+    - ``node_ptr`` (K + 1,) int64, ``node_segs`` int32: the segments decided
+      at node k are ``node_segs[node_ptr[k]:node_ptr[k + 1]]``;
+    - ``n_segments``, ``depth`` the finest level, ``origin``, ``size``.
     """
 
     level: np.ndarray
     ix: np.ndarray
     iy: np.ndarray
-    bits: np.ndarray
+    node: np.ndarray
+    parent: np.ndarray
+    node_ptr: np.ndarray
+    node_segs: np.ndarray
+    n_segments: int
     origin: np.ndarray
     size: float
     depth: int
+
+    def lists(self, leaves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The lists of ``leaves`` (L,) leaf indices as ``(owner, seg)``, both
+        int32: pairs sorted by position in ``leaves`` then segment id
+        (``owner`` indexes ``leaves``)."""
+        owners, segs = [], []
+        cur = self.node[np.asarray(leaves, dtype=np.int64)]
+        pos = np.arange(len(cur), dtype=np.int32)
+        while len(cur):
+            start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
+            owners.append(np.repeat(pos, count))
+            segs.append(self.node_segs[_ranges(start, count)])
+            up = self.parent[cur]
+            pos, cur = pos[up >= 0], up[up >= 0]
+        owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int32)
+        seg = np.concatenate(segs) if segs else np.zeros(0, dtype=np.int32)
+        order = np.lexsort((seg, owner))
+        return owner[order], seg[order]
+
+
+def _ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """Concatenated ``arange(start[i], start[i] + count[i])`` for all i."""
+    total = int(count.sum())
+    if total == 0:
+        return np.zeros(0, dtype=np.int64)
+    ends = np.cumsum(count)
+    first = np.repeat(start - (ends - count), count)
+    return first + np.arange(total)
+
+
+def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, boxes: np.ndarray, bi: np.ndarray) -> np.ndarray:
+    """``predicate(geoms[gi], boxes[bi])`` (P,) bool, ``VIR_PAIR_CHUNK`` pairs at
+    a time: the gathered object arrays would otherwise take 16 bytes a pair."""
+    out = np.empty(len(gi), dtype=bool)
+    for i in range(0, len(gi), VIR_PAIR_CHUNK):
+        out[i : i + VIR_PAIR_CHUNK] = predicate(geoms[gi[i : i + VIR_PAIR_CHUNK]], boxes[bi[i : i + VIR_PAIR_CHUNK]])
+    return out
 
 
 def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
@@ -189,8 +257,10 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 
     Per level, every still-undecided (cell, segment) pair is tested at once
     with shapely's vectorised predicates on prepared geometries: ``intersects``
-    (S may be listed) then ``covers`` (S is listed for every child too).
-    Children test only their parent's undecided segments.
+    (S may be listed) then ``covers`` (S is listed for every child too; not
+    asked at the finest level, which lists whatever meets it).
+    Children test only their parent's undecided segments; what a cell is
+    covered by is stored once, at that cell (:class:`Leaves`).
     """
     from tqdm import tqdm
 
@@ -208,34 +278,39 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 
     ix = np.zeros(1, dtype=np.int64)
     iy = np.zeros(1, dtype=np.int64)
-    listed = np.zeros((1, n), dtype=bool)
+    node = np.zeros(1, dtype=np.int64)  # node ids of this level's cells
+    parents = [np.full(1, -1, dtype=np.int64)]
+    n_nodes = 1
     tree = shapely.STRtree(grown)
-    ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int64)
-    pc = np.zeros(len(ps), dtype=np.int64)
-    out_level, out_ix, out_iy, out_bits = [], [], [], []
+    ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int32)
+    pc = np.zeros(len(ps), dtype=np.int32)
+    out_level, out_ix, out_iy, out_node = [], [], [], []
+    dec_node, dec_seg = [], []
     for lev in tqdm(range(depth + 1), desc="region quadtree", disable=not progress, leave=False):
         s = size / 2.0**lev
         bx, by = origin[0] + ix * s, origin[1] + iy * s
         boxes = shapely.box(bx, by, bx + s, by + s)
         # Cells off the free space are dropped; pairs follow their cells.
         keep = shapely.intersects(free, boxes)
-        remap = np.cumsum(keep) - 1
+        remap = (np.cumsum(keep) - 1).astype(np.int32)
         alive = keep[pc]
         pc, ps = remap[pc[alive]], ps[alive]
-        ix, iy, listed, boxes = ix[keep], iy[keep], listed[keep], boxes[keep]
-        hit = shapely.intersects(grown[ps], boxes[pc])
+        ix, iy, node, boxes = ix[keep], iy[keep], node[keep], boxes[keep]
+        hit = _pairwise(shapely.intersects, grown, ps, boxes, pc)
         pc, ps = pc[hit], ps[hit]
-        full = shapely.covers(grown[ps], boxes[pc])
-        listed[pc[full], ps[full]] = True
+        if lev == depth:  # smallest cells keep every segment that may be seen
+            full = np.ones(len(pc), dtype=bool)
+        else:
+            full = _pairwise(shapely.covers, grown, ps, boxes, pc)
+        dec_node.append(node[pc[full]].astype(np.int32))
+        dec_seg.append(ps[full].astype(np.int32))
         pc, ps = pc[~full], ps[~full]
         open_count = np.bincount(pc, minlength=len(ix))
         done = open_count == 0 if lev < depth else np.ones(len(ix), dtype=bool)
-        if lev == depth:  # smallest cells keep every segment that may be seen
-            listed[pc, ps] = True
         out_level.append(np.full(int(done.sum()), lev))
         out_ix.append(ix[done])
         out_iy.append(iy[done])
-        out_bits.append(np.packbits(listed[done], axis=1, bitorder="little"))
+        out_node.append(node[done])
         if lev == depth or done.all():
             break
         # Split the undecided cells in four; children inherit the parent's list.
@@ -246,18 +321,31 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         dy = np.array([0, 0, 1, 1])
         ix = (2 * ix[split][:, None] + dx).ravel()
         iy = (2 * iy[split][:, None] + dy).ravel()
-        listed = np.repeat(listed[split], 4, axis=0)
-        base = child_of[pc] * 4
-        pc = (base[:, None] + np.arange(4)).ravel()
+        parents.append(np.repeat(node[split], 4))
+        node = n_nodes + np.arange(4 * len(split), dtype=np.int64)
+        n_nodes += len(node)
+        base = (child_of[pc] * 4).astype(np.int32)
+        pc = (base[:, None] + np.arange(4, dtype=np.int32)).ravel()
         ps = np.repeat(ps, 4)
-    nbytes = (n + 7) // 8
-    bits = np.concatenate(out_bits) if out_bits else np.zeros((0, nbytes), dtype=np.uint8)
-    level = np.concatenate(out_level).astype(np.int64)
+        release_memory()  # this level's cells and tests
+    del pc, ps, boxes
+    dn = np.concatenate(dec_node)
+    del dec_node
+    node_ptr = np.zeros(n_nodes + 1, dtype=np.int64)
+    np.cumsum(np.bincount(dn, minlength=n_nodes), out=node_ptr[1:])
+    node_segs = np.concatenate(dec_seg)
+    del dec_seg
+    node_segs = node_segs[np.argsort(dn, kind="stable")]
+    del dn
     return Leaves(
-        level,
+        np.concatenate(out_level).astype(np.int64),
         np.concatenate(out_ix).astype(np.int64),
         np.concatenate(out_iy).astype(np.int64),
-        bits.reshape(len(level), nbytes),
+        np.concatenate(out_node).astype(np.int64),
+        np.concatenate(parents),
+        node_ptr,
+        node_segs,
+        n,
         origin,
         size,
         depth,
@@ -311,6 +399,59 @@ def adjacent_pairs(labels: np.ndarray) -> np.ndarray:
     return np.unique(np.sort(pairs, axis=1), axis=0)
 
 
+def _leaf_fingerprints(leaves: Leaves) -> tuple[np.ndarray, np.ndarray]:
+    """(M,) uint64 sums of a random key per listed segment, and (M,) list lengths:
+    equal lists have equal fingerprints (the sum of disjoint sets adds up)."""
+    key = np.random.default_rng(0).integers(0, 2**63, size=max(leaves.n_segments, 1), dtype=np.uint64)
+    run = np.zeros(len(leaves.node_segs) + 1, dtype=np.uint64)
+    np.cumsum(key[leaves.node_segs], out=run[1:])  # wraps modulo 2**64, as wanted
+    node_hash = run[leaves.node_ptr[1:]] - run[leaves.node_ptr[:-1]]
+    node_count = np.diff(leaves.node_ptr)
+    fp = np.zeros(len(leaves.node), dtype=np.uint64)
+    count = np.zeros(len(leaves.node), dtype=np.int64)
+    cur, pos = leaves.node.copy(), np.arange(len(leaves.node))
+    while len(cur):
+        fp[pos] += node_hash[cur]
+        count[pos] += node_count[cur]
+        up = leaves.parent[cur]
+        pos, cur = pos[up >= 0], up[up >= 0]
+    return fp, count
+
+
+def equal_lists(leaves: Leaves, pairs: np.ndarray) -> np.ndarray:
+    """(P,) bool: whether the leaves of each pair (P, 2) have the same list.
+
+    Fingerprints rule most pairs out; the rest are compared segment by
+    segment, ``VIR_LIST_CHUNK`` listed segments at a time."""
+    fp, count = _leaf_fingerprints(leaves)
+    maybe = np.nonzero((fp[pairs[:, 0]] == fp[pairs[:, 1]]) & (count[pairs[:, 0]] == count[pairs[:, 1]]))[0]
+    out = np.zeros(len(pairs), dtype=bool)
+    step = max(1, VIR_LIST_CHUNK // max(1, int(count.max(initial=1))))
+    for i in range(0, len(maybe), step):
+        k = maybe[i : i + step]
+        owner_a, seg_a = leaves.lists(pairs[k, 0])
+        _, seg_b = leaves.lists(pairs[k, 1])
+        # Equal lengths pair by pair, so the two concatenations line up.
+        differs = np.bincount(owner_a[seg_a != seg_b], minlength=len(k))
+        out[k] = differs == 0
+    return out
+
+
+def list_bitsets(leaves: Leaves, which: np.ndarray) -> list[int]:
+    """The lists of leaves ``which`` as Python int bitsets (bit i: segment i)."""
+    n = leaves.n_segments
+    out: list[int] = []
+    step = max(1, VIR_LIST_CHUNK // max(n, 1))
+    for i in range(0, len(which), step):
+        k = np.asarray(which[i : i + step])
+        owner, seg = leaves.lists(k)
+        rows = np.zeros((len(k), n), dtype=bool)
+        rows[owner, seg] = True
+        packed = np.packbits(rows, axis=1, bitorder="little")
+        out.extend(int.from_bytes(r.tobytes(), "little") for r in packed)
+    return out
+
+
 def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[int]]:
     """Group leaves into regions. Returns ``group`` (M,) region index of each
     leaf and the region lists as Python int bitsets (bit i: segment i).
@@ -323,24 +464,23 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     """
     m = len(leaves.level)
     pairs = adjacent_pairs(leaf_raster(leaves).labels)
-    # Rows as opaque byte strings: a 1-D unique on them is far faster than axis=0.
-    nbytes = leaves.bits.shape[1]
-    rows = np.ascontiguousarray(leaves.bits).view(np.dtype((np.void, nbytes))).ravel() if nbytes else np.zeros(m)
-    _, list_id = np.unique(rows, return_inverse=True)
-    list_id = list_id.ravel()
-    same = pairs[list_id[pairs[:, 0]] == list_id[pairs[:, 1]]]
+    same = pairs[equal_lists(leaves, pairs)]
     graph = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(m, m))
     n_comp, comp = connected_components(graph, directed=False)
     first = np.full(n_comp, -1)
     first[comp[::-1]] = np.arange(m)[::-1]
     cell_area = (leaves.size / 2.0**leaves.level) ** 2
     area = np.bincount(comp, weights=cell_area, minlength=n_comp).tolist()
-    bits = [int.from_bytes(leaves.bits[i].tobytes(), "little") for i in first]
+    bits = list_bitsets(leaves, first)
     count = [b.bit_count() for b in bits]
     cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
+    # One int object per component, shared by the sets and heap entries
+    # below (ids from .tolist() would be new objects each: tens of MB).
+    ids = list(range(n_comp))
+    pair_ids = [(ids[a], ids[b]) for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist())]
     nbrs: list[set] = [set() for _ in range(n_comp)]
-    for a, b in cpairs.tolist():
+    for a, b in pair_ids:
         nbrs[a].add(b)
         nbrs[b].add(a)
 
@@ -352,12 +492,26 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
         u = (bits[a] | bits[b]).bit_count()
         return area[a] * (u - count[a]) + area[b] * (u - count[b])
 
-    heap = [(cost(a, b), a, b, 0, 0) for a, b in cpairs.tolist()]
+    heap = [(cost(a, b), a, b, 0, 0) for a, b in pair_ids]
+    del pair_ids
     heapq.heapify(heap)
     spent = 0.0
+    live = len(heap)  # pairs of current neighbours, at the last compaction
+
+    def current(entry) -> bool:
+        _, a, b, va, vb = entry
+        return version[a] == va and version[b] == vb and parent[a] == a and parent[b] == b
+
     while heap and budget > 0:
+        if len(heap) > 2 * live + 1024:
+            # Entries outdated by later merges pile up; dropping them keeps
+            # the heap (memory, pops) in proportion to the live pairs. The
+            # current entries, and so the order of merges, are unchanged.
+            heap = [e for e in heap if current(e)]
+            heapq.heapify(heap)
+            live = len(heap)
         c, a, b, va, vb = heapq.heappop(heap)
-        if version[a] != va or version[b] != vb or parent[a] != a or parent[b] != b:
+        if not current((c, a, b, va, vb)):
             continue
         if spent + c > budget:
             break
@@ -366,6 +520,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
         parent[b] = a
         bits[a] |= bits[b]
         count[a] = bits[a].bit_count()
+        bits[b] = 0  # b's list lives on in a's
         area[a] += area[b]
         version[a] += 1
         for x in nbrs[b]:

@@ -26,11 +26,15 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon
 
+from mapkit.memory import release_memory
+from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
     OVERLAY_GRID,
     VIS_BLOCK,
+    VIS_FIRST_EDGES,
+    VIS_HIDDEN_SLACK,
     VIS_BUILD_SHRINK,
     VIS_COLLINEAR,
     VIS_RAY_OFFSET_DEG,
@@ -119,11 +123,18 @@ def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarr
     verts = np.concatenate([a, b]) - p
     theta = np.arctan2(verts[:, 1], verts[:, 0])
     off = math.radians(VIS_RAY_OFFSET_DEG)
-    ang = np.concatenate([theta - off, theta + off])
-    ang = np.unique(np.mod(ang + math.pi, 2.0 * math.pi) - math.pi)
+    ang = np.mod(np.concatenate([theta - off, theta + off]) + math.pi, 2.0 * math.pi) - math.pi
     d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
     t = _nearest_hits(d, a - p, b - a)
-    return p + d * t[:, None]
+    # A vertex both of whose rays stop short of it is hidden: the nearest
+    # edge does not change at its angle, so its rays only add points along
+    # an edge already in the polygon. Dropping them keeps the outline (up to
+    # VIS_HIDDEN_SLACK next to grazed corners) with a fraction of the vertices.
+    r = np.hypot(verts[:, 0], verts[:, 1])
+    seen = np.tile((t[: len(r)] >= r - VIS_HIDDEN_SLACK) | (t[len(r) :] >= r - VIS_HIDDEN_SLACK), 2)
+    ang, d, t = ang[seen], d[seen], t[seen]
+    ang, first = np.unique(ang, return_index=True)
+    return p + d[first] * t[first, None]
 
 
 def clip_segments(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,7 +157,37 @@ def clip_segments(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) 
 
 def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
     """Distance along unit rays ``d`` (K, 2) from the origin to the nearest of
-    the edges ``a + u e``, u in [0, 1] (``a``, ``e`` (E, 2)); inf if none."""
+    the edges ``a + u e``, u in [0, 1] (``a``, ``e`` (E, 2)); inf if none.
+
+    Edges are tried nearest first, in batches that double in size: a ray
+    whose hit so far is no farther than the next edge's distance from the
+    origin cannot be cut shorter by that edge or any later one, so it stops
+    there. In a room most rays end on its own walls after the first batch:
+    the work grows with what each point sees, not with the whole plan."""
+    out = np.full(len(d), np.inf)
+    if len(a) == 0 or len(d) == 0:
+        return out
+    ee = np.einsum("ij,ij->i", e, e)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.clip(np.where(ee > 0, -np.einsum("ij,ij->i", a, e) / ee, 0.0), 0.0, 1.0)
+    reach = np.hypot(a[:, 0] + u * e[:, 0], a[:, 1] + u * e[:, 1])
+    order = np.argsort(reach, kind="stable")
+    a, e, reach = a[order], e[order], reach[order]
+    rays = np.arange(len(d))
+    start, batch = 0, VIS_FIRST_EDGES
+    while start < len(a) and len(rays):
+        stop = min(len(a), start + batch)
+        out[rays] = _hits_block(d[rays], a[start:stop], e[start:stop], out[rays])
+        start, batch = stop, 2 * batch
+        if start < len(a):
+            rays = rays[out[rays] > reach[start]]
+    return out
+
+
+def _hits_block(d: np.ndarray, a: np.ndarray, e: np.ndarray, best: np.ndarray | None = None) -> np.ndarray:
+    """Nearest hit of rays ``d`` (K, 2) on edges ``a + u e`` (E, 2), or ``best``
+    (K,) where that is nearer (inf by default): the brute-force kernel of
+    :func:`_nearest_hits`, in blocks of at most ``VIS_BLOCK`` ray-edge pairs."""
     out = np.empty(len(d))
     step = max(1, VIS_BLOCK // max(1, len(a)))
     for i in range(0, len(d), step):
@@ -159,7 +200,7 @@ def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
         # not slip between the two edges meeting there.
         ok = (t > 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
         out[i : i + step] = np.where(ok, t, np.inf).min(axis=1)
-    return out
+    return out if best is None else np.minimum(out, best)
 
 
 # --------------------------------------------------------------------------
@@ -390,6 +431,8 @@ def segment_regions(
     vp = shapely.simplify(raw, VIS_COLLINEAR, preserve_topology=False)
     bad = ~shapely.is_valid(vp)
     vp[bad] = raw[bad]
+    del raw  # the largest arrays of the stage: free them before the overlays
+    release_memory()
     # A point inside a (shrunk) wall is seen from nowhere: every sight line
     # from outside crosses the solid. The sweep, which skips edges facing
     # away, would instead see through that wall.
@@ -417,9 +460,12 @@ def segment_regions(
         lo_k, hi_k = np.minimum(pa, pb), np.maximum(pa, pb)
         uniq, inv = np.unique(lo_k * len(xy) + hi_k, return_inverse=True)
         ua, ub = uniq // len(xy), uniq % len(xy)
-        both = polygonal(shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID))
-        ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
-        pieces = polygonal(shapely.intersection(both[inv], ann))
+        with step("visibility overlaps", progress):
+            both = polygonal(shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID))
+            ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
+            pieces = polygonal(shapely.intersection(both[inv], ann))
+        del both, ann, vp
+        release_memory()
         pair_seg = np.array(pair_seg)
         order = np.argsort(pair_seg, kind="stable")
         bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))

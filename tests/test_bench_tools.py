@@ -72,3 +72,22 @@ def test_bench_budget_table(capsys):
     assert spent[1] == "1e-09" and spent[3] == "0%" and spent[5] == "2"  # a spent budget: both cut, none accepted
     assert bench_budget.main(["--poses", "0"]) == 2
     assert capsys.readouterr().err.strip() == "error: --poses must be at least 1 and --budgets at least 0"
+
+
+def test_bench_build_prints_a_row_with_peak_memory(capsys):
+    import bench_build
+
+    assert bench_build.main(["simple_room", "--load-repeats", "1"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split(" | ")[0].strip() == "input" and "peak MB" in lines[0]
+    row = [c.strip() for c in lines[2].split("|")]
+    assert row[0] == "simple_room.glb" and float(row[8]) > 10  # a child's peak memory, MB
+    assert row[9] == "40" and row[10] == "3"  # segments, regions
+
+
+def test_bench_build_writes_the_generated_offices(tmp_path):
+    import bench_build
+
+    path = bench_build.case_path("office_grid:2", tmp_path)
+    assert path.exists() and path.suffix == ".dxf"
+    assert bench_build.case_path("open_office", tmp_path).exists()

@@ -1,24 +1,35 @@
 #!/usr/bin/env python3
-"""Benchmark ``mapkit build`` on the bundled example and the real drawings and meshes.
+"""Benchmark ``mapkit build`` on the bundled example, the real drawings and
+meshes, and generated offices drawn as architects draw them.
 
-Prints one row per input: seconds per pipeline stage, segments, regions,
-mean visible-list length, file size and ``load_map`` time (best of
-``--load-repeats``). Targets (2-core machine): flat.dxf < 5 s total,
-barcelona < 30 s, flat.lmap < 100 KB, load_map < 20 ms.
+Prints one row per input: its floor (free space, m2), seconds per pipeline
+stage, segments, regions, mean visible-list length, file size, peak memory
+(the ``ru_maxrss`` of a child process that does only that build) and
+``load_map`` time (best of ``--load-repeats``). The generated cases
+(``tools/synthetic_plans.py``) show time and memory against floor area:
+offices of 4 x 4, 7 x 7 and 10 x 10 rooms of 5 m, and an open-plan office
+of about 600 m2 with the traits of a real one (AIA layer names, facade
+pieces and piers, door blocks, no closed outline). Targets (2-core machine):
+flat.dxf < 5 s total, barcelona < 30 s, flat.lmap < 100 KB, load_map < 20 ms;
+the open-plan office < 30 s and 1 GB, the 100-room office < 30 s and 500 MB.
 
     python tools/bench_build.py            # every case
     python tools/bench_build.py flat       # cases whose name contains 'flat'
+    python tools/bench_build.py office     # the generated offices
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tools"))
 
 #: name, input path, extra `mapkit build` options (as a user types them).
 CASES = [
@@ -27,7 +38,30 @@ CASES = [
     ("thehouse.dxf", "tests/data/thehouse.dxf", ["--walls", "s001-*", "--units", "m"]),
     ("simple_room.glb", "tests/data/simple_room.glb", []),  # stored z-up despite glTF's convention
     ("hospital.stl", "tests/data/hospital.stl", []),
+    # Generated (tools/synthetic_plans.py), written to a temporary folder first.
+    ("office 4x4 rooms", "office_grid:4", []),
+    ("office 7x7 rooms", "office_grid:7", []),
+    ("office 10x10 rooms", "office_grid:10", []),
+    ("open-plan office", "open_office", []),
 ]
+
+
+def case_path(rel: str, tmp: Path) -> Path:
+    """The input file of a case: a path under the project, or a generated plan written into ``tmp``."""
+    if rel.startswith("office_grid:"):
+        from synthetic_plans import office_grid
+
+        n = int(rel.split(":")[1])
+        path = tmp / f"office_{n}x{n}.dxf"
+        office_grid(path, n=n)
+        return path
+    if rel == "open_office":
+        from synthetic_plans import open_office
+
+        path = tmp / "open_office.dxf"
+        open_office(path)
+        return path
+    return ROOT / rel
 
 
 def run_case(path: Path, extra: list[str], load_repeats: int) -> dict:
@@ -50,7 +84,11 @@ def run_case(path: Path, extra: list[str], load_repeats: int) -> dict:
             t = time.perf_counter()
             load_map(out)
             loads.append(time.perf_counter() - t)
+    import resource
+
     return {
+        "floor_m2": float(linemap.meta.get("scene", {}).get("areas_m2", {}).get("free_space", float("nan"))),
+        "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         **{f"t_{k}": v for k, v in report.seconds.items()},
         "t_write": write,
         "t_total": total + write,
@@ -62,32 +100,52 @@ def run_case(path: Path, extra: list[str], load_repeats: int) -> dict:
     }
 
 
+def run_in_child(path: Path, extra: list[str], load_repeats: int) -> dict:
+    """:func:`run_case` in a fresh interpreter, so that its peak memory is its own."""
+    cmd = [sys.executable, __file__, "--child", str(path), "--load-repeats", str(load_repeats), "--", *extra]
+    done = subprocess.run(cmd, capture_output=True, text=True)
+    if done.returncode != 0:
+        lines = (done.stderr or done.stdout).strip().splitlines()
+        raise RuntimeError(lines[-1] if lines else f"exit status {done.returncode}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("only", nargs="*", help="run only cases whose name contains one of these")
     ap.add_argument("--load-repeats", type=int, default=20)
-    args = ap.parse_args(argv)
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    args, extra = ap.parse_known_args(argv)
+    if args.child:  # one build, its figures as JSON on the last line
+        import logging
+
+        logging.disable(logging.WARNING)
+        print(json.dumps(run_case(Path(args.child), [e for e in extra if e != "--"], args.load_repeats)))
+        return 0
     cols = [
-        ("input", 24, "s"), ("import", 7, ".2f"), ("edges", 6, ".2f"), ("regions", 7, ".2f"),
-        ("assemble", 8, ".2f"), ("write", 6, ".2f"), ("total s", 7, ".2f"), ("segs", 5, "d"),
-        ("regions", 7, "d"), ("mean list", 9, ".1f"), ("KiB", 7, ".1f"), ("load ms", 7, ".2f"),
+        ("input", 22, "s"), ("floor m2", 8, ".0f"), ("import", 6, ".2f"), ("edges", 5, ".2f"), ("regions", 7, ".2f"),
+        ("assemble", 8, ".2f"), ("write", 5, ".2f"), ("total s", 7, ".2f"), ("peak MB", 7, ".0f"), ("segs", 5, "d"),
+        ("regions", 7, "d"), ("mean list", 9, ".1f"), ("KiB", 6, ".1f"), ("load ms", 7, ".2f"),
     ]
     print(" | ".join(f"{name:>{w}}" if i else f"{name:<{w}}" for i, (name, w, _) in enumerate(cols)))
     print("-|-".join("-" * w for _, w, _ in cols))
     failed = 0
-    for name, rel, extra in CASES:
-        if args.only and not any(o in name for o in args.only):
-            continue
-        try:
-            r = run_case(ROOT / rel, extra, args.load_repeats)
-        except Exception as exc:  # a benchmark reports every case, even a failing one
-            print(f"{name:<24} | failed: {exc}")
-            failed += 1
-            continue
-        vals = [name, r.get("t_import", 0), r.get("t_edges", 0), r.get("t_regions", 0), r.get("t_assemble", 0),
-                r["t_write"], r["t_total"], r["segments"], r["regions"], r["mean_list"], r["kib"], r["load_ms"]]
-        print(" | ".join(f"{v:<{w}{f}}" if i == 0 else f"{v:>{w}{f}}" for i, (v, (_, w, f)) in enumerate(zip(vals, cols))))
-        sys.stdout.flush()
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, rel, extra_opts in CASES:
+            if args.only and not any(o in name for o in args.only):
+                continue
+            try:
+                r = run_in_child(case_path(rel, Path(tmp)), extra_opts, args.load_repeats)
+            except Exception as exc:  # a benchmark reports every case, even a failing one
+                print(f"{name:<22} | failed: {exc}")
+                failed += 1
+                continue
+            vals = [name, r["floor_m2"], r.get("t_import", 0), r.get("t_edges", 0), r.get("t_regions", 0),
+                    r.get("t_assemble", 0), r["t_write"], r["t_total"], r["peak_mb"], r["segments"], r["regions"],
+                    r["mean_list"], r["kib"], r["load_ms"]]
+            print(" | ".join(f"{v:<{w}{f}}" if i == 0 else f"{'-':>{w}}" if v != v else f"{v:>{w}{f}}"
+                             for i, (v, (_, w, f)) in enumerate(zip(vals, cols))))
+            sys.stdout.flush()
     return 1 if failed else 0
 
 

@@ -48,6 +48,7 @@ def run(args) -> int:
             "role": {"ignore": "ignored", None: "unknown"}.get(roles.get(name), roles.get(name)),
             "entities": dict(sorted(c.items())),
             "total": sum(c.values()),
+            "why": _why(name, roles.get(name), options),
         }
         for name, c in sorted(counts.items(), key=lambda kv: kv[0].casefold())
     ]
@@ -60,15 +61,33 @@ def run(args) -> int:
     return 0
 
 
+def _why(name: str, role: str | None, options) -> str:
+    """Why a layer has its role: the option that named it, or the word of its name."""
+    from mapkit.importers.dxf.layer_roles import _matches, explain_role
+
+    for opt in ("ignore", "walls", "doors", "windows", "floor"):
+        globs = getattr(options, opt, None) or []
+        if _matches(name, globs):
+            return f"--{opt} {next(g for g in globs if _matches(name, [g]))}"
+    guessed, reason = explain_role(name)
+    if role == guessed:
+        return reason
+    if role == "ignore" and guessed is not None:
+        return f"{reason}; other layers were named with --{guessed}"
+    if role == "walls":
+        return "the only layer with linework"
+    return reason
+
+
 def _table(rows: list[dict]) -> str:
-    """Aligned text table: layer, role, total, entities per type."""
-    header = ("LAYER", "ROLE", "COUNT", "ENTITIES")
+    """Aligned text table: layer, role, total, entities per type, why the role."""
+    header = ("LAYER", "ROLE", "COUNT", "ENTITIES", "WHY")
     body = [
-        (r["name"], r["role"], str(r["total"]), ", ".join(f"{k} {v}" for k, v in r["entities"].items()) or "-")
+        (r["name"], r["role"], str(r["total"]), ", ".join(f"{k} {v}" for k, v in r["entities"].items()) or "-", r["why"])
         for r in rows
     ]
-    widths = [max(len(row[i]) for row in [header, *body]) for i in range(3)]
+    widths = [max(len(row[i]) for row in [header, *body]) for i in range(4)]
     lines = []
     for row in [header, *body]:
-        lines.append(f"{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:>{widths[2]}}  {row[3]}")
+        lines.append(f"{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:>{widths[2]}}  {row[3]:<{widths[3]}}  {row[4]}")
     return "\n".join(lines)

@@ -15,10 +15,11 @@ def add_arguments(p) -> None:
 
 
 def run(args) -> int:
+    import sys
     from pathlib import Path
 
     from mapkit.commands._import_args import import_options_from_args, output_file
-    from mapkit.errors import MapkitError
+    from mapkit.errors import MapkitError, NoFreeSpaceError
     from mapkit.importers import load_scene
     from mapkit.preview import render_preview
 
@@ -26,7 +27,14 @@ def run(args) -> int:
     out = output_file(args.output, (".png",), [args.plan])
     if not 20 <= args.dpi <= 1200:
         raise MapkitError(f"--dpi must be between 20 and 1200, got {args.dpi}")
-    scene = load_scene(args.plan, options)
+    try:
+        scene = load_scene(args.plan, options)
+    except NoFreeSpaceError as exc:
+        if exc.scene is None:
+            raise
+        # The preview is where a user sees why: draw what was understood.
+        print(f"mapkit: warning: {exc}", file=sys.stderr)
+        scene = exc.scene
     render_preview(scene, out, title=Path(args.plan).name, dpi=args.dpi)
     doors = sum(o.kind == "door" for o in scene.openings)
     windows = sum(o.kind == "window" for o in scene.openings)

@@ -3,7 +3,10 @@
 Users name layers with ``--walls/--doors/--windows/--ignore`` globs
 (fnmatch, case-insensitive). Without them, roles are guessed from the names
 architects commonly use, in several languages and in the US National CAD
-Standard (``A-WALL``, ``A-DOOR``, ``A-GLAZ``, ``A-COLS``, ``A-FURN`` ...).
+Standard (``A-WALL``, ``A-DOOR``, ``A-GLAZ``, ``A-COLS``, ``A-FURN`` ...)
+and their numbered variants; zone and space polygons (``Zone``, ``Space``,
+``Room``, ``Pieces``, ``Raum``) give the free space like a floor layer;
+facade contours are walls; virtual partitions are ignored.
 """
 
 from __future__ import annotations
@@ -29,6 +32,8 @@ _IGNORE_FIRST = r"""
     |eqpm|equipment|appliances?|fixtures?|plumbing|plmb|sanitary|sanitaire|elec|electrical|hvac|mech
     |grid|axis|axes|achsen?|ejes?|title|titleblock|frame|viewport|vport|defpoints|hidden|cancel
     |projection|roof|ceiling|clng|plafond|techo|decke|trees?|plants?|landscape|symbols?|iden|tags?
+    |names?|labels?|noms?|nummern?|numbers?|numeros?
+    |virtual|virtuals|virtuel|virtuelle|virtuell|virtuale|notional|imaginary
 """
 _DOORS = r"doors?|door|dr|porte|portes|tuer|tur|tueren|turen|puertas?|porta|porte|deur|deuren|portas?"
 _WINDOWS = r"""
@@ -40,8 +45,12 @@ _WALLS = r"""
     |partitions?|prtn|cloisons?|tabiques?|tramezz[io]|structure|structural|struct|strs|tragwerk
     |columns?|cols?|colonnes?|colonnas?|columnas?|pilier|piliers|pilar|pilares|pilastr[io]|poteaux?|stuetzen?|stutzen?|kolom|kolommen
     |core|beton|concrete|hormigon|masonry|maconnerie|mauerwerk
+    |facades?|fassaden?|fachadas?|facciata|facciate|gevel|gevels|envelope|shell
 """
-_FLOOR = r"""flooring|floors?|flor|sol|sols|dallage|revetement|suelos?|pavimentos?|piso|boden|fussboden|vloer|paving"""
+_FLOOR = r"""
+    flooring|floors?|flor|sol|sols|dallage|revetement|suelos?|pavimentos?|piso|boden|fussboden|vloer|paving
+    |zones?|zona|zonas|spaces?|espaces?|espacios?|rooms?|pieces?|raum|raume|raeume|stanze?|habitaciones?|locaux|local
+"""
 
 
 def _rx(alternatives: str) -> re.Pattern:
@@ -68,13 +77,48 @@ def tokens(layer: str) -> list[str]:
     return [w for w in re.split(r"[^A-Za-z]+", split.lower()) if w]
 
 
-def guess_role(layer: str) -> str | None:
-    """Role guessed from a layer's name, or None when the name says nothing."""
+_VIRTUAL = re.compile(r"^(?:virtual|virtuals|virtuel|virtuelle|virtuell|virtuale|notional|imaginary)$")
+
+#: What each guessed role means for the map, for ``mapkit layers``.
+_MEANING = {
+    "ignore": "not building geometry",
+    "doors": "door drawings: openings in walls",
+    "windows": "windows or glass",
+    "walls": "walls: block the robot and the view",
+    "floor": "outlines of the floor or of rooms: free space",
+}
+
+
+def explain_role(layer: str) -> tuple[str | None, str]:
+    """Role guessed from a layer's name and why: ``("walls", "'structure': walls ...")``.
+
+    Words are matched whole, numbers and punctuation ignored, so AIA/NCS
+    names and their numbered variants read alike (``A-WALL``, ``A-210 G -
+    Existing Structure 4``, ``A-320G - Permanent Solid Partitions 12``).
+    A virtual partition (``I-321G - Virtual Partition 18``) marks a zone
+    on the plan, not a wall on site: ignored, it blocks nothing."""
     words = tokens(layer)
     for role, rx in _GUESS_ORDER:
-        if any(rx.match(w) for w in words):
-            return role
-    return None
+        hit = next((w for w in words if rx.match(w)), None)
+        if hit is not None:
+            if _VIRTUAL.match(hit):
+                return role, f"'{hit}': a partition drawn for zoning, not built: blocks nothing"
+            return role, f"'{hit}': {_MEANING[role]}"
+    return None, "no known word in the name"
+
+
+_ZONE = re.compile(r"""^(?:zones?|zona|zonas|spaces?|espaces?|espacios?|rooms?|pieces?|raum|raume|raeume|stanze?
+                     |habitaciones?|locaux|local)$""", re.X)
+
+
+def is_zone_layer(layer: str) -> bool:
+    """Whether a layer's name says it holds room or space polygons (not one floor outline)."""
+    return any(_ZONE.match(w) for w in tokens(layer))
+
+
+def guess_role(layer: str) -> str | None:
+    """Role guessed from a layer's name, or None when the name says nothing."""
+    return explain_role(layer)[0]
 
 
 def _matches(layer: str, globs: Iterable[str]) -> bool:

@@ -109,6 +109,72 @@ def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> 
     return best
 
 
+def door_openings(items: list[MultiLineString], barriers, max_wall_thickness: float) -> list[tuple[MultiLineString, Polygon | None]]:
+    """Each door drawing with the wall gap it sits in (None if none).
+
+    A drawing between two jambs is found by :func:`find_opening`. The
+    leaves of a double door are two drawings, each at one jamb: drawings
+    that found no gap alone and touch each other are tried together. A door
+    at the end of a wall, with no wall on its latch side, gets the gap its
+    drawing spans from that end (:func:`opening_at_wall_end`)."""
+    found = [(item, find_opening(item, barriers, max_wall_thickness)) for item in items]
+    alone = [k for k, (_, gap) in enumerate(found) if gap is None]
+    merged: set[int] = set()
+    for i in alone:
+        if i in merged:
+            continue
+        for j in alone:
+            if j <= i or j in merged or found[i][0].distance(found[j][0]) > JAMB_REACH:
+                continue
+            both = _lines(unary_union([found[i][0], found[j][0]]))
+            gap = find_opening(both, barriers, max_wall_thickness)
+            if gap is not None:
+                found[i] = (both, gap)
+                merged.add(j)
+                break
+    out = []
+    for k, (item, gap) in enumerate(found):
+        if k in merged:
+            continue
+        if gap is None:
+            gap = opening_at_wall_end(item, barriers, max_wall_thickness)
+        out.append((item, gap))
+    return out
+
+
+def opening_at_wall_end(item: MultiLineString, barriers, max_wall_thickness: float) -> Polygon | None:
+    """The gap a door drawing spans from the end of a wall it meets, when no
+    wall stands on its other side: from the wall's end face, along the wall,
+    as far as the drawing reaches (at least ``MIN_OPENING_WIDTH``), as wide
+    as the wall is thick, stopped by any wall in the way. None when the
+    drawing meets no wall end."""
+    from mapkit.importers.dxf.enclosure import wall_ends
+
+    x0, y0, x1, y1 = item.bounds
+    pad = JAMB_REACH + max_wall_thickness
+    local = shapely.clip_by_rect(barriers, x0 - pad, y0 - pad, x1 + pad, y1 + pad)
+    a, b, out = wall_ends(local, max_wall_thickness)
+    if len(a) == 0:
+        return None
+    coords = np.concatenate([np.asarray(g.coords)[:, :2] for g in item.geoms])
+    best = None
+    for k in range(len(a)):
+        face = LineString([a[k], b[k]])
+        if face.distance(item) > JAMB_REACH:
+            continue
+        c = (a[k] + b[k]) / 2.0
+        reach = float(((coords - c) @ out[k]).max())
+        if reach < MIN_OPENING_WIDTH:
+            continue
+        zone = Polygon([a[k], b[k], b[k] + out[k] * reach, a[k] + out[k] * reach])
+        gap = zone.difference(barriers)
+        piece = max((g for g in shapely.get_parts(gap) if isinstance(g, Polygon)), key=lambda g: g.area, default=None)
+        if piece is None or piece.area <= 0 or (best is not None and piece.area <= best.area):
+            continue
+        best = piece
+    return best
+
+
 def _wall_direction(axis: np.ndarray, barriers, jambs) -> np.ndarray:
     """The direction of the wall faces at the jambs closest to ``axis`` (within 15 degrees).
 
@@ -175,4 +241,4 @@ def _lines(geom) -> MultiLineString:
     return MultiLineString([g for g in shapely.get_parts(geom) if isinstance(g, LineString) and not g.is_empty])
 
 
-__all__ = ["drawing_items", "find_opening", "glass_footprint", "opening_width"]
+__all__ = ["door_openings", "drawing_items", "find_opening", "glass_footprint", "opening_at_wall_end", "opening_width"]

@@ -18,12 +18,15 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
 
-from mapkit.errors import MapkitError, NoWallsError
+from mapkit.errors import MapkitError, NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
-from mapkit.importers.dxf.openings import drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.enclosure import end_bridges, passable
+from mapkit.importers.dxf.layer_roles import is_zone_layer
+from mapkit.importers.dxf.openings import door_openings, drawing_items, find_opening, glass_footprint, opening_width
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
+from mapkit.shapes import polygon_parts
 from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP
 
 log = logging.getLogger("mapkit")
@@ -49,8 +52,16 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
         raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
 
+    zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    if not zones.is_empty:
+        between = _between_zones(walls, zones, options.max_wall_thickness)
+        if not between.is_empty:
+            walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
+            info["zone_walls_m2"] = round(between.area, 3)
+
     openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
-    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"))
+    bridges = end_bridges(walls, options.max_wall_thickness)
+    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
         warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
 
@@ -61,12 +72,6 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if options.robot_radius > 1e-9:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
-    if free.is_empty:
-        layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
-        raise MapkitError(
-            f"no free space left inside the walls (layers {layers}) after keeping {options.robot_radius:g} m "
-            f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius"
-        )
 
     info["interior"] = interior_source
     info["counts"] = dict(wall_result.counts) | {
@@ -80,7 +85,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         "interior": round(interior.area, 3),
     }
     ignored = {layer: _strokes_geometry(strokes) for layer, strokes in drawing.ignored.items()}
-    return Scene(
+    scene = Scene(
         walls=walls,
         openings=openings,
         free_space=free,
@@ -89,6 +94,14 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         ignored=ignored,
         info=info,
     )
+    if free.is_empty:
+        layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
+        raise NoFreeSpaceError(
+            f"no free space left inside the walls (layers {layers}) after keeping {options.robot_radius:g} m "
+            f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius",
+            scene,
+        )
+    return scene
 
 
 def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
@@ -111,8 +124,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     barriers = unary_union([walls, glass]) if not glass.is_empty else walls
     door_gaps = []
     lost = []
-    for item in drawing_items(drawing.role("doors")):
-        gap = find_opening(item, barriers, options.max_wall_thickness)
+    for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
         if gap is None:
             lost.append(item.centroid)
             continue
@@ -140,16 +152,21 @@ def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
     return any(gap.intersection(t).area > 0.5 * min(gap.area, t.area) for t in taken)
 
 
-def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPolygon, floor: list[Stroke]):
+def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPolygon, floor: list[Stroke],
+              bridges: list[Polygon] | None = None):
     """Region where the building's inside is, and how it was decided.
 
-    Doors, windows and glass shut their gaps, so the rooms are the holes of
-    the union of all barriers; door gaps then join the interior (the robot
-    passes through them). Open plans (those holes cover less than
-    ``OPEN_PLAN_FRACTION`` of the walls' convex hull) take the floor layer's
-    extent, else the hull.
+    Doors, windows, glass and the undrawn openings between facing wall ends
+    (``bridges``, :mod:`.enclosure`) shut their gaps, so the rooms are the
+    holes of the union of all barriers; door gaps and the bridges with a
+    room on both sides then join the interior (the robot passes through
+    them; a bridge to the outside stays shut). A floor layer, when there is
+    one, says where the inside is. Plans still open after that (the holes
+    cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) take
+    the hull.
     """
-    shut = unary_union([walls, obstacles, *door_gaps])
+    bridges = bridges or []
+    shut = unary_union([walls, obstacles, *door_gaps, *bridges])
     # Hairline gaps where glass or a door gap meets a wall must not let the inside leak.
     shut = shut.buffer(SNAP_GAP, join_style="mitre").buffer(-SNAP_GAP, join_style="mitre")
     holes = [Polygon(ring) for poly in shapely.get_parts(shut) if isinstance(poly, Polygon) for ring in poly.interiors]
@@ -166,9 +183,23 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     # A small closing seals hairline slits where a gap meets a room (they
     # would block the passage once the free space is shrunk); walls are
     # subtracted afterwards, so it cannot add wall material to the inside.
-    inside = unary_union([inside, *door_gaps])
+    doorways = [b for b in bridges if passable(b, inside)] if bridges else []
+    inside = unary_union([inside, *door_gaps, *doorways])
     inside = inside.buffer(SNAP_GAP, join_style="mitre").buffer(-SNAP_GAP, join_style="mitre")
     return inside, source
+
+
+def _between_zones(walls, zones, max_wall_thickness: float):
+    """Walls a plan drawn as room polygons leaves implicit: the thin strips
+    (thinner than ``max_wall_thickness``) between its rooms, and between
+    its rooms and the outline the walls enclose (a facade contour)."""
+    half = max_wall_thickness / 2.0
+    holes = [Polygon(r) for p in polygon_parts(walls) for r in p.interiors]
+    envelope = unary_union(holes) if holes else Polygon()
+    closed = zones.buffer(half, join_style="mitre").buffer(-half, join_style="mitre")
+    candidates = unary_union([envelope.difference(zones), closed.difference(zones)])
+    thin = [p for p in polygon_parts(candidates) if p.area > 0 and p.buffer(-half * 0.999).is_empty]
+    return unary_union(thin) if thin else Polygon()
 
 
 def _floor_extent(floor: list[Stroke]) -> Polygon | MultiPolygon:

@@ -75,14 +75,18 @@ def build_walls(strokes: list[Stroke], max_wall_thickness: float) -> WallResult:
         faces_by_comp[c] = [f for f in shapely.get_parts(shapely.polygonize(shapely.get_parts(lines))) if f.area > 0]
     all_faces = [(c, f) for c, fs in faces_by_comp.items() for f in fs]
     tree = shapely.STRtree([f for _, f in all_faces])
+    faces_of_double = _double_line_faces(all_faces, tree, half)
     for c, faces in faces_by_comp.items():
         for f in faces:
             if f.buffer(-half).is_empty:
                 material.append(f)
+            elif id(f) in faces_of_double:
+                rooms.append(f)  # the inner face of a wall drawn as two outlines
             elif len(faces) == 1 and (f.area <= COLUMN_MAX_AREA or _nested(f, c, all_faces, tree)):
                 solids.append(f)
             else:
                 rooms.append(f)
+    material.extend(faces_of_double.values())
     solid = unary_union(material + solids + fills)
     # Lines not bordering a solid are walls drawn as a single line.
     loose = noded.difference(solid.buffer(MERGE)) if not solid.is_empty else noded
@@ -216,6 +220,34 @@ def _components(parts: list[LineString]) -> np.ndarray:
     graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n_nodes, n_nodes))
     _, labels = connected_components(graph, directed=False)
     return labels[a]
+
+
+def _double_line_faces(all_faces, tree, half: float) -> dict[int, Polygon]:
+    """Walls drawn as nested outlines: their inner faces and the wall between.
+
+    An outline whose face holds, from other drawings, outlines that leave
+    between them and it only a band thinner than ``2 * half`` (a room drawn
+    with its wall's outer and inner faces, or a building outline around its
+    rooms' outlines) is the outer face of a wall. Returns ``{id(inner face):
+    band}`` for every inner face so found (the band once, on the first)."""
+    out: dict[int, Polygon] = {}
+    for c, outer in all_faces:
+        if outer.buffer(-half).is_empty:
+            continue  # already wall material
+        inner = [f for j in tree.query(outer, predicate="contains_properly")
+                 for cj, f in [all_faces[j]] if cj != c and f.area < outer.area]
+        if not inner:
+            continue
+        band = outer.difference(unary_union(inner))
+        if band.is_empty or not band.buffer(-half).is_empty:
+            continue
+        # The rooms are the outermost nested faces that are not wall material
+        # themselves (a column inside a room is not a room).
+        rooms = [f for f in inner if not f.buffer(-half).is_empty
+                 and not any(g is not f and g.contains(f) for g in inner)]
+        for k, f in enumerate(rooms):
+            out[id(f)] = band if k == 0 else Polygon()
+    return out
 
 
 def _nested(face: Polygon, comp: int, all_faces, tree) -> bool:
