@@ -81,6 +81,17 @@ BRIDGE_ANGLE_DEG = 15.0
 #: walls, not places a camera can stand.
 MIN_FREE_AREA = 0.05
 
+# ---- segments files (mapkit/importers/segments.py) -----------------------
+#: Two end heights within this many metres are one level (a horizontal
+#: segment; the floor and ceiling levels).
+SEGMENTS_LEVEL = 0.02
+#: Without "walls", the floor-level segments are wall faces this thick
+#: (metres): they hide what is behind them.
+SEGMENTS_WALL_FACE = 0.1
+#: Without an "outline", gaps between floor-level segments up to this wide
+#: (metres: a double door) are shut to find the rooms they enclose.
+SEGMENTS_CLOSE_GAP = 1.5
+
 #: Plausible building extent, metres (largest side); outside it the drawing
 #: units are probably wrong.
 PLAUSIBLE_EXTENT = (1.0, 2000.0)

@@ -25,6 +25,7 @@ REGISTRY = {
     ".glb": "mapkit.importers.mesh",
     ".gltf": "mapkit.importers.mesh",
     ".off": "mapkit.importers.mesh",
+    ".csv": "mapkit.importers.segments",
 }
 
 
