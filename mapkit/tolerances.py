@@ -91,6 +91,30 @@ DXF_MAX_BLOCK_DEPTH = 32
 #: 4e-6 of the radius (a 90-degree one by 3e-4, 3 mm on a 10 m rotunda).
 CURVE_BEZIER_PER_TURN = 8
 
+
+# ---- ZInD annotations (mapkit.importers.zind) -------------------------------
+
+#: ZInD draws each room's inner outline only; a wall this thick is put
+#: around every room (the sample tour's rooms stand 6 to 47 cm apart).
+ZIND_WALL_THICKNESS = 0.15
+
+#: Gaps between neighbouring rooms' walls up to twice this are filled with
+#: wall (a thick wall between two rooms is solid, not two skins and a void).
+ZIND_WALL_GAP_CLOSE = 0.1
+
+#: How far across the wall a door, window or opening is cut, from the face
+#: of the room that annotates it: through both rooms' walls and the gap
+#: between them.
+ZIND_OPENING_REACH = 2 * (ZIND_WALL_THICKNESS + ZIND_WALL_GAP_CLOSE)
+
+#: An annotated door, window or opening may lie this far inside its room's
+#: outline and still cut the wall behind it.
+ZIND_OPENING_SLACK = 0.05
+
+#: An opening whose annotated bottom is within this of the floor starts at
+#: the floor (annotators click the floor line to a few centimetres).
+ZIND_FLOOR_SNAP = 0.1
+
 # ---- visibility and regions (mapkit.visibility, mapkit.vir) -----------------
 
 #: Visibility polygons cast rays this many degrees either side of each wall
