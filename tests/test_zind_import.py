@@ -52,7 +52,7 @@ def _pano(centre, outline, ceiling_m, doors=(), windows=(), openings=(), primary
     }
 
 
-def zind_doc(floors=("floor_01",)):
+def zind_doc(floors=("floor_01",), recess=False):
     a_centre, b_centre = np.array([2.5, 2.0]), np.array([7.2, 2.0])
     room_a = [(0, 0), (5, 0), (5, 4), (0, 4)]
     room_b = [(5.2, 0), (9.2, 0), (9.2, 4), (5.2, 4)]
@@ -64,6 +64,9 @@ def zind_doc(floors=("floor_01",)):
         "complete_room_01": {"partial_room_01": {"pano_1": _pano(a_centre, room_a, 2.5, [door_a], [window])}},
         "complete_room_02": {"partial_room_02": {"pano_2": _pano(b_centre, room_b, 2.4, [door_b], [], [opening])}},
     }
+    if recess:  # B annotates an opening in the wall it shares with A, which A does not
+        floor["complete_room_02"]["partial_room_02"]["pano_2"] = _pano(
+            b_centre, room_b, 2.4, [door_b], [], [opening, ((5.2, 3.6), (5.2, 3.0), 0.0, 2.4)])
     return {
         "scale_meters_per_coordinate": {f: 1.0 for f in floors},
         "merger": {f: floor for f in floors},
@@ -124,6 +127,22 @@ def test_door_and_opening_gaps(zind_file):
     # The window: sill and head edges at 0.9 and 2.1 m on A's north face.
     north = np.all(np.abs(seg[:, :, 1] - 4.0) < 1e-6, axis=1) & (kinds == SegmentKind.WINDOW)
     assert sorted(set(seg[north][:, 0, 2].round(3))) == [0.9, 2.1]
+
+
+def test_an_opening_annotated_from_one_side_is_a_recess(tmp_path):
+    path = tmp_path / "zind_data.json"
+    path.write_text(json.dumps(zind_doc(recess=True)))
+    m, report = build_map(path, BuildOptions(robot_radius=0.1))
+    seg, kinds = m.segments, m.kinds
+    floor = kinds == SegmentKind.FLOOR
+
+    def spans(x):
+        on = floor & np.all(np.abs(seg[:, :, 0] - x) < 1e-6, axis=1)
+        return sorted(tuple(sorted(s[:, 1].round(3))) for s in seg[on])
+
+    assert spans(5.0) == [(0.0, 1.0), (2.0, 4.0)]  # A's face: only the door
+    assert spans(5.2) == [(0.0, 1.0), (2.0, 3.0), (3.6, 4.0)]  # B's face: the door and the recess
+    assert any("one side only" in w for w in report.warnings)
 
 
 def test_cli_builds_and_the_camera_flag_wins(zind_file, tmp_path, capsys):

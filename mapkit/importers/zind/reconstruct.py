@@ -47,23 +47,23 @@ def scene_from_floor(floor: ZindFloor, options: BuildOptions) -> Scene:
     solid = solid.buffer(-ZIND_WALL_GAP_CLOSE, join_style="mitre")
     wall_material = solid.difference(inside)
 
+    gaps, one_sided = _gaps(floor, rooms, wall_material)
     openings: list[Opening] = []
-    passages, window_gaps, missed, kept = [], [], 0, []
-    for room, poly in zip(floor.rooms, rooms):
-        for o in room.openings:
-            gap = _cut(o, poly, wall_material)
-            if gap is None:
-                missed += 1
-                continue
-            if any(gap.intersection(t).area > 0.5 * min(gap.area, t.area) for t in passages + window_gaps):
-                continue  # the same gap, annotated from the room on its other side
-            sill = 0.0 if o.bottom < ZIND_FLOOR_SNAP else o.bottom
-            head = max(o.top, sill + ZIND_FLOOR_SNAP)
-            openings.append(Opening(gap, "window" if o.kind == "window" else "door", sill, head))
-            (window_gaps if o.kind == "window" else passages).append(gap)
-            kept.append(o.kind)
+    passages, window_gaps, kept = [], [], []
+    for o, gap in gaps:
+        if any(gap.intersection(t).area > 0.5 * min(gap.area, t.area) for t in passages + window_gaps):
+            continue  # the same gap, annotated from the room on its other side
+        sill = 0.0 if o.bottom < ZIND_FLOOR_SNAP else o.bottom
+        head = max(o.top, sill + ZIND_FLOOR_SNAP)
+        openings.append(Opening(gap, "window" if o.kind == "window" else "door", sill, head))
+        (window_gaps if o.kind == "window" else passages).append(gap)
+        kept.append(o.kind)
+    missed = sum(len(r.openings) for r in floor.rooms) - len(gaps)
     if missed:
         warn(f"{missed} door(s), window(s) or opening(s) are not on a room's wall and were left out")
+    if one_sided:
+        warn(f"{one_sided} door(s) or opening(s) toward a neighbouring room are annotated from one side only: "
+             "each is a recess in the wall, not a way through")
 
     cut = shapely.union_all(passages + window_gaps) if openings else Polygon()
     walls = _multi(wall_material.difference(cut))
@@ -112,9 +112,39 @@ def _polygon(outline: np.ndarray, name: str, warn) -> Polygon:
     return poly
 
 
-def _cut(o: ZindOpening, room: Polygon, wall_material) -> Polygon | None:
+def _gaps(floor: ZindFloor, rooms: list[Polygon], wall_material) -> tuple[list, int]:
+    """(opening, gap polygon) of every opening on a wall, and how many were cut short.
+
+    A gap goes through the wall when nothing is behind it (an outside wall)
+    or when the room behind annotates a gap there too (the same door seen
+    from both sides). A door or opening that the room behind does not
+    annotate is cut only to halfway to that room: seen from there it is a
+    wall (the sample tour's garage has an "opening" onto a recess that its
+    neighbour sees as plain wall)."""
+    full = []
+    for k, (room, poly) in enumerate(zip(floor.rooms, rooms)):
+        for o in room.openings:
+            gap = _cut(o, poly, wall_material, ZIND_OPENING_REACH)
+            if gap is not None:
+                full.append((k, o, poly, gap))
+    out, one_sided = [], 0
+    for k, o, poly, gap in full:
+        behind = shapely.union_all([r for j, r in enumerate(rooms) if j != k] or [Polygon()])
+        depth = float(shapely.distance(shapely.points(*o.ends.mean(axis=0)), behind)) if not behind.is_empty else np.inf
+        seen_behind = any(j != k and gap.intersection(g).area > 0.25 * min(gap.area, g.area) for j, _, _, g in full)
+        if depth < ZIND_OPENING_REACH and not seen_behind and o.kind != "window":
+            gap = _cut(o, poly, wall_material, 0.5 * depth)
+            one_sided += 1
+            if gap is None:
+                continue
+        out.append((o, gap))
+    return out, one_sided
+
+
+def _cut(o: ZindOpening, room: Polygon, wall_material, reach: float) -> Polygon | None:
     """The wall gap an opening makes: from the room's face outwards through
-    the wall, the part of the wall that touches the annotated line."""
+    the wall up to ``reach`` metres, the part of the wall that touches the
+    annotated line."""
     a, b = o.ends
     along = b - a
     length = float(np.hypot(*along))
@@ -124,7 +154,7 @@ def _cut(o: ZindOpening, room: Polygon, wall_material) -> Polygon | None:
     mid = 0.5 * (a + b)
     if room.contains(shapely.points(*(mid + 2 * ZIND_OPENING_SLACK * normal))):
         normal = -normal  # point outwards, away from the room
-    back, out = -ZIND_OPENING_SLACK * normal, ZIND_OPENING_REACH * normal
+    back, out = -ZIND_OPENING_SLACK * normal, reach * normal
     rect = Polygon([a + back, b + back, b + out, a + out])
     line = LineString([a, b])
     parts = [p for p in shapely.get_parts(rect.intersection(wall_material))
