@@ -30,7 +30,7 @@ from mapkit.shapes import rings_of
 from linemap.lmap import SegmentKind
 from mapkit.options import BuildOptions
 from mapkit.scene import Opening, Scene
-from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, FOOTPRINT_CLOSE_GAP, MERGE
+from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, FOOTPRINT_CLOSE_GAP, MERGE, ZONE_REACH
 
 
 def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -50,11 +50,15 @@ def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np
     options = options or BuildOptions()
     zones = scene.height_zones
     if not zones:
-        segs, kinds = _edges_at_height(scene, float(scene.wall_height), options)
+        segs, kinds = _edges_at_height(scene.walls, scene.openings, float(scene.wall_height), options)
     else:
         segs, kinds = [], []
         for k, zone in enumerate(zones):
-            s, kk = _edges_at_height(scene, float(zone.height), options)
+            # Only the walls near the zone: a cut this far off lies along another zone, which owns it.
+            near = zone.area.buffer(ZONE_REACH)
+            walls = scene.walls.intersection(near)
+            openings = [o for o in scene.openings if o.footprint.intersects(near)]
+            s, kk = _edges_at_height(walls, openings, float(zone.height), options)
             if not s:
                 continue
             owner = _nearest_zone(np.stack(s), zones)
@@ -73,10 +77,10 @@ def _nearest_zone(segments: np.ndarray, zones) -> np.ndarray:
     return np.argmin(shapely.distance(points[:, None], areas[None, :]), axis=1)
 
 
-def _edges_at_height(scene: Scene, height: float, options: BuildOptions) -> tuple[list, list]:
-    """Edges of the scene's walls extruded to ``height``: lists of (2, 3) arrays and kinds."""
-    openings = _openings_below(scene.openings, height)
-    levels, footprints = _bands(scene.walls, openings, height)
+def _edges_at_height(walls, openings: list[Opening], height: float, options: BuildOptions) -> tuple[list, list]:
+    """Edges of ``walls`` with ``openings`` extruded to ``height``: lists of (2, 3) arrays and kinds."""
+    openings = _openings_below(openings, height)
+    levels, footprints = _bands(walls, openings, height)
     segs: list[np.ndarray] = []
     kinds: list[int] = []
     doors = shapely.union_all([o.footprint for o in openings if o.kind == "door"] or [MultiPolygon()])

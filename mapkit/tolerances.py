@@ -46,6 +46,11 @@ AXIS_DEG = 2.0
 #: (the edge stage, :mod:`mapkit.edges`).
 FOOTPRINT_CLOSE_GAP = 5 * MERGE
 
+#: Rooms of their own ceiling heights (:mod:`mapkit.edges`): a room's pass
+#: takes only the walls within this of it. Walls exist only next to rooms,
+#: so where this cuts a wall it runs along another room, nearer that room.
+ZONE_REACH = 1.0
+
 # ---- plan reconstruction (mapkit.importers.dxf) -----------------------------
 
 #: Single wall lines that bound no solid are thickened to this total width.
