@@ -116,6 +116,12 @@ ZIND_OPENING_REACH = 2 * (ZIND_WALL_THICKNESS + ZIND_WALL_GAP_CLOSE)
 #: outline and still cut the wall behind it.
 ZIND_OPENING_SLACK = 0.05
 
+#: A gap annotated from the room behind too (the same door seen from both
+#: sides) overlaps this one by at least this fraction of the smaller, once
+#: both are cut through the wall; the two rooms' annotations of one door
+#: differ by centimetres.
+ZIND_SAME_GAP_OVERLAP = 0.25
+
 #: An opening whose annotated bottom is within this of the floor starts at
 #: the floor (annotators click the floor line to a few centimetres).
 ZIND_FLOOR_SNAP = 0.1

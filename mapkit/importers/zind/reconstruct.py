@@ -26,6 +26,7 @@ from mapkit.tolerances import (
     ZIND_FLOOR_SNAP,
     ZIND_OPENING_REACH,
     ZIND_OPENING_SLACK,
+    ZIND_SAME_GAP_OVERLAP,
     ZIND_WALL_GAP_CLOSE,
     ZIND_WALL_THICKNESS,
 )
@@ -131,7 +132,8 @@ def _gaps(floor: ZindFloor, rooms: list[Polygon], wall_material) -> tuple[list, 
     for k, o, poly, gap in full:
         behind = shapely.union_all([r for j, r in enumerate(rooms) if j != k] or [Polygon()])
         depth = float(shapely.distance(shapely.points(*o.ends.mean(axis=0)), behind)) if not behind.is_empty else np.inf
-        seen_behind = any(j != k and gap.intersection(g).area > 0.25 * min(gap.area, g.area) for j, _, _, g in full)
+        seen_behind = any(j != k and gap.intersection(g).area > ZIND_SAME_GAP_OVERLAP * min(gap.area, g.area)
+                          for j, _, _, g in full)
         if depth < ZIND_OPENING_REACH and not seen_behind and o.kind != "window":
             gap = _cut(o, poly, wall_material, 0.5 * depth)
             one_sided += 1
