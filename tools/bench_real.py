@@ -91,12 +91,23 @@ def main(argv=None) -> int:
         print(f"bench_real: error: {e}", file=sys.stderr)
         return 2
     if args.check:
-        if not args.overlays:
-            print("bench_real: error: --check needs --overlays DIR", file=sys.stderr)
-            return 2
-        check_views(views[: args.check], args, lmap_path)
-        return 0
+        try:
+            if not args.overlays:
+                print("bench_real: error: --check needs --overlays DIR", file=sys.stderr)
+                return 2
+            check_views(views[: args.check], args, lmap_path)
+            return 0
+        finally:
+            Path(lmap_path).unlink(missing_ok=True)
 
+    try:
+        return run_all(views, floor, lmap_path, camera_height, args)
+    finally:
+        Path(lmap_path).unlink(missing_ok=True)
+
+
+def run_all(views, floor, lmap_path, camera_height, args) -> int:
+    """Localise every view (in ``--jobs`` processes) and print the tables."""
     tasks = group_by_pano(views)
     t0 = time.perf_counter()
     rows = []
