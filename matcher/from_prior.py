@@ -120,15 +120,9 @@ def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, 
                               f"{seen} of them: the lines do not look like the map there", **common)
     res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
                          matches=matches_of(best), **common)
-    # Matches that leave a direction of the pose free (parallel lines,
-    # vertical edges on one bearing) fit every pose along it: the best of
-    # them is a guess, not an answer. On real photographs such answers were
-    # a third of the accepted-and-wrong ones and never a right one
-    # (tools/bench_real.py). A few tenths of a millisecond.
+    # Worked out when first read (a few tenths of a millisecond a robot
+    # that only wants the pose does not spend).
     res.pose_std_from(lambda: pose_std_of(camera, img, cands.segments, ranked_h, best, tol))
-    if res.pose_std is None:
-        return LocalizeResult(False, f"the {len(res.matches)} matched lines do not fix the pose (they leave a "
-                              "direction of it free): more lines, or other lines, are needed", **common)
     n_fin = np.bincount(ranked_h.hyp, minlength=n_h)
     answers = [(pose_deg(ranked_h.poses[h]), int(n_fin[h]), float(E[h]), float(ranked_h.cost[h])) for h in order
                if np.isfinite(E[h])]
