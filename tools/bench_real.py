@@ -247,7 +247,9 @@ def run_pano(task):
 def _outcome(res, truth, seconds):
     out = {"ok": bool(res), "seconds": seconds, "reason": "" if res else res.reason, "pose": None,
            "score": res.score, "runner_up": res.runner_up_score, "matches": len(res.matches),
-           "candidates": len(res.candidates)}
+           "candidates": len(res.candidates),
+           # The best hypothesis of a refused answer: what accepting it would have given.
+           "best_error": pose_error(res.ranked[0][2], truth) if res.ranked else None}
     if res:
         out["pose"] = tuple(res.pose)
         out["error"] = pose_error(res.pose, truth)
