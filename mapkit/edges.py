@@ -29,23 +29,61 @@ from shapely.geometry import MultiPolygon
 from mapkit.shapes import rings_of
 from linemap.lmap import SegmentKind
 from mapkit.options import BuildOptions
-from mapkit.scene import Scene
-from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, FOOTPRINT_CLOSE_GAP, MERGE
+from mapkit.scene import Opening, Scene
+from mapkit.tolerances import COLLINEAR_DEG, CORNER_DEG, FOOTPRINT_CLOSE_GAP, MERGE, ZONE_REACH
 
 
 def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np.ndarray, np.ndarray]:
     """All edges of the scene's extruded walls.
 
     Returns ``segments`` (N, 2, 3) float64 metres and ``kinds`` (N,) uint8
-    (:class:`SegmentKind`). Order: horizontal edges by height, then verticals;
-    deterministic for a given scene.
+    (:class:`SegmentKind`). Order: horizontal edges by height, then verticals
+    (per height zone, zones in the scene's order); deterministic for a given
+    scene.
+
+    A scene with ``height_zones`` (rooms of their own ceiling heights) is
+    extruded once per zone to that zone's height, and each pass keeps the
+    edges nearest its zone: a wall face belongs to the room it faces, so its
+    ceiling junction and the tops of its corners sit at that room's ceiling,
+    while floor, sill and lintel edges come out the same in every pass.
     """
     options = options or BuildOptions()
-    height = float(scene.wall_height)
-    levels, footprints = _bands(scene, height)
+    zones = scene.height_zones
+    if not zones:
+        segs, kinds = _edges_at_height(scene.walls, scene.openings, float(scene.wall_height), options)
+    else:
+        segs, kinds = [], []
+        for k, zone in enumerate(zones):
+            # Only the walls near the zone: a cut this far off lies along another zone, which owns it.
+            near = zone.area.buffer(ZONE_REACH)
+            walls = scene.walls.intersection(near)
+            openings = [o for o in scene.openings if o.footprint.intersects(near)]
+            s, kk = _edges_at_height(walls, openings, float(zone.height), options)
+            if not s:
+                continue
+            owner = _nearest_zone(np.stack(s), zones)
+            segs += [seg for seg, o in zip(s, owner) if o == k]
+            kinds += [kind for kind, o in zip(kk, owner) if o == k]
+    if not segs:
+        return np.zeros((0, 2, 3)), np.zeros(0, dtype=np.uint8)
+    return np.stack(segs), np.asarray(kinds, dtype=np.uint8)
+
+
+def _nearest_zone(segments: np.ndarray, zones) -> np.ndarray:
+    """(N,) index of the zone nearest each segment's midpoint seen from above."""
+    mid = 0.5 * (segments[:, 0, :2] + segments[:, 1, :2])
+    points = shapely.points(mid)
+    areas = np.array([z.area for z in zones], dtype=object)
+    return np.argmin(shapely.distance(points[:, None], areas[None, :]), axis=1)
+
+
+def _edges_at_height(walls, openings: list[Opening], height: float, options: BuildOptions) -> tuple[list, list]:
+    """Edges of ``walls`` with ``openings`` extruded to ``height``: lists of (2, 3) arrays and kinds."""
+    openings = _openings_below(openings, height)
+    levels, footprints = _bands(walls, openings, height)
     segs: list[np.ndarray] = []
     kinds: list[int] = []
-    doors = shapely.union_all([o.footprint for o in scene.openings if o.kind == "door"] or [MultiPolygon()])
+    doors = shapely.union_all([o.footprint for o in openings if o.kind == "door"] or [MultiPolygon()])
 
     # Horizontal edges where the footprint changes.
     for k, z in enumerate(levels):
@@ -68,7 +106,7 @@ def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np
                 runs[-1][1] = z1  # continues the run of the band below
             else:
                 runs.append([z0, z1])
-    opening_corners = _opening_corners(scene)
+    opening_corners = _opening_corners(openings)
     for key in sorted(verticals):
         x, y = key[0] * MERGE, key[1] * MERGE
         is_jamb = bool(len(opening_corners)) and np.hypot(*(opening_corners - (x, y)).T).min() < FOOTPRINT_CLOSE_GAP * 2
@@ -76,23 +114,31 @@ def extract_edges(scene: Scene, options: BuildOptions | None = None) -> tuple[np
             if z1 - z0 >= options.min_edge_length:
                 segs.append(np.array([[x, y, z0], [x, y, z1]]))
                 kinds.append(SegmentKind.JAMB if is_jamb else SegmentKind.VERTICAL)
-
-    if not segs:
-        return np.zeros((0, 2, 3)), np.zeros(0, dtype=np.uint8)
-    return np.stack(segs), np.asarray(kinds, dtype=np.uint8)
+    return segs, kinds
 
 
-def _bands(scene: Scene, height: float) -> tuple[list[float], list]:
+def _openings_below(openings: list[Opening], height: float) -> list[Opening]:
+    """The openings of walls ``height`` high: heads above it cut to it (an
+    opening to the ceiling has no lintel), openings wholly above it dropped."""
+    out = []
+    for o in openings:
+        if o.sill >= height - MERGE:
+            continue
+        out.append(o if o.head < height - MERGE else Opening(o.footprint, o.kind, o.sill, height))
+    return out
+
+
+def _bands(walls, openings: list[Opening], height: float) -> tuple[list[float], list]:
     """Breakpoint heights and the solid's footprint in each band between them."""
     cuts = {0.0, height}
-    for o in scene.openings:
+    for o in openings:
         cuts.update(z for z in (o.sill, o.head) if 0.0 < z < height)
     levels = sorted(cuts)
     footprints = []
     for z0, z1 in zip(levels[:-1], levels[1:]):
         mid = 0.5 * (z0 + z1)
-        closed = [o.footprint for o in scene.openings if not (o.sill <= mid <= o.head)]
-        fp = shapely.union_all([scene.walls, *closed]) if closed else scene.walls
+        closed = [o.footprint for o in openings if not (o.sill <= mid <= o.head)]
+        fp = shapely.union_all([walls, *closed]) if closed else walls
         footprints.append(_clean(fp))
     return levels, footprints
 
@@ -159,8 +205,8 @@ def _corners(geom) -> list[tuple[float, float]]:
     return out
 
 
-def _opening_corners(scene: Scene) -> np.ndarray:
-    pts = [pts for o in scene.openings for pts, _ in rings_of(o.footprint)]
+def _opening_corners(openings: list[Opening]) -> np.ndarray:
+    pts = [pts for o in openings for pts, _ in rings_of(o.footprint)]
     return np.concatenate(pts) if pts else np.zeros((0, 2))
 
 

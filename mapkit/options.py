@@ -30,6 +30,9 @@ class BuildOptions:
     #: is y-up, the others have none and default to z), a glTF file stored
     #: z-up being told by its faces (:func:`mapkit.importers.mesh.load.guess_up`).
     up: str = "auto"
+    #: The floor to build of a source holding several (ZInD's "floor_01");
+    #: None: the first, with a warning when there are more.
+    floor_name: str | None = None
 
     # ---- reconstruction -----------------------------------------------
     wall_height: float = 2.5
@@ -48,6 +51,10 @@ class BuildOptions:
     crease_deg: float = 30.0
 
     # ---- visibility and regions ----------------------------------------
+    #: A source that records its camera's height (ZInD's panoramas) sets the
+    #: map camera's height, unless this is False (the user chose the camera:
+    #: --camera, --camera-height).
+    camera_from_source: bool = True
     #: Camera: height above the floor, pitch (down positive) and intrinsics.
     camera: dict = field(
         default_factory=lambda: {

@@ -70,6 +70,8 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     with step("import", progress):
         scene = load_scene(plan, options)
     report.seconds["import"] = time.perf_counter() - t
+    if scene.camera_height is not None and options.camera_from_source:
+        camera = Camera.from_dict({**camera.to_dict(), "height_m": round(float(scene.camera_height), 4)})
 
     t = time.perf_counter()
     if scene.segments is not None:

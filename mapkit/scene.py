@@ -29,6 +29,18 @@ class Opening:
     head: float
 
 
+@dataclass(frozen=True)
+class HeightZone:
+    """A part of the floor under one ceiling height (a room).
+
+    ``area`` is the room seen from above; ``height`` its ceiling, metres.
+    The wall faces nearest a zone rise to its height (:mod:`mapkit.edges`).
+    """
+
+    area: Polygon
+    height: float
+
+
 @dataclass
 class Scene:
     """A building as the map builder sees it.
@@ -40,7 +52,14 @@ class Scene:
       view (glass, window footprints); removed from the free space only.
     - ``free_space``: where the camera centre may be: the interior minus
       walls and obstacles, shrunk by the robot radius.
-    - ``wall_height``: ceiling height (walls are extruded from 0 to it).
+    - ``wall_height``: ceiling height (walls are extruded from 0 to it); with
+      ``height_zones``, the tallest of them.
+    - ``height_zones``: rooms with their own ceiling heights (ZInD
+      annotations); each wall face rises to the height of the zone nearest
+      it. Empty: every wall is ``wall_height`` high.
+    - ``camera_height``: the height above the floor of the camera the source
+      was recorded with (ZInD's panoramas), or ``None``; the map's camera
+      takes it unless the user chose a camera.
     - ``segments`` / ``kinds``: 3D model edges when the importer already has
       them (meshes); ``None`` lets the edge stage derive them from the walls.
     - ``ignored``: geometry drawn but not used (for previews), per layer.
@@ -52,6 +71,8 @@ class Scene:
     free_space: MultiPolygon
     wall_height: float
     obstacles: MultiPolygon = field(default_factory=MultiPolygon)
+    height_zones: list[HeightZone] = field(default_factory=list)
+    camera_height: float | None = None
     segments: np.ndarray | None = None
     kinds: np.ndarray | None = None
     ignored: dict[str, Any] = field(default_factory=dict)

@@ -46,6 +46,11 @@ AXIS_DEG = 2.0
 #: (the edge stage, :mod:`mapkit.edges`).
 FOOTPRINT_CLOSE_GAP = 5 * MERGE
 
+#: Rooms of their own ceiling heights (:mod:`mapkit.edges`): a room's pass
+#: takes only the walls within this of it. Walls exist only next to rooms,
+#: so where this cuts a wall it runs along another room, nearer that room.
+ZONE_REACH = 1.0
+
 # ---- plan reconstruction (mapkit.importers.dxf) -----------------------------
 
 #: Single wall lines that bound no solid are thickened to this total width.
@@ -111,6 +116,36 @@ DXF_MAX_BLOCK_DEPTH = 32
 #: turn (at most 45 degrees each): a 45-degree cubic strays from its circle by
 #: 4e-6 of the radius (a 90-degree one by 3e-4, 3 mm on a 10 m rotunda).
 CURVE_BEZIER_PER_TURN = 8
+
+
+# ---- ZInD annotations (mapkit.importers.zind) -------------------------------
+
+#: ZInD draws each room's inner outline only; a wall this thick is put
+#: around every room (the sample tour's rooms stand 6 to 47 cm apart).
+ZIND_WALL_THICKNESS = 0.15
+
+#: Gaps between neighbouring rooms' walls up to twice this are filled with
+#: wall (a thick wall between two rooms is solid, not two skins and a void).
+ZIND_WALL_GAP_CLOSE = 0.1
+
+#: How far across the wall a door, window or opening is cut, from the face
+#: of the room that annotates it: through both rooms' walls and the gap
+#: between them.
+ZIND_OPENING_REACH = 2 * (ZIND_WALL_THICKNESS + ZIND_WALL_GAP_CLOSE)
+
+#: An annotated door, window or opening may lie this far inside its room's
+#: outline and still cut the wall behind it.
+ZIND_OPENING_SLACK = 0.05
+
+#: A gap annotated from the room behind too (the same door seen from both
+#: sides) overlaps this one by at least this fraction of the smaller, once
+#: both are cut through the wall; the two rooms' annotations of one door
+#: differ by centimetres.
+ZIND_SAME_GAP_OVERLAP = 0.25
+
+#: An opening whose annotated bottom is within this of the floor starts at
+#: the floor (annotators click the floor line to a few centimetres).
+ZIND_FLOOR_SNAP = 0.1
 
 # ---- visibility and regions (mapkit.visibility, mapkit.vir) -----------------
 

@@ -74,6 +74,35 @@ def test_budget_stops_a_long_search(cam):
     assert "second_search" not in res.time_ms
 
 
+def test_pairwise_tests_stop_at_the_search_deadline(small_map, cam):
+    """The pairwise tests are stage 1's longest step on a cluttered real view
+    (thousands of correspondences, millions of pairs): they stop at the
+    search deadline, and stage 1 hands on no sets, truncated and out of time."""
+    from matcher.candidates import select_candidates
+    from matcher.frame import prepare_lines
+    from matcher.stage1.generate import generate
+    from matcher.stage1.pairwise import pair_compatibility
+
+    fr = make_frame(small_map, cam, np.random.default_rng([7, 5]), 5)
+    img = prepare_lines(cam, np.asarray(fr.lines, float), DEFAULT)
+    prior = (fr.prior[0], fr.prior[1], math.radians(fr.prior[2]), fr.dt, math.radians(fr.dyaw))
+    cands = select_candidates(small_map, cam, prior, DEFAULT)
+    past = Deadlines(search=0.0, checks=0.0)
+    hyps = generate(cands, cam, img, prior, DEFAULT, past)
+    assert hyps.sets == [] and hyps.truncated and hyps.counts["out_of_time"] is True
+    assert hyps.tree_input is None and "compatible_pairs" not in hyps.counts
+    corr = _correspondences(cands, cam, img, prior)
+    assert pair_compatibility(img, corr, prior[3], DEFAULT, past) is None
+    assert pair_compatibility(img, corr, prior[3], DEFAULT).shape == (len(corr), len(corr))
+    assert generate(cands, cam, img, prior, DEFAULT).sets  # unbudgeted, the same frame has sets
+
+
+def _correspondences(cands, cam, img, prior):
+    from matcher.stage1.correspondences import find_correspondences
+
+    return find_correspondences(cands.reps, cam, img, prior, DEFAULT, cands.sight, cands.faces, {})
+
+
 def test_lost_mode_budget_bounds_the_whole_call(small_map, cam):
     fr = make_frame(small_map, cam, np.random.default_rng(3), 1)
     res = matcher.localize_global(small_map, cam, fr.lines, SPENT)

@@ -46,6 +46,8 @@ def add_import_arguments(p) -> None:
     g.add_argument("--windows", action="append", default=[], metavar="GLOB", help="layer(s) holding windows or glass (repeatable)")
     g.add_argument("--floor", action="append", default=[], metavar="GLOB", help="layer(s) outlining the floor of an open plan (repeatable)")
     g.add_argument("--ignore", action="append", default=[], metavar="GLOB", help="layer(s) to leave out (repeatable)")
+    g.add_argument("--floor-name", metavar="NAME",
+                   help="floor to build of a tour with several (ZInD: floor_01, ...; default the first, with a warning)")
     g.add_argument("--up", choices=("auto", "z", "y"), default=d.up,
                    help="mesh up axis (default auto: glTF's y-up, z for the other formats; a glTF stored z-up is told by its faces)")
     add_float_options(p.add_argument_group("reconstruction"), d, [
@@ -81,6 +83,7 @@ def import_options_from_args(args) -> BuildOptions:
         ignore=list(args.ignore),
         floor=list(args.floor),
         up=args.up,
+        floor_name=args.floor_name,
         wall_height=args.wall_height,
         door_height=args.door_height,
         window_sill=args.window_sill,

@@ -1,4 +1,4 @@
-"""``mapkit build PLAN -o OUT.lmap``: the main job, plan or mesh in, map out."""
+"""``mapkit build PLAN -o OUT.lmap``: the main job, plan, mesh or ZInD annotations in, map out."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import sys
 
 from mapkit.errors import MapkitError
 
-HELP = "build a .lmap map from a DXF floor plan or a 3D mesh"
+HELP = "build a .lmap map from a DXF floor plan, a 3D mesh or ZInD annotations"
 
 
 def add_arguments(p) -> None:
@@ -14,7 +14,7 @@ def add_arguments(p) -> None:
     from mapkit.options import BuildOptions
 
     d = BuildOptions()
-    p.add_argument("plan", metavar="PLAN", help="DXF plan or mesh (.obj .ply .stl .glb .gltf .off)")
+    p.add_argument("plan", metavar="PLAN", help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off) or ZInD zind_data.json")
     p.add_argument("-o", "--output", required=True, metavar="OUT.lmap", help="map file to write")
     add_import_arguments(p)
     g = p.add_argument_group("camera (what 'visible' means)")
@@ -42,6 +42,7 @@ def options_from_args(args):
     from mapkit.commands._import_args import import_options_from_args
 
     o = import_options_from_args(args)
+    o.camera_from_source = not (args.camera or args.camera_height is not None)
     if args.camera:
         if any(v is not None for v in (args.camera_height, args.pitch, args.hfov, args.image_size)):
             raise MapkitError("--camera already sets the camera; drop --camera-height/--pitch/--hfov/--image-size")

@@ -77,7 +77,10 @@ def generate(cands: Candidates, camera: Camera, img: ImageLines, prior, tol: Tol
                           int(counts.get("correspondences", 0)), False, counts)
 
     t_pairs = time.perf_counter()
-    compat = pair_compatibility(img, corr, dt, tol)
+    compat = pair_compatibility(img, corr, dt, tol, deadlines)
+    if compat is None:  # out of time before the tree could start
+        counts.update(out_of_time=True, tree_nodes=0, sets_found=0)
+        return Hypotheses(corr.seg_k, corr.line_k, [], np.zeros((0, 3)), len(segments), len(corr), True, counts)
     counts["compatible_pairs"] = int(compat.sum() // 2)
 
     t_tree = time.perf_counter()

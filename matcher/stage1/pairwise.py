@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from matcher.budget import NO_LIMIT, Deadlines
 from matcher.frame import ImageLines
 from matcher.stage1 import posegrid
 from matcher.stage1.constraints import binary_constraint
@@ -19,12 +20,15 @@ from matcher.stage1.correspondences import Correspondences
 from matcher.tolerances import Tolerances
 
 
-def pair_compatibility(img: ImageLines, corr: Correspondences, dt: float, tol: Tolerances) -> np.ndarray:
+def pair_compatibility(img: ImageLines, corr: Correspondences, dt: float, tol: Tolerances,
+                       deadlines: Deadlines = NO_LIMIT) -> np.ndarray | None:
     """(K, K) bool pairwise compatibility: one-to-one (two lines share a
     segment only if they may be pieces of one line, ``img.pieces``), a
     common pose of the two in the prior set at one grid yaw (within both
     half-planes, see :func:`_half_planes`), and the paper's binary
-    constraint for two vertical correspondences."""
+    constraint for two vertical correspondences. ``None`` when the search
+    time of ``deadlines`` ran out first (a real view can hold thousands of
+    correspondences: millions of pairs, seconds of work)."""
     near, seg_k, line_k, is_v, mask = corr.near, corr.seg_k, corr.line_k, corr.is_v, corr.mask
     centre = (float(corr.centre[0]), float(corr.centre[1]))
     K = len(seg_k)
@@ -37,8 +41,12 @@ def pair_compatibility(img: ImageLines, corr: Correspondences, dt: float, tol: T
     # In chunks of pairs, so that a huge prior (lost mode, a large dt with
     # any heading) does not need gigabytes; a frame's pairs are one chunk.
     step = max(1, tol.internals.pair_chunk // mask.shape[1])
-    pair_ok = np.concatenate([_share_a_pose(iu[c:c + step], ju[c:c + step], corr, dt, tol)
-                              for c in range(0, len(iu), step)]) if len(iu) else np.zeros(0, dtype=bool)
+    chunks = []
+    for c in range(0, len(iu), step):
+        if not deadlines.may_search():
+            return None
+        chunks.append(_share_a_pose(iu[c:c + step], ju[c:c + step], corr, dt, tol))
+    pair_ok = np.concatenate(chunks) if chunks else np.zeros(0, dtype=bool)
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):
         a_i, a_j = iu[sel], ju[sel]

@@ -1,0 +1,357 @@
+#!/usr/bin/env python3
+"""The matcher on real photographs: perspective views cut from a ZInD tour.
+
+    python tools/bench_real.py /path/to/zind/000              # the tour's first floor
+    python tools/bench_real.py TOUR --jobs 2 --overlays /tmp/overlays
+    python tools/bench_real.py TOUR --headings 1 --peq 1 5 --lost-every 0 --budget-ms inf   # times unbounded
+    python tools/bench_real.py TOUR --check 6 --overlays /tmp/check   # ground truth only
+
+ZInD (Zillow Indoor Dataset, its own terms of use: download it yourself; no
+part of it is in this project) gives upright-corrected 360-degree panoramas
+of a home with human-annotated room layouts and each panorama's place on the
+floor plan. The floor's map is built from the annotations with
+``mapkit build zind_data.json`` (:mod:`mapkit.importers.zind`); from every
+panorama, ``--headings`` perspective views are cut (evenly spaced, a seeded
+random offset each) with a horizontal field of view in ``--hfov``, a pitch in
+``--pitch`` (down) and one of ``--sizes``, drawn per view from the seed.
+A view's true pose is the panorama's place and the heading it was cut at.
+
+Per view: lines by :func:`matcher.detect_lines`; the map segments in sight
+at the true pose (``tools/simulate.visible_lines``); :func:`matcher.localize`
+from a prior drawn within each PEQ's bounds (``tools/simulate.PEQ``, as in
+``tools/bench_paper.py``: dt 0.2 to 1.0 m, dyaw 10 to 50 deg); and
+:func:`matcher.localize_global` (lost mode) on every ``--lost-every``-th view;
+each call within ``--budget-ms`` (default 1 s: unbounded, a real view can
+take a minute and a whole run hours).
+A table per mode: views, views showing at least 6 map lines, within
+20 cm / 5 deg and 5 cm / 1 deg, accepted and wrong (over 50 cm or 10 deg),
+not localised, time per call median / p95, lines per view. ``--overlays DIR``
+saves the failing views: the map at the true pose in green, the detected
+lines in red, the returned pose's map in blue.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tools"))
+
+import matcher  # noqa: E402
+from panorama_views import cut_view, view_pose  # noqa: E402
+from simulate import PEQ, pose_error, visible_lines  # noqa: E402
+
+#: Right, tight: within these (metres, degrees) of the true pose.
+RIGHT = (0.20, 5.0)
+TIGHT = (0.05, 1.0)
+#: Accepted and wrong: farther than either of these.
+WRONG = (0.50, 10.0)
+#: A view "shows the map" when at least this many segments are in sight.
+MIN_SHOWN = 6
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description="Localise perspective views cut from a ZInD tour's panoramas.")
+    ap.add_argument("tour", help="a ZInD tour folder (zind_data.json and panos/)")
+    ap.add_argument("--floor-name", help="floor to use (default the tour's first)")
+    ap.add_argument("--headings", type=int, default=5, help="views per panorama, evenly spaced (default 5)")
+    ap.add_argument("--hfov", default="60,90", help="range of horizontal fields of view, degrees (default 60,90)")
+    ap.add_argument("--pitch", default="0,10", help="range of pitches, degrees down (default 0,10)")
+    ap.add_argument("--sizes", default="640x480,800x600", help="image sizes to choose from (default 640x480,800x600)")
+    ap.add_argument("--peq", type=int, nargs="*", default=sorted(PEQ), help="PEQs to run (default 1 to 5)")
+    ap.add_argument("--lost-every", type=int, default=4, help="lost mode on every N-th view (0: none; default 4)")
+    ap.add_argument("--budget-ms", type=float, default=1000.0,
+                    help="time budget per call, ms (default 1000, which keeps a run of the sample tour near 15 min; "
+                         "inf: none)")
+    ap.add_argument("--max-views", type=int, default=0, help="stop after this many views (0: all)")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--jobs", type=int, default=1, help="worker processes (the views of a panorama stay together)")
+    ap.add_argument("--overlays", metavar="DIR", help="save PNGs of the failing views here")
+    ap.add_argument("--rows", metavar="FILE.json", help="save every view's results here (for analysis)")
+    ap.add_argument("--check", type=int, default=0, metavar="N",
+                    help="only save N views with the map at the true pose to --overlays (ground-truth check)")
+    args = ap.parse_args(argv)
+
+    from mapkit.errors import MapkitError
+    try:
+        views, floor, lmap_path, camera_height = prepare(args)
+    except MapkitError as e:
+        print(f"bench_real: error: {e}", file=sys.stderr)
+        return 2
+    if args.check:
+        try:
+            if not args.overlays:
+                print("bench_real: error: --check needs --overlays DIR", file=sys.stderr)
+                return 2
+            check_views(views[: args.check], args, lmap_path)
+            return 0
+        finally:
+            Path(lmap_path).unlink(missing_ok=True)
+
+    try:
+        return run_all(views, floor, lmap_path, camera_height, args)
+    finally:
+        Path(lmap_path).unlink(missing_ok=True)
+
+
+def run_all(views, floor, lmap_path, camera_height, args) -> int:
+    """Localise every view (in ``--jobs`` processes) and print the tables."""
+    tasks = group_by_pano(views)
+    t0 = time.perf_counter()
+    rows = []
+    if args.jobs > 1:
+        with ProcessPoolExecutor(args.jobs) as ex:
+            for done in ex.map(run_pano, [(t, args, lmap_path) for t in tasks]):
+                rows += done
+                print(f"  {len(rows)} / {len(views)} views", file=sys.stderr, flush=True)
+    else:
+        for t in tasks:
+            rows += run_pano((t, args, lmap_path))
+            print(f"  {len(rows)} / {len(views)} views", file=sys.stderr, flush=True)
+    elapsed = time.perf_counter() - t0
+
+    m = matcher.load_map(lmap_path)
+    print(f"tour {args.tour}, floor {floor.name}: {len(floor.rooms)} rooms, {len(floor.panos)} panoramas; "
+          f"map {len(m.segments)} segments, {len(m.regions) if hasattr(m, 'regions') else m.n_regions} regions; "
+          f"camera height {camera_height:.3f} m")
+    print(f"{len(rows)} views: hfov {args.hfov} deg, pitch {args.pitch} deg down, sizes {args.sizes}, "
+          f"{args.headings} headings per panorama, seed {args.seed}, budget "
+          f"{'none' if math.isinf(args.budget_ms) else f'{args.budget_ms:g} ms'}; {elapsed / 60:.1f} min with "
+          f"{args.jobs} job(s)")
+    print(table(rows, args))
+    if args.rows:
+        Path(args.rows).write_text(json.dumps(rows, default=float))
+    return 0
+
+
+# --------------------------------------------------------------------------
+# Views
+
+
+def prepare(args):
+    """The views to run (dicts), the floor, the built map's path, the camera height."""
+    from linemap.lmap import save_map
+    from mapkit.importers.zind.annotations import read_floor
+    from mapkit.options import BuildOptions
+    from mapkit.pipeline import build_map
+
+    from mapkit.errors import MapkitError
+
+    tour = Path(args.tour)
+    data = tour / "zind_data.json"
+    if not data.is_file():
+        raise MapkitError(f"{tour}: no zind_data.json; give the folder of a ZInD tour (e.g. .../000)")
+    floor = read_floor(data, args.floor_name)
+    options = BuildOptions(floor_name=floor.name)
+    m, _ = build_map(data, options)
+    path = Path(tempfile.gettempdir()) / f"bench_real_{os.getpid()}.lmap"
+    save_map(path, m)
+    camera_height = float(m.meta["camera"]["height_m"])
+
+    rng = np.random.default_rng(args.seed)
+    hfov = _range(args.hfov)
+    pitch = _range(args.pitch)
+    sizes = [tuple(int(v) for v in s.lower().split("x")) for s in args.sizes.split(",")]
+    views = []
+    for pano in floor.panos:
+        image = tour / pano.image_path
+        if not image.is_file():
+            raise MapkitError(f"{image}: panorama missing; is the tour complete?")
+        offset = rng.uniform(0, 360.0 / args.headings)
+        for k in range(args.headings):
+            w, h = sizes[int(rng.integers(len(sizes)))]
+            views.append({
+                "id": len(views), "pano": pano, "image": str(image),
+                "yaw_deg": offset + k * 360.0 / args.headings,
+                "hfov": float(rng.uniform(*hfov)), "pitch": float(rng.uniform(*pitch)), "size": (w, h),
+            })
+    if args.max_views:
+        views = views[: args.max_views]
+    return views, floor, str(path), camera_height
+
+
+def _range(text: str) -> tuple[float, float]:
+    lo, hi = (float(v) for v in text.split(","))
+    return lo, hi
+
+
+def group_by_pano(views):
+    groups: dict[str, list] = {}
+    for v in views:
+        groups.setdefault(v["image"], []).append(v)
+    return list(groups.values())
+
+
+def view_camera(view, height_m: float) -> matcher.Camera:
+    w, h = view["size"]
+    return matcher.Camera.from_fov(view["hfov"], w, h, height_m, view["pitch"])
+
+
+def cut(view, panorama, camera):
+    return cut_view(panorama, view["pano"], camera, math.radians(view["yaw_deg"]))
+
+
+# --------------------------------------------------------------------------
+# Localisation
+
+
+def run_pano(task):
+    """Every view of one panorama: cut, detect, localise per PEQ and lost."""
+    import cv2
+
+    views, args, lmap_path = task
+    m = matcher.load_map(lmap_path)
+    height_m = float(m.meta["camera"]["height_m"])
+    panorama = cv2.imread(views[0]["image"], cv2.IMREAD_GRAYSCALE)
+    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms) if not math.isinf(args.budget_ms) else None
+    rows = []
+    for view in views:
+        camera = view_camera(view, height_m)
+        image = cut(view, panorama, camera)
+        truth = view_pose(view["pano"], view["yaw_deg"])
+        lines = matcher.detect_lines(image, camera)
+        shown, _ = visible_lines(m, camera, truth)
+        row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": len(lines),
+               "shown": len(shown), "results": {}}
+        rng = np.random.default_rng([args.seed, view["id"]])
+        for peq in args.peq:
+            dt, dyaw = PEQ[peq]
+            r, phi = dt * math.sqrt(rng.uniform()), rng.uniform(0, 2 * math.pi)
+            prior = (truth[0] + r * math.cos(phi), truth[1] + r * math.sin(phi),
+                     truth[2] + rng.uniform(-dyaw, dyaw))
+            t = time.perf_counter()
+            res = matcher.localize(m, camera, lines, prior, dt, dyaw, tolerances=tol)
+            row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
+        if args.lost_every and view["id"] % args.lost_every == 0:
+            t = time.perf_counter()
+            res = matcher.localize_global(m, camera, lines, tolerances=tol)
+            row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t)
+        if args.overlays:
+            save_failures(row, view, image, lines, camera, m, args.overlays)
+        rows.append(row)
+    return rows
+
+
+def _outcome(res, truth, seconds):
+    out = {"ok": bool(res), "seconds": seconds, "reason": "" if res else res.reason, "pose": None,
+           "score": res.score, "runner_up": res.runner_up_score, "matches": len(res.matches),
+           "candidates": len(res.candidates),
+           # The best hypothesis of a refused answer: what accepting it would have given.
+           "best_error": pose_error(res.ranked[0][2], truth) if res.ranked else None}
+    if res:
+        out["pose"] = tuple(res.pose)
+        out["error"] = pose_error(res.pose, truth)
+        out["pose_std"] = tuple(res.pose_std) if res.pose_std is not None else None
+    return out
+
+
+def classify(o) -> str:
+    """'tight', 'right', 'off' (accepted, between right and wrong), 'wrong' or 'none'."""
+    if not o["ok"]:
+        return "none"
+    d, a = o["error"]
+    if d <= TIGHT[0] and a <= TIGHT[1]:
+        return "tight"
+    if d <= RIGHT[0] and a <= RIGHT[1]:
+        return "right"
+    if d > WRONG[0] or a > WRONG[1]:
+        return "wrong"
+    return "off"
+
+
+def table(rows, args) -> str:
+    modes = [p for p in args.peq] + (["lost"] if args.lost_every else [])
+    out = ["| mode | views | views showing >= 6 map lines | within 20 cm / 5 deg (of those showing) | within 5 cm / 1 deg "
+           "| accepted and wrong | not localised | time ms median / p95 | lines per view (median) |",
+           "|---|---|---|---|---|---|---|---|---|"]
+    for mode in modes:
+        rs = [r for r in rows if mode in r["results"]]
+        if not rs:
+            continue
+        cls = [classify(r["results"][mode]) for r in rs]
+        shown = [r["shown"] >= MIN_SHOWN for r in rs]
+        n, ns = len(rs), sum(shown)
+        right = sum(c in ("tight", "right") for c in cls)
+        right_shown = sum(c in ("tight", "right") for c, s in zip(cls, shown) if s)
+        ms = np.array([r["results"][mode]["seconds"] * 1000 for r in rs])
+        name = f"PEQ {mode}" if mode != "lost" else "lost"
+        out.append(
+            f"| {name} | {n} | {ns} | {_pct(right, n)} ({_pct(right_shown, ns)}) | {_pct(cls.count('tight'), n)} "
+            f"| {_pct(cls.count('wrong'), n)} | {_pct(cls.count('none'), n)} "
+            f"| {np.median(ms):.0f} / {np.percentile(ms, 95):.0f} | {np.median([r['lines'] for r in rs]):.0f} |")
+    return "\n".join(out)
+
+
+def _pct(k, n) -> str:
+    return f"{100.0 * k / n:.1f}%" if n else "-"
+
+
+# --------------------------------------------------------------------------
+# Overlays
+
+
+def draw_overlay(image, lines, camera, m, truth, pose=None):
+    """BGR image: the map at ``truth`` in green, ``lines`` in red, the map at ``pose`` in blue."""
+    import cv2
+
+    canvas = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR) if image.ndim == 2 else image.copy()
+    canvas = (canvas * 0.6).astype(np.uint8)
+    for seg in visible_lines(m, camera, truth)[0]:
+        cv2.line(canvas, _pt(seg[0]), _pt(seg[1]), (0, 220, 0), 3, cv2.LINE_AA)
+    for seg in lines:
+        cv2.line(canvas, _pt(seg[0]), _pt(seg[1]), (0, 0, 255), 1, cv2.LINE_AA)
+    if pose is not None:
+        for seg in visible_lines(m, camera, pose)[0]:
+            cv2.line(canvas, _pt(seg[0]), _pt(seg[1]), (255, 120, 0), 2, cv2.LINE_AA)
+    return canvas
+
+
+def _pt(p):
+    return int(round(float(p[0]))), int(round(float(p[1])))
+
+
+def save_failures(row, view, image, lines, camera, m, folder):
+    import cv2
+
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    for mode, o in row["results"].items():
+        c = classify(o)
+        if c in ("tight", "right"):
+            continue
+        name = f"view{row['id']:03d}_{row['pano']}_{mode if mode == 'lost' else f'peq{mode}'}_{c}.png"
+        cv2.imwrite(str(Path(folder) / name), draw_overlay(image, lines, camera, m, row["truth"], o["pose"]))
+
+
+def check_views(views, args, lmap_path):
+    """Save the map at the true pose over each view: the ground-truth check."""
+    import cv2
+
+    m = matcher.load_map(lmap_path)
+    height_m = float(m.meta["camera"]["height_m"])
+    Path(args.overlays).mkdir(parents=True, exist_ok=True)
+    for view in views:
+        panorama = cv2.imread(view["image"], cv2.IMREAD_GRAYSCALE)
+        camera = view_camera(view, height_m)
+        image = cut(view, panorama, camera)
+        lines = matcher.detect_lines(image, camera)
+        truth = view_pose(view["pano"], view["yaw_deg"])
+        path = Path(args.overlays) / f"check_view{view['id']:03d}_{view['pano'].name}.png"
+        cv2.imwrite(str(path), draw_overlay(image, lines, camera, m, truth))
+        print(f"wrote {path}: pose {truth[0]:.2f}, {truth[1]:.2f}, {truth[2]:.1f} deg; hfov {view['hfov']:.0f}, "
+              f"pitch {view['pitch']:.1f}; {len(lines)} lines")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
