@@ -44,6 +44,13 @@ class Internals:
     #: Margin of that raster around the regions, metres: farther points read
     #: as this far (any sane tolerance rejects them anyway).
     free_border_m: float = 1.0
+    #: Most cells of that raster: a map larger than ``free_cell_m`` times
+    #: its square root across (200 m) gets coarser cells instead of a
+    #: raster of gigabytes (a 2 km plan: 0.5 m cells, 128 MB of distances).
+    free_max_cells: int = 16_000_000
+    #: Rows x ring edges per block of the raster's scanline pass (a work
+    #: size, not a tolerance: it bounds that pass's temporaries).
+    free_scan_block: int = 4_000_000
     #: Bearings per vertical edge in the map's sight table (half a degree):
     #: how far one sees back from the edge along each.
     sight_bins: int = 720

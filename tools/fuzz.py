@@ -55,6 +55,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 FAMILIES = ("dxf", "mesh", "lmap", "matcher")
+#: The example map in a case's command; ``{ROOT}`` is the checkout, so saved cases run from any clone.
+FLAT_LMAP = "{ROOT}/maps/flat.lmap"
 
 #: Outcomes; the first three are what a case may end in.
 ERROR, VALID, FALSY, TRACEBACK, OVER = "clean error", "valid", "falsy", "traceback", "over bound"
@@ -515,7 +517,7 @@ def matcher_case(rng: random.Random, name: str = "matcher") -> Case:
 def _localize_argv(prior=None, dt=None, dyaw=None, extra=()) -> list:
     f = base_frame()
     prior = prior if prior is not None else ",".join(map(str, f["prior"]))
-    return ["matcher", "localize", "--map", str(ROOT / "maps" / "flat.lmap"), "--camera", "camera.json",
+    return ["matcher", "localize", "--map", FLAT_LMAP, "--camera", "camera.json",
             "--prior", prior, "--dt", str(f["dt"] if dt is None else dt),
             "--dyaw", str(f["dyaw"] if dyaw is None else dyaw), *extra]
 
@@ -567,7 +569,7 @@ def _options_case(rng, name):
     if rng.random() < 0.5:
         extra += ["--budget-ms", _odd_number_text(rng, 200.0)]
     if rng.random() < 0.2:  # lost mode, always under a budget (it takes seconds)
-        argv = ["matcher", "localize", "--map", str(ROOT / "maps" / "flat.lmap"), "--camera", "camera.json",
+        argv = ["matcher", "localize", "--map", FLAT_LMAP, "--camera", "camera.json",
                 "--lost", "--lines", "lines.json", "--budget-ms", rng.choice(("100", "300", "0", "nan", "-5"))]
     elif rng.random() < 0.2:  # the camera on the command line
         argv = _localize_argv(prior, extra=extra)
@@ -637,7 +639,7 @@ def _frames_case(rng, name):
                 ("missing.png", "/etc", "..", "camera.json", "", "/dev/zero"))})
         text, note = "\n".join(rows) + "\n", f"frame {i} json"
     files = {"camera.json": json.dumps(base_camera()).encode(), "run.jsonl": text.encode()}
-    argv = ["matcher", "track", "--map", str(ROOT / "maps" / "flat.lmap"), "--camera", "camera.json",
+    argv = ["matcher", "track", "--map", FLAT_LMAP, "--camera", "camera.json",
             "--frames", "run.jsonl", "--relocalise-budget-ms", "300", "--budget-ms", "500", "--out", "traj.txt"]
     argv += ["--lost"] if rng.random() < 0.2 else ["--prior", ",".join(map(str, start)), "--dt", "0.3",
                                                     "--dyaw", "15"]
@@ -708,6 +710,7 @@ def run_case_here(case: Case) -> tuple[str, str]:
             return OVER, "MemoryError"
         except Exception:  # noqa: BLE001 - the point of the exercise
             return TRACEBACK, traceback.format_exc()[-2000:]
+    argv = [a.replace("{ROOT}", str(ROOT)) if isinstance(a, str) else a for a in case.call[1:]]
     if what == "mapkit":
         from mapkit.cli import main
     else:
@@ -717,7 +720,7 @@ def run_case_here(case: Case) -> tuple[str, str]:
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             try:
-                code = main(list(case.call[1:]))
+                code = main(argv)
             except SystemExit as exc:  # argparse's errors
                 code = exc.code
     except MemoryError:
@@ -802,7 +805,7 @@ def save_case(case: Case, outcome: Outcome, folder: Path) -> Path:
 
 def load_case(folder: Path) -> Case:
     meta = json.loads((folder / "case.json").read_text())
-    files = {p.name: p.read_bytes() for p in folder.iterdir() if p.name != "case.json"}
+    files = {p.name: p.read_bytes() for p in folder.iterdir() if p.name != "case.json" and p.is_file()}
     return Case(meta["family"], folder.name, files, meta["call"], meta.get("note", ""))
 
 

@@ -17,7 +17,7 @@ import numpy as np
 from ezdxf import path as dxfpath
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import CURVE_BEZIER_PER_TURN, CURVE_STEP_DEG, DXF_MAX_BLOCK_DEPTH
+from mapkit.tolerances import CURVE_BEZIER_PER_TURN, CURVE_STEP_DEG, DXF_MAX_BLOCK_DEPTH, PLAUSIBLE_EXTENT
 
 #: Entities that carry no building geometry: skipped without a word.
 SILENT = frozenset(
@@ -55,8 +55,12 @@ def flatten_entities(
     types that were skipped. An entity with a non-finite coordinate (a
     damaged file) is left out and counted as ``"<type> (non-finite
     coordinates, handle H on layer L)"``: its geometry would stall or break
-    the plan's reconstruction.
+    the plan's reconstruction. So is an outline larger than any building
+    (its control points span more than ``PLAUSIBLE_EXTENT``'s upper bound, a
+    damaged bulge or radius): flattened to ``sagitta`` it would take
+    billions of points.
     """
+    max_span = PLAUSIBLE_EXTENT[1] / factor if factor > 0 else math.inf
     strokes: list[Stroke] = []
     skipped: Counter = Counter()
     groups: dict[tuple[int, int], int] = {}
@@ -75,7 +79,10 @@ def flatten_entities(
             if not layer_wanted(sub_layer):
                 continue
             group = None if cell is None else groups.setdefault((index, cell), len(groups))
-            for coords, closed, filled in _outlines(sub, sagitta, skipped):
+            for coords, closed, filled in _outlines(sub, sagitta, skipped, max_span):
+                if coords is None:
+                    skipped[_left_out(entity, layer, f"larger than {PLAUSIBLE_EXTENT[1]:g} m")] += 1
+                    continue
                 if not np.isfinite(coords).all():
                     skipped[_left_out(entity, layer)] += 1
                     continue
@@ -101,10 +108,10 @@ def _finite_placement(entity) -> bool:
     return True
 
 
-def _left_out(entity, layer: str) -> str:
+def _left_out(entity, layer: str, why: str = "non-finite coordinates") -> str:
     """The skipped-entities key of a damaged entity, naming it for the user."""
     handle = entity.dxf.get("handle", "?")
-    return f"{entity.dxftype()} (non-finite coordinates, handle {handle} on layer {layer})"
+    return f"{entity.dxftype()} ({why}, handle {handle} on layer {layer})"
 
 
 def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iterator[tuple[object, str, int]]:
@@ -133,8 +140,11 @@ def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iter
             yield child, effective, cell
 
 
-def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.ndarray, bool, bool]]:
-    """(coords (N, 2) in drawing units, closed, filled) for each outline of an entity."""
+def _outlines(entity, sagitta: float, skipped: Counter,
+              max_span: float = math.inf) -> Iterator[tuple[np.ndarray | None, bool, bool]]:
+    """(coords (N, 2) in drawing units, closed, filled) for each outline of
+    an entity; coords None for an outline whose control points span more
+    than ``max_span`` drawing units (not flattened)."""
     kind = entity.dxftype()
     if kind in SILENT:
         return
@@ -159,6 +169,13 @@ def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.nda
     for p in paths:
         subs = p.sub_paths() if p.has_sub_paths else [p]
         for sub in subs:
+            cv = np.array([(v.x, v.y) for v in sub.control_vertices()], dtype=float).reshape(-1, 2)
+            if not np.isfinite(cv).all():
+                yield cv, False, filled  # the caller names it as non-finite
+                continue
+            if len(cv) and np.ptp(cv, axis=0).max() > max_span:
+                yield None, False, filled
+                continue
             pts = np.array([(v.x, v.y) for v in sub.flattening(sagitta, segments=_MIN_SEGMENTS)], dtype=float)
             if len(pts) < 2:
                 continue
