@@ -40,3 +40,54 @@ def test_the_free_space_raster_of_a_2_km_map_stays_small():
     assert fs.dist.size <= DEFAULT_INTERNALS.free_max_cells
     assert fs.distance(np.array([[1000.0, 1000.0], [5.0, 5.0]])).tolist() == [0.0, 0.0]
     assert 0.0 < fs.distance(np.array([[1000.0, -0.9]]))[0] <= 0.9 + fs.cell
+
+
+def test_a_matcher_call_has_a_time_budget_by_default():
+    """Hundreds of look-alike lines used to keep the tree busy for minutes
+    (tests/data/fuzz/lines_450_lookalikes): a call without a budget given
+    still ends, with a reason naming the budget."""
+    import math
+
+    import matcher
+
+    assert math.isfinite(matcher.Tolerances().time_budget_ms)
+
+
+def test_line_pieces_in_blocks_is_the_whole_pass(monkeypatch):
+    """Line preparation compares every pair of lines a block of rows at a
+    time (bounded memory however many lines): the same pairs as all at once."""
+    import matcher
+    from matcher.stage1 import constraints
+
+    rng = np.random.default_rng(5)
+    cam = matcher.Camera.from_dict({"width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0,
+                                    "cy": 240.0, "height_m": 1.2, "pitch_deg": 0.0})
+    a = rng.uniform([0, 0], [640, 480], (300, 2))
+    lines = np.stack([a, a + rng.normal(0, 60, (300, 2))], axis=1)
+    lines[100:200] = lines[0] + (lines[0, 1] - lines[0, 0]) * rng.uniform(1.1, 3, (100, 1, 1))  # one line's pieces
+    normals = cam.interpretation_normals(lines)
+    eps, _, _ = constraints.plane_noises(cam, lines, 1.0, 1.0)
+    whole = constraints.line_pieces(lines, normals, eps, 6.0)
+    monkeypatch.setattr(constraints, "_PAIR_BLOCK", 1000)
+    blocked = constraints.line_pieces(lines, normals, eps, 6.0)
+    assert whole.sum() > 100 and (blocked == whole).all()
+
+
+def test_more_lines_than_the_limit_name_the_option(tmp_path, capsys):
+    import json
+
+    from matcher.cli import main
+
+    rng = np.random.default_rng(2)
+    a = rng.uniform([10, 10], [600, 440], (2500, 2))
+    lines = np.concatenate([a, a + 20.0], axis=1).round(2).tolist()
+    (tmp_path / "lines.json").write_text(json.dumps({"lines": lines}))
+    (tmp_path / "cam.json").write_text(json.dumps({"width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0,
+                                                    "cy": 240.0, "height_m": 1.2, "pitch_deg": 0.0}))
+    argv = ["localize", "--map", str(ROOT / "maps" / "flat.lmap"), "--camera", str(tmp_path / "cam.json"),
+            "--lines", str(tmp_path / "lines.json"), "--prior", "5,5,0", "--dt", "0.3", "--dyaw", "10"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "2500 image lines" in err and "--max-lines" in err and len(err.splitlines()) == 1
+    assert main(argv + ["--max-lines", "3000", "--budget-ms", "200"]) in (0, 1)
+    assert "not localised" in capsys.readouterr().out

@@ -34,6 +34,7 @@ NOT_THRESHOLDS = {
     ("matcher/cli.py", "EXIT_OK"): "exit codes",
     ("matcher/tracking/route_plot.py", "_WALL"): "colours of a picture",
     ("matcher/stage1/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
+    ("matcher/stage1/constraints.py", "_PAIR_BLOCK"): "a work size bounding temporaries, not a tolerance",
     ("matcher/stage1/tree.py", "_BIT_LEVELS"): "the bits of an int64, sign spared",
 }
 

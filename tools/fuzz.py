@@ -663,7 +663,8 @@ def _classify_cli(prog: str, code, out: str, err: str) -> tuple[str, str]:
     if code == 1 and prog == "matcher":
         # localize prints 'not localised: REASON'; track one line a frame, with its reason
         said = out.strip().splitlines()
-        return (FALSY, said[-1]) if said else (TRACEBACK, f"exit 1 without a reason: {err[-500:]}")
+        reason = next((ln for ln in said if ln.startswith("not localised")), said[-1] if said else "")
+        return (FALSY, reason) if reason else (TRACEBACK, f"exit 1 without a reason: {err[-500:]}")
     if code == 2:
         errors = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith(f"{prog}: warning:")]
         if len(errors) == 1 and errors[0].startswith(f"{prog}: error: "):
