@@ -237,6 +237,23 @@ EXTRUDE_CLEAN = 5 * MERGE
 #: so that the differences between bands have no float-noise slivers.
 EXTRUDE_GRID = MERGE / 10
 
+# ---- limits of work (each raised by an option of mapkit build) ----------------
+# Not geometry: inputs past them would run for minutes or take gigabytes, so
+# they end in an error naming the limit and its option before the work.
+
+#: Most drawing entities an import flattens (after expanding blocks and
+#: MINSERT arrays; text and dimensions do not count): the example has 240,
+#: the Barcelona pavilion 1200; 200 000 LINEs used to run past 120 s and a
+#: MINSERT of 10^6 copies for minutes. ``--max-entities`` raises it.
+DXF_MAX_ENTITIES = 100_000
+
+#: Largest floor a map is built for, square metres (the bounding box of the
+#: free space): the region builder's work and memory grow with it (an empty
+#: room 200 m across: 11 s, 0.3 GB; 1000 m: 80 s, 2 GB; 1999 m: out of
+#: memory). A large building's floor is 10^4 to 10^5 m2. ``--max-floor-area``
+#: raises it.
+MAX_FLOOR_AREA_M2 = 250_000.0
+
 # ---- work sizes ---------------------------------------------------------------
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.
 

@@ -91,3 +91,65 @@ def test_more_lines_than_the_limit_name_the_option(tmp_path, capsys):
     assert "2500 image lines" in err and "--max-lines" in err and len(err.splitlines()) == 1
     assert main(argv + ["--max-lines", "3000", "--budget-ms", "200"]) in (0, 1)
     assert "not localised" in capsys.readouterr().out
+
+
+def _room(path, side: float, copies: tuple[int, int] | None = None, lines: int = 0) -> None:
+    """A square room ``side`` metres across on A-WALL; optionally a column
+    block inserted as a MINSERT array of ``copies`` (rows, columns) and
+    ``lines`` short wall LINEs."""
+    import ezdxf
+
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    doc.layers.add("A-WALL")
+    msp.add_lwpolyline([(0, 0), (side, 0), (side, side), (0, side)], close=True, dxfattribs={"layer": "A-WALL"})
+    if copies:
+        block = doc.blocks.new("COLUMN")
+        block.add_lwpolyline([(0, 0), (0.3, 0), (0.3, 0.3), (0, 0.3)], close=True)
+        ins = msp.add_blockref("COLUMN", (1, 1), dxfattribs={"layer": "A-WALL"})
+        ins.grid(size=copies, spacing=(0.5, 0.5))
+    for i in range(lines):
+        msp.add_line((1 + 0.1 * (i % 100), 1 + 0.1 * (i // 100)), (1.05 + 0.1 * (i % 100), 1 + 0.1 * (i // 100)),
+                     dxfattribs={"layer": "A-WALL"})
+    doc.saveas(path)
+
+
+def _one_line_error(code, out, err, *needles):
+    lines = [ln for ln in err.splitlines() if not ln.startswith("mapkit: warning:")]
+    assert code == 2 and out == "" and len(lines) == 1 and lines[0].startswith("mapkit: error: "), (code, err)
+    for n in needles:
+        assert n in lines[0], lines[0]
+
+
+def test_a_room_2_km_across_is_refused_before_the_region_builder(tmp_path, capsys):
+    """An empty square room 1999 m across (inside the 2 km plan limit) ran
+    out of memory; it is now refused in seconds, naming the option."""
+    _room(tmp_path / "huge.dxf", 1999.0)
+    code, out, err = run(capsys, "build", tmp_path / "huge.dxf", "-o", tmp_path / "huge.lmap")
+    _one_line_error(code, out, err, "1998 x 1998 m", "--max-floor-area")
+    assert not (tmp_path / "huge.lmap").exists()
+
+
+def test_the_floor_limit_is_an_option(tmp_path, capsys):
+    _room(tmp_path / "room.dxf", 20.0)
+    code, out, err = run(capsys, "build", tmp_path / "room.dxf", "-o", tmp_path / "a.lmap", "--max-floor-area", "100")
+    _one_line_error(code, out, err, "--max-floor-area")
+    code, out, err = run(capsys, "build", tmp_path / "room.dxf", "-o", tmp_path / "a.lmap")
+    assert code == 0, err
+
+
+def test_a_million_block_copies_are_refused_without_expanding_them(tmp_path, capsys):
+    """A MINSERT of 1000 x 1000 columns ran for minutes (its bounding box
+    alone expanded every copy); counted from the block, it is refused at once."""
+    _room(tmp_path / "minsert.dxf", 30.0, copies=(1000, 1000))
+    code, out, err = run(capsys, "build", tmp_path / "minsert.dxf", "-o", tmp_path / "m.lmap")
+    _one_line_error(code, out, err, "more than 100000 entities", "--max-entities")
+
+
+def test_the_entity_limit_counts_plain_entities_and_is_an_option(tmp_path, capsys):
+    _room(tmp_path / "lines.dxf", 30.0, lines=600)
+    code, out, err = run(capsys, "preview", tmp_path / "lines.dxf", "-o", tmp_path / "p.png", "--max-entities", "500")
+    _one_line_error(code, out, err, "more than 500 entities", "--max-entities")
+    code, out, err = run(capsys, "layers", tmp_path / "lines.dxf")
+    assert code == 0

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from ezdxf import bbox
 
-from mapkit.importers.dxf.entities import flatten_entities
+from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
 from mapkit.importers.dxf.read import read_dxf
 from mapkit.importers.dxf.units import decide_units
@@ -61,6 +61,7 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     doc, warnings = read_dxf(path)
     for w in warnings:
         log.warning(w)
+    check_entity_count(doc.modelspace(), doc.blocks, options.max_entities)
     counts = layer_counts(doc)
     roles, role_warnings = resolve_roles(counts, options)
     for w in role_warnings:
@@ -78,7 +79,8 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         warnings.append(unit_warning)
     factor = per_unit * float(options.scale)
 
-    strokes, skipped = flatten_entities(msp, factor, CURVE_SAGITTA / factor, lambda layer: True)
+    strokes, skipped = flatten_entities(msp, factor, CURVE_SAGITTA / factor, lambda layer: True,
+                                        max_entities=options.max_entities)
     if skipped:
         listed = ", ".join(f"{n} {kind}" for kind, n in sorted(skipped.items()))
         message = f"skipped unsupported entities: {listed}"

@@ -17,7 +17,14 @@ import numpy as np
 from ezdxf import path as dxfpath
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import CURVE_BEZIER_PER_TURN, CURVE_STEP_DEG, DXF_MAX_BLOCK_DEPTH, PLAUSIBLE_EXTENT
+from mapkit.errors import MapkitError
+from mapkit.tolerances import (
+    CURVE_BEZIER_PER_TURN,
+    CURVE_STEP_DEG,
+    DXF_MAX_BLOCK_DEPTH,
+    DXF_MAX_ENTITIES,
+    PLAUSIBLE_EXTENT,
+)
 
 #: Entities that carry no building geometry: skipped without a word.
 SILENT = frozenset(
@@ -46,6 +53,7 @@ def flatten_entities(
     factor: float,
     sagitta: float,
     layer_wanted: Callable[[str], bool],
+    max_entities: int | None = None,
 ) -> tuple[list[Stroke], Counter]:
     """Strokes (in metres) of model-space ``entities`` on wanted layers.
 
@@ -58,8 +66,13 @@ def flatten_entities(
     the plan's reconstruction. So is an outline larger than any building
     (its control points span more than ``PLAUSIBLE_EXTENT``'s upper bound, a
     damaged bulge or radius): flattened to ``sagitta`` it would take
-    billions of points.
+    billions of points. More than ``max_entities`` entities with geometry
+    (blocks and MINSERT arrays expanded; default ``DXF_MAX_ENTITIES``) is a
+    :class:`MapkitError` naming ``--max-entities``, raised as soon as the
+    count passes it.
     """
+    limit = DXF_MAX_ENTITIES if max_entities is None else max_entities
+    taken = 0
     max_span = PLAUSIBLE_EXTENT[1] / factor if factor > 0 else math.inf
     strokes: list[Stroke] = []
     skipped: Counter = Counter()
@@ -76,8 +89,13 @@ def flatten_entities(
         else:
             items = iter([(entity, layer, None)])
         for sub, sub_layer, cell in items:
-            if not layer_wanted(sub_layer):
+            if not layer_wanted(sub_layer) or sub.dxftype() in SILENT:
                 continue
+            taken += 1
+            if taken > limit:
+                raise MapkitError(f"the drawing holds more than {limit} entities with geometry (blocks and MINSERT "
+                                  f"arrays expanded; DXF_MAX_ENTITIES): building it would take very long; raise "
+                                  f"the limit with --max-entities if the plan is really that large")
             group = None if cell is None else groups.setdefault((index, cell), len(groups))
             for coords, closed, filled in _outlines(sub, sagitta, skipped, max_span):
                 if coords is None:
@@ -88,6 +106,39 @@ def flatten_entities(
                     continue
                 strokes.append(Stroke(coords * factor, closed, filled, sub_layer, group))
     return strokes, skipped
+
+
+def check_entity_count(entities, blocks, limit: int = DXF_MAX_ENTITIES) -> int:
+    """The number of entities with geometry in ``entities`` once blocks and
+    MINSERT arrays are expanded, counted from the block definitions without
+    expanding anything (a MINSERT of 10^6 copies costs one multiplication);
+    :class:`MapkitError` naming ``--max-entities`` as soon as it passes ``limit``."""
+    memo: dict[str, int] = {}
+
+    def block_count(name: str, depth: int) -> int:
+        if name not in memo:
+            memo[name] = 0  # a reference cycle counts as empty (the expansion skips it too)
+            block = blocks.get(name) if depth <= DXF_MAX_BLOCK_DEPTH else None
+            memo[name] = 0 if block is None else count(block, depth + 1)
+        return memo[name]
+
+    def count(items, depth: int) -> int:
+        total = 0
+        for e in items:
+            kind = e.dxftype()
+            if kind == "INSERT":
+                copies = max(1, int(e.dxf.get("row_count", 1) or 1)) * max(1, int(e.dxf.get("column_count", 1) or 1))
+                total += copies * block_count(e.dxf.get("name", ""), depth)
+            elif kind not in SILENT:
+                total += 1
+            if total > limit:
+                raise MapkitError(
+                    f"the drawing holds more than {limit} entities with geometry (blocks and MINSERT arrays "
+                    f"expanded; DXF_MAX_ENTITIES): building it would take very long; raise the limit with "
+                    f"--max-entities if the plan is really that large")
+        return total
+
+    return count(entities, 0)
 
 
 def _finite_placement(entity) -> bool:
