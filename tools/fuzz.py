@@ -829,9 +829,14 @@ def preload() -> None:
 
 
 def campaign(counts: dict[str, int], seed: int, workers: int, bound_s: float, mem_gb: float, save: Path | None,
-             scratch: Path, progress: bool = True) -> dict[str, dict[str, int]]:
-    """Run every case, ``workers`` at a time; returns counts per family and outcome."""
-    todo = [(fam, i) for fam in FAMILIES for i in range(counts.get(fam, 0))]
+             scratch: Path, progress: bool = True, minutes: float = math.inf) -> dict[str, dict[str, int]]:
+    """Run every case, ``workers`` at a time, the families interleaved in
+    proportion to their counts (so that a campaign stopped after ``minutes``
+    has run a share of each); returns counts per family and outcome."""
+    todo = sorted(((fam, i) for fam in FAMILIES for i in range(counts.get(fam, 0))),
+                  key=lambda c: ((c[1] + 0.5) / counts[c[0]], FAMILIES.index(c[0])))
+    started = time.monotonic()
+    stop_at = started + 60.0 * minutes
     table = {fam: {k: 0 for k in (ERROR, VALID, FALSY, TRACEBACK, OVER)} for fam in FAMILIES if counts.get(fam)}
     preload()
     for fam in table:  # build the shared inputs once, before forking
@@ -839,6 +844,9 @@ def campaign(counts: dict[str, int], seed: int, workers: int, bound_s: float, me
     running = []
     done = 0
     while todo or running:
+        if time.monotonic() > stop_at and todo:
+            print(f"stopping: {minutes:g} minutes are up, {len(todo)} cases not started", file=sys.stderr)
+            todo = []
         while todo and len(running) < workers:
             fam, i = todo.pop(0)
             case = make_case(fam, seed, i)
@@ -857,8 +865,8 @@ def campaign(counts: dict[str, int], seed: int, workers: int, bound_s: float, me
                 where = save_case(case, out, save) if save else None
                 print(f"{case.name}: {out.kind} ({case.note}) {out.detail.strip().splitlines()[-1:]}"
                       + (f" -> {where}" if where else ""), file=sys.stderr)
-            if progress and done % 50 == 0:
-                print(f"{done} cases done", file=sys.stderr)
+            if progress and done % 100 == 0:
+                print(f"{done} cases done, {time.monotonic() - started:.0f} s", file=sys.stderr)
     return table
 
 
@@ -888,6 +896,8 @@ def main(argv=None) -> int:
     ap.add_argument("--bound-s", type=float, default=60.0, help="time bound of one case, seconds (default 60)")
     ap.add_argument("--mem-gb", type=float, default=3.0, help="address-space limit of one case, GiB (default 3)")
     ap.add_argument("--save", type=Path, metavar="DIR", help="write each failing case into DIR")
+    ap.add_argument("--minutes", type=float, default=math.inf,
+                    help="start no case after this many minutes (the table counts the cases run)")
     ap.add_argument("--replay", type=Path, metavar="CASE_DIR", help="run one saved case and print its outcome")
     args = ap.parse_args(argv)
     import tempfile
@@ -899,7 +909,8 @@ def main(argv=None) -> int:
             return 0 if out.kind in (ERROR, VALID, FALSY) else 1
         t0 = time.monotonic()
         counts = {"dxf": args.dxf, "mesh": args.mesh, "lmap": args.lmap, "matcher": args.matcher}
-        table = campaign(counts, args.seed, args.workers, args.bound_s, args.mem_gb, args.save, Path(scratch))
+        table = campaign(counts, args.seed, args.workers, args.bound_s, args.mem_gb, args.save, Path(scratch),
+                         minutes=args.minutes)
     print(f"seed {args.seed}, {args.workers} workers, bound {args.bound_s:g} s and {args.mem_gb:g} GiB a case")
     print_table(table, time.monotonic() - t0)
     bad = sum(row[TRACEBACK] + row[OVER] for row in table.values())
