@@ -83,6 +83,17 @@ TYPICAL_EXTENT = 20.0
 #: degrees of parallel and the cap is within this of square to them.
 WALL_CAP_ANGLE_DEG = 15.0
 
+#: A drawing entity whose centre lies farther from the median centre of
+#: the plan's entities than this many times the distance that holds 90 % of
+#: them (or than the typical entity's size, if larger) is far outside the
+#: rest (a damaged coordinate, 1e9 where the plan
+#: spans 20 m): it is left out with a warning instead of making the plan
+#: look a million kilometres across. A title block beside the plan lies
+#: within a few times that distance. Plans of fewer than
+#: ``DXF_FAR_MIN_ENTITIES`` entities are not judged.
+DXF_FAR_FACTOR = 100.0
+DXF_FAR_MIN_ENTITIES = 10
+
 #: Block nesting deeper than this is a reference cycle in a broken file.
 DXF_MAX_BLOCK_DEPTH = 32
 

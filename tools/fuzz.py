@@ -819,10 +819,19 @@ def preload() -> None:
     import shapely  # noqa: F401
     import trimesh  # noqa: F401
 
+    import mapkit.assemble  # noqa: F401
     import mapkit.cli  # noqa: F401
+    import mapkit.edges  # noqa: F401
+    import mapkit.importers.dxf  # noqa: F401
+    import mapkit.importers.mesh  # noqa: F401
     import mapkit.pipeline  # noqa: F401
+    import mapkit.preview  # noqa: F401
+    import mapkit.vir  # noqa: F401
+    import mapkit.visibility  # noqa: F401
     import matcher.cli  # noqa: F401
     import matcher.cli_track  # noqa: F401
+    import matcher.lost  # noqa: F401
+    import matcher.tracking.tracker  # noqa: F401
 
     base_frame()
     base_run()
