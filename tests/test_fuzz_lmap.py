@@ -17,7 +17,7 @@ def _warm():
     fuzz.preload()
 
 
-@fuzz_settings(examples=30)
+@fuzz_settings(examples=25)
 @given(rng=st.randoms(use_true_random=False))
 def test_a_damaged_map_is_refused_in_one_line_or_read(tmp_path_factory, rng):
     case = fuzz.lmap_case(rng)

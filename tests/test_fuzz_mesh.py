@@ -16,7 +16,7 @@ def _warm():
     fuzz.preload()
 
 
-@fuzz_settings(examples=8)
+@fuzz_settings(examples=6)
 @given(rng=st.randoms(use_true_random=False))
 def test_a_damaged_mesh_ends_in_a_clean_error_or_a_map(tmp_path_factory, rng):
     case = fuzz.mesh_case(rng)
