@@ -123,7 +123,10 @@ def _extent(entities) -> tuple[float, list]:
     item to be left out of the plan."""
     kept, lows, highs = [], [], []
     for e in entities:
-        box = bbox.extents([e], fast=True)
+        try:
+            box = bbox.extents([e], fast=True)
+        except Exception:  # noqa: BLE001 - a broken entity (a vertex without a location); flattening names it
+            continue
         if not box.has_data:
             continue
         a = np.array((box.extmin.x, box.extmin.y), dtype=float)
