@@ -135,6 +135,9 @@ def _from_calibration(path: Path, text: str, height_m, pitch_deg) -> Camera:
             raise CameraError(f"{what} has no image size (image_width and image_height, or image_size)")
         height_m = _number(fs, "height_m") if height_m is None else height_m
         pitch_deg = _number(fs, "pitch_deg") if pitch_deg is None else pitch_deg
+    except (cv2.error, SystemError):  # a damaged matrix node ("dt" missing, data not a map, ...)
+        raise CameraError(f"{what} is damaged: OpenCV cannot read its matrices; calibrate again or fix the "
+                          "file") from None
     finally:
         fs.release()
     if height_m is None:

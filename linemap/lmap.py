@@ -60,6 +60,10 @@ RAW_FLOOR_BYTES = 64 << 20
 MAX_LIST_ENTRIES_PER_BYTE = 64
 MAX_META_BYTES = 16 << 20
 MAX_META_DEPTH = 32
+#: A map may span at most this many metres: the builder refuses plans over
+#: 2 km (mapkit.tolerances.PLAUSIBLE_EXTENT), so a map larger than this was
+#: crafted, and the matcher's rasters of it would be needlessly coarse.
+MAX_EXTENT_M = 10_000.0
 
 
 class LmapError(ValueError):
@@ -570,6 +574,12 @@ def validate(m: LineMap, name: str = "map") -> None:
         raise bad("wall outline offsets are malformed")
     if not np.isfinite(m.wall_points).all():
         raise bad("wall outlines hold non-finite coordinates")
+    xy = [a.reshape(-1, 2) for a in (m.segments[..., :2], m.ring_points, m.wall_points) if a.size]
+    if xy:
+        span = float(np.ptp(np.concatenate([np.min(a, axis=0, keepdims=True) for a in xy]
+                                           + [np.max(a, axis=0, keepdims=True) for a in xy]), axis=0).max())
+        if span > MAX_EXTENT_M:
+            raise bad(f"it spans {span:.3g} m, more than any building ({MAX_EXTENT_M:g} m, linemap.lmap.MAX_EXTENT_M)")
 
 
 def file_sha256(path: str | os.PathLike) -> str:

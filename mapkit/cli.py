@@ -61,6 +61,14 @@ def _setup_logging() -> None:
     if not any(isinstance(h, _OneLineWarnings) for h in log.handlers):
         log.addHandler(_OneLineWarnings(logging.WARNING))
     log.propagate = False
+    # ezdxf logs each repair of a damaged file ("recovered invalid integer
+    # value ..."); the reader's own one-line warning says what matters, and
+    # Python's last-resort handler would print them all to stderr.
+    # trimesh likewise logs the formats it tried on a damaged mesh, with tracebacks.
+    for name in ("ezdxf", "trimesh"):
+        quiet = logging.getLogger(name)
+        if not any(isinstance(h, logging.NullHandler) for h in quiet.handlers):
+            quiet.addHandler(logging.NullHandler())
 
 
 def main(argv: list[str] | None = None) -> int:

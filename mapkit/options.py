@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from mapkit.tolerances import VIR_MERGE_GROWTH
+from mapkit.tolerances import DXF_MAX_ENTITIES, MAX_FLOOR_AREA_M2, VIR_MERGE_GROWTH
 
 
 @dataclass
@@ -78,6 +78,20 @@ class BuildOptions:
     #: grows by at most this fraction: 0 keeps lists tightest, more regions.
     merge_growth: float = VIR_MERGE_GROWTH
 
+    # ---- limits of work (not recorded: they change no result) ----------
+    #: Most DXF entities flattened (blocks and MINSERT arrays expanded).
+    max_entities: int = DXF_MAX_ENTITIES
+    #: Largest floor, square metres (bounding box of the free space).
+    max_floor_area: float = MAX_FLOOR_AREA_M2
+
     def to_meta(self) -> dict:
-        """JSON-able record of every option (stored in the map)."""
-        return asdict(self)
+        """JSON-able record of every option that shapes the map (stored in
+        it); the limits of work are left out."""
+        d = asdict(self)
+        for name in LIMITS:
+            d.pop(name)
+        return d
+
+
+#: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
+LIMITS = ("max_entities", "max_floor_area")

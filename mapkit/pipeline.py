@@ -83,6 +83,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     if len(segments) == 0:
         raise MapkitError(f"{plan}: no straight wall edges found; check the layer choice with 'mapkit preview'")
 
+    _check_floor(scene.free_space, options, plan)
     t = time.perf_counter()
     part = build_regions(
         segments,
@@ -123,6 +124,21 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     report.counts = counts
     report.warnings = list(scene.info.get("warnings", []))
     return linemap, report
+
+
+def _check_floor(free_space, options: BuildOptions, plan: Path) -> None:
+    """MapkitError naming --max-floor-area when the free space's bounding
+    box is larger than the region builder is allowed to work on."""
+    if free_space is None or free_space.is_empty:
+        return
+    x0, y0, x1, y1 = free_space.bounds
+    area = (x1 - x0) * (y1 - y0)
+    if area > options.max_floor_area:
+        raise MapkitError(
+            f"{plan.name}: the floor spans {x1 - x0:.0f} x {y1 - y0:.0f} m ({area:.3g} m2), more than the "
+            f"{options.max_floor_area:g} m2 a map is built for (MAX_FLOOR_AREA_M2: the region builder's time and "
+            f"memory grow with it, about 2 GB at 10^6 m2); check the units, or raise it with --max-floor-area"
+        )
 
 
 def _check_options(o: BuildOptions) -> None:

@@ -109,6 +109,17 @@ TYPICAL_EXTENT = 20.0
 #: degrees of parallel and the cap is within this of square to them.
 WALL_CAP_ANGLE_DEG = 15.0
 
+#: A drawing entity whose centre lies farther from the median centre of
+#: the plan's entities than this many times the distance that holds 90 % of
+#: them (or than the typical entity's size, if larger) is far outside the
+#: rest (a damaged coordinate, 1e9 where the plan
+#: spans 20 m): it is left out with a warning instead of making the plan
+#: look a million kilometres across. A title block beside the plan lies
+#: within a few times that distance. Plans of fewer than
+#: ``DXF_FAR_MIN_ENTITIES`` entities are not judged.
+DXF_FAR_FACTOR = 100.0
+DXF_FAR_MIN_ENTITIES = 10
+
 #: Block nesting deeper than this is a reference cycle in a broken file.
 DXF_MAX_BLOCK_DEPTH = 32
 
@@ -299,6 +310,23 @@ EXTRUDE_CLEAN = 5 * MERGE
 #: Footprints are snapped to this grid, metres, before boolean operations,
 #: so that the differences between bands have no float-noise slivers.
 EXTRUDE_GRID = MERGE / 10
+
+# ---- limits of work (each raised by an option of mapkit build) ----------------
+# Not geometry: inputs past them would run for minutes or take gigabytes, so
+# they end in an error naming the limit and its option before the work.
+
+#: Most drawing entities an import flattens (after expanding blocks and
+#: MINSERT arrays; text and dimensions do not count): the example has 240,
+#: the Barcelona pavilion 1200; 200 000 LINEs used to run past 120 s and a
+#: MINSERT of 10^6 copies for minutes. ``--max-entities`` raises it.
+DXF_MAX_ENTITIES = 100_000
+
+#: Largest floor a map is built for, square metres (the bounding box of the
+#: free space): the region builder's work and memory grow with it (an empty
+#: room 200 m across: 11 s, 0.3 GB; 1000 m: 80 s, 2 GB; 1999 m: out of
+#: memory). A large building's floor is 10^4 to 10^5 m2. ``--max-floor-area``
+#: raises it.
+MAX_FLOOR_AREA_M2 = 250_000.0
 
 # ---- work sizes ---------------------------------------------------------------
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.

@@ -48,7 +48,8 @@ def check_lines(lines, camera: Camera, tol: Tolerances) -> np.ndarray:
         raise ValueError(f"lines: Expected shape (M, 2, 2) or (M, 4), got {arr.shape}")
     if len(arr) > tol.max_lines:
         raise ValueError(f"{len(arr)} image lines given, the matcher takes at most {tol.max_lines} "
-                         "(Tolerances.max_lines): keep the longest")
+                         "(Tolerances.max_lines, "
+                         "matcher localize --max-lines): keep the longest")
     bad = ~np.isfinite(arr).all(axis=(1, 2))
     if bad.any():
         raise ValueError(f"lines[{int(np.argmax(bad))}] is not finite (NaN or inf pixel coordinates)")

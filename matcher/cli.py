@@ -56,7 +56,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="no prior: try every region of the map, any heading (lost mode; seconds, not milliseconds)")
     p.add_argument("--budget-ms", type=float, metavar="MS",
                    help="time budget: stop searching after MS milliseconds and verify what was found "
-                        "(default: no limit)")
+                        "(default 30000: Tolerances.time_budget_ms)")
+    p.add_argument("--max-lines", type=int, metavar="N",
+                   help="most image lines taken (default 2000: Tolerances.max_lines); more is an error")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     from matcher.cli_track import add_track_parser
 
@@ -165,11 +167,16 @@ def _tolerances(args):
     is not a positive number."""
     from matcher.tolerances import DEFAULT
 
+    tol = DEFAULT
+    if getattr(args, "max_lines", None) is not None:
+        if args.max_lines < 1:
+            raise UsageError(f"--max-lines must be a positive number of lines, got {args.max_lines}")
+        tol = replace(tol, max_lines=args.max_lines)
     if args.budget_ms is None:
-        return DEFAULT
+        return tol
     if not (math.isfinite(args.budget_ms) and args.budget_ms > 0):
         raise UsageError(f"--budget-ms must be a positive number of milliseconds, got {args.budget_ms:g}")
-    return replace(DEFAULT, time_budget_ms=args.budget_ms)
+    return replace(tol, time_budget_ms=args.budget_ms)
 
 
 def _region_progress(done: int, total: int) -> None:

@@ -71,9 +71,12 @@ def localize_prepared(linemap, camera: Camera, img: ImageLines, px, tol: Toleran
     cands = select_candidates(linemap, camera, px, tol, candidate_ids)
     times["select"] = (time.perf_counter() - t0) * 1e3
     reason = cands if isinstance(cands, str) else too_few_lines(img, tol)
+    late = not reason and not deadlines.may_search()  # line preparation and selection count too
+    if late:
+        reason = f"no time left to search after preparing {len(img.lines)} lines" + _cut_short(None, tol, True)
     if reason:
         times["total"] = (time.perf_counter() - t0) * 1e3
-        return LocalizeResult(False, reason, time_ms=times, stage1={})
+        return LocalizeResult(False, reason, time_ms=times, stage1={"out_of_time": True, "tree_nodes": 0} if late else {})
     answer = run_strategy(Frame(camera, img, cands, px, tol, deadlines), sources)
     times.update(answer.times)
     return _result(answer, camera, img, cands, tol, t0, times)
@@ -137,6 +140,6 @@ def _cut_short(hyps, tol: Tolerances, spent: bool) -> str:
     """What a failure's reason adds when the search stopped early: the time
     budget spent (by stage 1, or ``spent``: a later step skipped), or
     stage 1's node or set budget."""
-    if hyps.counts.get("out_of_time") or spent:
-        return f" (time budget of {tol.time_budget_ms:g} ms spent)"
+    if spent or hyps.counts.get("out_of_time"):
+        return f" (time budget of {tol.time_budget_ms:g} ms spent; --budget-ms, Tolerances.time_budget_ms)"
     return " (hypothesis search truncated)" if hyps.truncated else ""

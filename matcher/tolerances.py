@@ -44,6 +44,13 @@ class Internals:
     #: Margin of that raster around the regions, metres: farther points read
     #: as this far (any sane tolerance rejects them anyway).
     free_border_m: float = 1.0
+    #: Most cells of that raster: a map larger than ``free_cell_m`` times
+    #: its square root across (200 m) gets coarser cells instead of a
+    #: raster of gigabytes (a 2 km plan: 0.5 m cells, 128 MB of distances).
+    free_max_cells: int = 16_000_000
+    #: Rows x ring edges per block of the raster's scanline pass (a work
+    #: size, not a tolerance: it bounds that pass's temporaries).
+    free_scan_block: int = 4_000_000
     #: Bearings per vertical edge in the map's sight table (half a degree):
     #: how far one sees back from the edge along each.
     sight_bins: int = 720
@@ -377,7 +384,10 @@ class Tolerances:
     #: then hold the true one.
     max_nodes: int = 2000
     #: Wall-clock budget of one call, milliseconds (inf: none), for a robot
-    #: that must answer at its frame rate. The searches (stage 1's tree, the
+    #: that must answer at its frame rate. The default, 30 s, never cuts a
+    #: frame of the benchmarks (milliseconds; lost mode a few seconds) but
+    #: ends a hostile one (hundreds of look-alike lines, a tree whose every
+    #: node is slow) in a reason instead of minutes of work. The searches (stage 1's tree, the
     #: second search, the resection) stop at 70 % of it, keeping what they
     #: found, and the final tests of their sets at 100 %; stage 2 then runs
     #: on what passed (at most ``max_hypotheses``: a few milliseconds).
@@ -388,7 +398,7 @@ class Tolerances:
     #: docs/matcher.md, from tools/bench_budget.py). In lost mode it bounds
     #: the whole call: regions are tried, the largest first, until it is
     #: spent.
-    time_budget_ms: float = math.inf
+    time_budget_ms: float = 30_000.0
     #: Stage 1 hands at most this many hypotheses to stage 2: the largest
     #: sets, then those that fit best at their grid pose (mean normalised
     #: residual). The paper saw
@@ -413,7 +423,8 @@ class Tolerances:
     #: output); lines reaching farther out are another camera's: refused.
     image_reach: float = 0.25
     #: Most image lines a call takes (line preparation compares every pair
-    #: of lines): a photo gives a few hundred after merging.
+    #: of lines): a photo gives a few hundred after merging (``matcher
+    #: localize --max-lines`` raises it).
     max_lines: int = 2000
     #: The method's inner constants (:class:`Internals`).
     internals: Internals = field(default_factory=Internals)

@@ -37,3 +37,18 @@ def test_an_entity_with_a_nan_coordinate_is_left_out_and_named(tmp_path, capsys,
     assert "Traceback" not in err
     assert f"non-finite coordinates, handle {handle}" in err
     assert "wrote" in out and (tmp_path / "out.lmap").exists()
+
+
+def test_an_entity_far_outside_the_rest_is_left_out_and_named(tmp_path, capsys):
+    """A wall line whose end reads 1e9 (a damaged number) made the plan a
+    million kilometres across, refused as a unit error; it is left out
+    instead, named, and the rest of the plan is read."""
+    doc = ezdxf.readfile(FLAT)
+    e = next(e for e in doc.modelspace() if e.dxftype() == "LINE" and e.dxf.layer == "A-WALL")
+    e.dxf.end = (1e9, e.dxf.end.y, 0.0)
+    path = tmp_path / "wild.dxf"
+    doc.saveas(path)
+    code, out, err = run(capsys, "preview", path, "-o", tmp_path / "p.png")
+    assert code == 0, err
+    assert f"far outside the rest of the drawing, handle {e.dxf.handle} on layer A-WALL" in err
+    assert "Traceback" not in err and (tmp_path / "p.png").exists()

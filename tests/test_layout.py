@@ -27,6 +27,7 @@ NOT_THRESHOLDS = {
     ("linemap/lmap.py", "MAX_LIST_ENTRIES_PER_BYTE"): "the loader's resource bounds on hostile files",
     ("linemap/lmap.py", "MAX_META_BYTES"): "the loader's resource bounds on hostile files",
     ("linemap/lmap.py", "MAX_META_DEPTH"): "the loader's resource bounds on hostile files",
+    ("linemap/lmap.py", "MAX_EXTENT_M"): "the loader's resource bounds on hostile files",
     ("linemap/camera_files.py", "_MAX_CALIBRATION_CHARS"): "input size limits of a file parser",
     ("linemap/camera_files.py", "_MAX_CALIBRATION_DEPTH"): "input size limits of a file parser",
     ("linemap/atomic.py", "STALE_TEMP_S"): "file housekeeping (a killed write's leftovers), not a tolerance of the method",
@@ -35,6 +36,7 @@ NOT_THRESHOLDS = {
     ("matcher/tracking/route_plot.py", "_LOST"): "colours of a picture",
     ("matcher/tracking/route_plot.py", "_JUMP_M"): "where a picture breaks its line",
     ("matcher/stage1/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
+    ("matcher/stage1/constraints.py", "_PAIR_BLOCK"): "a work size bounding temporaries, not a tolerance",
     ("matcher/stage1/tree.py", "_BIT_LEVELS"): "the bits of an int64, sign spared",
 }
 

@@ -271,7 +271,7 @@ def test_budget_from_the_command_line(files, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["ok"] is True and out["out_of_time"] is False
     assert main(args(files, "--budget-ms", "1e-9")) == 1
-    assert "(time budget of 1e-09 ms spent)" in capsys.readouterr().out
+    assert "(time budget of 1e-09 ms spent; --budget-ms" in capsys.readouterr().out
     assert main(args(files, "--budget-ms", "1e-9", "--json")) == 1
     out = json.loads(capsys.readouterr().out)
     assert out["ok"] is False and out["out_of_time"] is True

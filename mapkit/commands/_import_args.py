@@ -50,6 +50,8 @@ def add_import_arguments(p) -> None:
                    help="floor to build of a tour with several (ZInD: floor_01, ...; default the first, with a warning)")
     g.add_argument("--up", choices=("auto", "z", "y"), default=d.up,
                    help="mesh up axis (default auto: glTF's y-up, z for the other formats; a glTF stored z-up is told by its faces)")
+    g.add_argument("--max-entities", type=int, default=d.max_entities, metavar="N",
+                   help=f"most DXF entities taken, blocks and MINSERT arrays expanded (default {d.max_entities})")
     add_float_options(p.add_argument_group("reconstruction"), d, [
         ("--wall-height", "wall (ceiling) height"),
         ("--door-height", "door head height"),
@@ -71,6 +73,8 @@ def import_options_from_args(args) -> BuildOptions:
     for name in ("wall_height", "door_height", "window_head", "max_wall_thickness"):
         if not getattr(args, name) > 0:
             raise MapkitError(f"--{name.replace('_', '-')} must be positive, got {getattr(args, name)}")
+    if not args.max_entities > 0:
+        raise MapkitError(f"--max-entities must be a positive number, got {args.max_entities}")
     for name in ("robot_radius", "window_sill"):
         if not getattr(args, name) >= 0:
             raise MapkitError(f"--{name.replace('_', '-')} must be >= 0 metres, got {getattr(args, name)}")
@@ -90,4 +94,5 @@ def import_options_from_args(args) -> BuildOptions:
         window_head=args.window_head,
         robot_radius=args.robot_radius,
         max_wall_thickness=args.max_wall_thickness,
+        max_entities=args.max_entities,
     )

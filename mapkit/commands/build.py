@@ -31,6 +31,9 @@ def add_arguments(p) -> None:
         ("--min-visible-length", "shortest contiguous visible piece that counts"),
         ("--eps", "region lists cover everything visible within this distance"),
     ])
+    g.add_argument("--max-floor-area", type=float, default=d.max_floor_area, metavar="M2",
+                   help=f"largest floor a map is built for, square metres, bounding box of the free space "
+                        f"(default {d.max_floor_area:g}; the region builder's time and memory grow with it)")
     g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
@@ -65,6 +68,9 @@ def options_from_args(args):
     o.min_visible_length = args.min_visible_length
     o.eps = args.eps
     o.merge_growth = args.merge_growth
+    if not args.max_floor_area > 0:
+        raise MapkitError(f"--max-floor-area must be a positive number of square metres, got {args.max_floor_area}")
+    o.max_floor_area = args.max_floor_area
     return o
 
 

@@ -27,7 +27,8 @@ class FreeSpace:
         """``ring_points`` (P, 2) and ``ring_offsets`` (K+1,): the region rings
         of a map (outer rings and holes alike; the union of regions is their
         even-odd set because regions do not overlap). The raster's cell and
-        margin are ``free_cell_m`` and ``free_border_m``."""
+        margin are ``free_cell_m`` and ``free_border_m``; a map too large for
+        ``free_max_cells`` cells of that size gets larger cells."""
         self.cell = float(work.free_cell_m)
         border = work.free_border_m
         if len(ring_points) == 0:
@@ -37,9 +38,12 @@ class FreeSpace:
             return
         lo = ring_points.min(axis=0) - border
         hi = ring_points.max(axis=0) + border
+        span = np.prod((hi - lo) / self.cell + 1.0)
+        if span > work.free_max_cells:
+            self.cell *= float(np.sqrt(span / work.free_max_cells)) * 1.001
         nx, ny = (np.ceil((hi - lo) / self.cell).astype(int) + 1).tolist()
         self.origin = lo
-        inside = _even_odd_raster(ring_points, ring_offsets, lo, self.cell, nx, ny)
+        inside = _even_odd_raster(ring_points, ring_offsets, lo, self.cell, nx, ny, work.free_scan_block)
         if inside.any():
             # Centre to centre, less half a cell: the region's border lies
             # about half a cell beyond the last inside centre.
@@ -57,19 +61,26 @@ class FreeSpace:
         return self.dist[cell[..., 1], cell[..., 0]]
 
 
-def _even_odd_raster(points, offsets, origin, cell, nx, ny) -> np.ndarray:
+def _even_odd_raster(points, offsets, origin, cell, nx, ny, block: int) -> np.ndarray:
     """(ny, nx) bool: cell centres inside the rings under the even-odd rule.
 
     Per row, each ring edge straddling the row's centre line crosses it once;
     the crossings are binned by column and a running count along the row
-    gives each cell centre the parity of the crossings to its left."""
+    gives each cell centre the parity of the crossings to its left. Rows
+    are taken ``block // edges`` at a time (bounded temporaries)."""
     idx = np.arange(len(points))
     nxt = idx + 1
     nxt[offsets[1:] - 1] = offsets[:-1]  # each ring closes on its first point
     a, b = points, points[nxt]
     yc = origin[1] + (np.arange(ny) + 0.5) * cell  # (ny,)
-    straddle = (a[None, :, 1] > yc[:, None]) != (b[None, :, 1] > yc[:, None])  # (ny, E)
-    row, e = np.nonzero(straddle)
+    step = max(1, block // max(len(a), 1))
+    rows, edges = [], []
+    for r0 in range(0, ny, step):
+        y = yc[r0:r0 + step, None]
+        r, e = np.nonzero((a[None, :, 1] > y) != (b[None, :, 1] > y))  # rows of this block x edges
+        rows.append(r + r0)
+        edges.append(e)
+    row, e = np.concatenate(rows), np.concatenate(edges)
     t = (yc[row] - a[e, 1]) / (b[e, 1] - a[e, 1])
     xcross = a[e, 0] + t * (b[e, 0] - a[e, 0])
     # A crossing at x lies left of every cell centre x_c > x: the first such

@@ -22,6 +22,10 @@ from linemap.geometry import world_normals, wrap
 #: The noise cases of :func:`_perturbed_lines`: (rotation, offset) signs.
 #: The first four are the extreme cases of the noise model; then rotation
 #: alone and offset alone.
+#: Line pairs per block of :func:`line_pieces` (a work size: it bounds the
+#: float temporaries, 32 MB each, not a tolerance of the method).
+_PAIR_BLOCK = 4_000_000
+
 _NOISE_CASES = np.array([[-1, -1], [-1, 1], [1, -1], [1, 1], [-1, 0], [1, 0], [0, -1], [0, 1]], dtype=float)
 
 
@@ -96,9 +100,18 @@ def line_pieces(lines: np.ndarray, normals: np.ndarray, eps: np.ndarray, gap_px:
     out = np.zeros((M, M), dtype=bool)
     if M < 2:
         return out
-    # Planes within the noise: |cos| of the angle between the normals.
-    bound = np.cos(np.minimum(eps[:, None] + eps[None, :], 0.5 * np.pi))
-    i, j = np.nonzero(np.triu(np.abs(normals @ normals.T) >= bound, 1))
+    # Planes within the noise: |cos| of the angle between the normals; rows
+    # a block at a time, so that the float temporaries stay near
+    # ``_PAIR_BLOCK`` entries however many lines there are.
+    pairs = []
+    rows = max(1, _PAIR_BLOCK // M)
+    for r0 in range(0, M - 1, rows):
+        r = slice(r0, min(r0 + rows, M))
+        bound = np.cos(np.minimum(eps[r, None] + eps[None, :], 0.5 * np.pi))
+        bi, bj = np.nonzero(np.triu(np.abs(normals[r] @ normals.T) >= bound, 1 + r0))
+        pairs.append((bi + r0, bj))
+    i = np.concatenate([p[0] for p in pairs])
+    j = np.concatenate([p[1] for p in pairs])
     if not len(i):
         return out
     # Line j's span along line i, from i's first end point; i's own is [0, L].

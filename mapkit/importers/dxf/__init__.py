@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from ezdxf import bbox
 
-from mapkit.importers.dxf.entities import flatten_entities
+from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
 from mapkit.importers.dxf.read import read_dxf
 from mapkit.importers.dxf.units import decide_units
@@ -32,7 +32,7 @@ from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
-from mapkit.tolerances import CURVE_SAGITTA
+from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES
 
 SUFFIXES = (".dxf",)
 
@@ -61,6 +61,7 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     doc, warnings = read_dxf(path)
     for w in warnings:
         log.warning(w)
+    check_entity_count(doc.modelspace(), doc.blocks, options.max_entities)
     counts = layer_counts(doc)
     roles, role_warnings = resolve_roles(counts, options)
     for w in role_warnings:
@@ -69,7 +70,7 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
 
     msp = doc.modelspace()
     used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
-    extent = _extent(used)
+    extent, far = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
     imperial = doc.header.get("$MEASUREMENT", 1) == 0
     unit, per_unit, unit_warning = decide_units(insunits, options.units, extent, imperial)
@@ -78,7 +79,12 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         warnings.append(unit_warning)
     factor = per_unit * float(options.scale)
 
-    strokes, skipped = flatten_entities(msp, factor, CURVE_SAGITTA / factor, lambda layer: True)
+    far_ids = {id(e) for e in far}
+    strokes, skipped = flatten_entities([e for e in msp if id(e) not in far_ids], factor, CURVE_SAGITTA / factor,
+                                        lambda layer: True, max_entities=options.max_entities)
+    for e in far:
+        skipped[f"{e.dxftype()} (far outside the rest of the drawing, handle {e.dxf.get('handle', '?')} "
+                f"on layer {_layer(e)})"] += 1
     if skipped:
         listed = ", ".join(f"{n} {kind}" for kind, n in sorted(skipped.items()))
         message = f"skipped unsupported entities: {listed}"
@@ -110,20 +116,39 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     return drawing, info
 
 
-def _extent(entities) -> float:
+def _extent(entities) -> tuple[float, list]:
     """Largest side of the bounding box of ``entities``, drawing units (0 if
-    none), leaving out entities with non-finite coordinates."""
-    lo, hi = None, None
-    for box in (bbox.extents([e], fast=True) for e in entities):
+    none), leaving out entities with non-finite coordinates and those far
+    outside the rest (``DXF_FAR_FACTOR``), which are returned as the second
+    item to be left out of the plan."""
+    kept, lows, highs = [], [], []
+    for e in entities:
+        try:
+            box = bbox.extents([e], fast=True)
+        except Exception:  # noqa: BLE001 - a broken entity (a vertex without a location); flattening names it
+            continue
         if not box.has_data:
             continue
         a = np.array((box.extmin.x, box.extmin.y), dtype=float)
         b = np.array((box.extmax.x, box.extmax.y), dtype=float)
-        if not (np.isfinite(a).all() and np.isfinite(b).all()):
-            continue
-        lo = a if lo is None else np.minimum(lo, a)
-        hi = b if hi is None else np.maximum(hi, b)
-    return 0.0 if lo is None else float((hi - lo).max())
+        if np.isfinite(a).all() and np.isfinite(b).all():
+            kept.append(e)
+            lows.append(a)
+            highs.append(b)
+    if not kept:
+        return 0.0, []
+    lo, hi = np.array(lows), np.array(highs)
+    far = np.zeros(len(kept), dtype=bool)
+    if len(kept) >= DXF_FAR_MIN_ENTITIES:
+        centres = 0.5 * (lo + hi)
+        dist = np.linalg.norm(centres - np.median(centres, axis=0), axis=1)
+        # The spread of the centres, or the typical entity's size when most
+        # centres coincide (concentric circles).
+        reach = max(float(np.percentile(dist, 90)), float(np.median(np.linalg.norm(hi - lo, axis=1))))
+        far = dist > DXF_FAR_FACTOR * reach
+    near = ~far
+    extent = float((hi[near].max(axis=0) - lo[near].min(axis=0)).max())
+    return extent, [e for e, f in zip(kept, far) if f]
 
 
 def _layer(entity) -> str:

@@ -17,7 +17,14 @@ import numpy as np
 from ezdxf import path as dxfpath
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import CURVE_BEZIER_PER_TURN, CURVE_STEP_DEG, DXF_MAX_BLOCK_DEPTH
+from mapkit.errors import MapkitError
+from mapkit.tolerances import (
+    CURVE_BEZIER_PER_TURN,
+    CURVE_STEP_DEG,
+    DXF_MAX_BLOCK_DEPTH,
+    DXF_MAX_ENTITIES,
+    PLAUSIBLE_EXTENT,
+)
 
 #: Entities that carry no building geometry: skipped without a word.
 SILENT = frozenset(
@@ -46,6 +53,7 @@ def flatten_entities(
     factor: float,
     sagitta: float,
     layer_wanted: Callable[[str], bool],
+    max_entities: int | None = None,
 ) -> tuple[list[Stroke], Counter]:
     """Strokes (in metres) of model-space ``entities`` on wanted layers.
 
@@ -55,8 +63,17 @@ def flatten_entities(
     types that were skipped. An entity with a non-finite coordinate (a
     damaged file) is left out and counted as ``"<type> (non-finite
     coordinates, handle H on layer L)"``: its geometry would stall or break
-    the plan's reconstruction.
+    the plan's reconstruction. So is an outline larger than any building
+    (its control points span more than ``PLAUSIBLE_EXTENT``'s upper bound, a
+    damaged bulge or radius): flattened to ``sagitta`` it would take
+    billions of points. More than ``max_entities`` entities with geometry
+    (blocks and MINSERT arrays expanded; default ``DXF_MAX_ENTITIES``) is a
+    :class:`MapkitError` naming ``--max-entities``, raised as soon as the
+    count passes it.
     """
+    limit = DXF_MAX_ENTITIES if max_entities is None else max_entities
+    taken = 0
+    max_span = PLAUSIBLE_EXTENT[1] / factor if factor > 0 else math.inf
     strokes: list[Stroke] = []
     skipped: Counter = Counter()
     groups: dict[tuple[int, int], int] = {}
@@ -72,15 +89,56 @@ def flatten_entities(
         else:
             items = iter([(entity, layer, None)])
         for sub, sub_layer, cell in items:
-            if not layer_wanted(sub_layer):
+            if not layer_wanted(sub_layer) or sub.dxftype() in SILENT:
                 continue
+            taken += 1
+            if taken > limit:
+                raise MapkitError(f"the drawing holds more than {limit} entities with geometry (blocks and MINSERT "
+                                  f"arrays expanded; DXF_MAX_ENTITIES): building it would take very long; raise "
+                                  f"the limit with --max-entities if the plan is really that large")
             group = None if cell is None else groups.setdefault((index, cell), len(groups))
-            for coords, closed, filled in _outlines(sub, sagitta, skipped):
+            for coords, closed, filled in _outlines(sub, sagitta, skipped, max_span):
+                if coords is None:
+                    skipped[_left_out(entity, layer, f"larger than {PLAUSIBLE_EXTENT[1]:g} m")] += 1
+                    continue
                 if not np.isfinite(coords).all():
                     skipped[_left_out(entity, layer)] += 1
                     continue
                 strokes.append(Stroke(coords * factor, closed, filled, sub_layer, group))
     return strokes, skipped
+
+
+def check_entity_count(entities, blocks, limit: int = DXF_MAX_ENTITIES) -> int:
+    """The number of entities with geometry in ``entities`` once blocks and
+    MINSERT arrays are expanded, counted from the block definitions without
+    expanding anything (a MINSERT of 10^6 copies costs one multiplication);
+    :class:`MapkitError` naming ``--max-entities`` as soon as it passes ``limit``."""
+    memo: dict[str, int] = {}
+
+    def block_count(name: str, depth: int) -> int:
+        if name not in memo:
+            memo[name] = 0  # a reference cycle counts as empty (the expansion skips it too)
+            block = blocks.get(name) if depth <= DXF_MAX_BLOCK_DEPTH else None
+            memo[name] = 0 if block is None else count(block, depth + 1)
+        return memo[name]
+
+    def count(items, depth: int) -> int:
+        total = 0
+        for e in items:
+            kind = e.dxftype()
+            if kind == "INSERT":
+                copies = max(1, int(e.dxf.get("row_count", 1) or 1)) * max(1, int(e.dxf.get("column_count", 1) or 1))
+                total += copies * block_count(e.dxf.get("name", ""), depth)
+            elif kind not in SILENT:
+                total += 1
+            if total > limit:
+                raise MapkitError(
+                    f"the drawing holds more than {limit} entities with geometry (blocks and MINSERT arrays "
+                    f"expanded; DXF_MAX_ENTITIES): building it would take very long; raise the limit with "
+                    f"--max-entities if the plan is really that large")
+        return total
+
+    return count(entities, 0)
 
 
 def _finite_placement(entity) -> bool:
@@ -101,10 +159,10 @@ def _finite_placement(entity) -> bool:
     return True
 
 
-def _left_out(entity, layer: str) -> str:
+def _left_out(entity, layer: str, why: str = "non-finite coordinates") -> str:
     """The skipped-entities key of a damaged entity, naming it for the user."""
     handle = entity.dxf.get("handle", "?")
-    return f"{entity.dxftype()} (non-finite coordinates, handle {handle} on layer {layer})"
+    return f"{entity.dxftype()} ({why}, handle {handle} on layer {layer})"
 
 
 def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iterator[tuple[object, str, int]]:
@@ -133,8 +191,11 @@ def _expand(entity, layer: str, cell: int, depth: int, skipped: Counter) -> Iter
             yield child, effective, cell
 
 
-def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.ndarray, bool, bool]]:
-    """(coords (N, 2) in drawing units, closed, filled) for each outline of an entity."""
+def _outlines(entity, sagitta: float, skipped: Counter,
+              max_span: float = math.inf) -> Iterator[tuple[np.ndarray | None, bool, bool]]:
+    """(coords (N, 2) in drawing units, closed, filled) for each outline of
+    an entity; coords None for an outline whose control points span more
+    than ``max_span`` drawing units (not flattened)."""
     kind = entity.dxftype()
     if kind in SILENT:
         return
@@ -159,6 +220,13 @@ def _outlines(entity, sagitta: float, skipped: Counter) -> Iterator[tuple[np.nda
     for p in paths:
         subs = p.sub_paths() if p.has_sub_paths else [p]
         for sub in subs:
+            cv = np.array([(v.x, v.y) for v in sub.control_vertices()], dtype=float).reshape(-1, 2)
+            if not np.isfinite(cv).all():
+                yield cv, False, filled  # the caller names it as non-finite
+                continue
+            if len(cv) and np.ptp(cv, axis=0).max() > max_span:
+                yield None, False, filled
+                continue
             pts = np.array([(v.x, v.y) for v in sub.flattening(sagitta, segments=_MIN_SEGMENTS)], dtype=float)
             if len(pts) < 2:
                 continue

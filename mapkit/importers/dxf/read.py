@@ -42,6 +42,7 @@ def read_dxf(path: Path) -> tuple[object, list[str]]:
             f"{path.name} is damaged ({_short(strict_error)}); recovered what was readable "
             f"({fixed} fixes, {errors} unrecoverable errors): check the preview"
         )
+    warnings += _drop_unknown_entities(doc, path)
     if not _has_entities(doc):
         if warnings:
             raise MapkitError(
@@ -50,6 +51,24 @@ def read_dxf(path: Path) -> tuple[object, list[str]]:
             )
         raise MapkitError(f"{path.name}: the drawing is empty (no entities in model space); check the file")
     return doc, warnings
+
+
+def _drop_unknown_entities(doc, path: Path) -> list[str]:
+    """Remove model-space entities that have no layer attribute at all: a
+    damaged group code makes a value read as an entity type ("9800.0"),
+    which ezdxf keeps as raw tags. Returns a warning naming them, or []."""
+    msp = doc.modelspace()
+    try:
+        bad = [e for e in msp if not e.dxf.is_supported("layer")]
+    except _READ_ERRORS:
+        return []
+    for e in bad:
+        msp.delete_entity(e)
+    if not bad:
+        return []
+    names = ", ".join(sorted({repr(e.dxftype())[:40] for e in bad})[:5])
+    return [f"{path.name}: left out {len(bad)} entities of no known type ({names}): the file is damaged; "
+            f"check the preview"]
 
 
 def _check_looks_like_dxf(path: Path) -> None:

@@ -133,6 +133,10 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
         raise MapkitError(f"{path}: the file holds no triangles; export the model as a surface mesh")
     offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
     vertices = np.concatenate([v for v, _ in parts])
+    for (v, f) in parts:  # damaged binary files name vertices they do not hold
+        if len(f) and (f.min() < 0 or f.max() >= len(v)):
+            bad = int(f.max()) if f.max() >= len(v) else int(f.min())
+            raise MapkitError(f"{path}: a face names vertex {bad} of {len(v)}; the file is damaged, export it again")
     faces = np.concatenate([f + o for (_, f), o in zip(parts, offsets)])
     if not np.isfinite(vertices).all():
         raise MapkitError(f"{path}: the mesh has non-finite coordinates (NaN or infinity); repair or re-export it")

@@ -22,6 +22,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from shapely.geometry import MultiLineString, MultiPolygon
 
+from mapkit.errors import MapkitError
 from mapkit.importers.mesh.edges import edge_faces, face_normals
 from mapkit.tolerances import MERGE, MESH_OPEN_FRACTION, MESH_SECTION_CHUNK, MESH_THIN_WALL
 
@@ -67,7 +68,14 @@ class MeshSections:
             return Section(MultiPolygon(), MultiLineString(), MultiPolygon(), MultiPolygon())
         seg = orient(np.asarray(lines)[:, :, :2], self.normals[face, :2])
         thin = self.open_face[face]
-        return section_regions(seg[~thin], seg[thin])
+        try:
+            return section_regions(seg[~thin], seg[thin])
+        except shapely.errors.GEOSException as exc:
+            # A damaged mesh (faces naming the wrong vertices) crosses itself:
+            # its section is no valid outline, and GEOS gives up on it.
+            reason = str(exc).split(". ")[0][:100]
+            raise MapkitError(f"the mesh's section at {z:.3f} m is not a valid outline ({reason}): its faces cross "
+                              "each other; repair the model or export it again") from None
 
 
 def open_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
