@@ -107,7 +107,7 @@ class _RegionSearch:
         self.tried: set[int] = set()
         self.out_of_time = False
         self.places = None  # the voted places (n, 4), once worked out
-        self.voted = 0  # narrow priors searched at voted places
+        self.voted: set[int] = set()  # the voted places searched
 
     def run_voted(self, tol: Tolerances, sources=(TreeSearch(),), only: list | None = None) -> dict:
         """Key ``("vote", k)`` -> accepted result (or one naming look-alike
@@ -123,11 +123,15 @@ class _RegionSearch:
         found: dict = {}
         dt, dyaw = work.vote_prior_m, math.radians(work.vote_prior_deg)
         for k, (x, y, yaw, _) in enumerate(self.places):
-            if (only is not None and ("vote", k) not in only) or not self.deadlines.may_search():
+            if only is not None and ("vote", k) not in only:
                 continue
+            if not self.deadlines.may_search():
+                self.out_of_time = True
+                break
             res = from_prior.localize_prepared(self.linemap, self.camera, self.img, (x, y, yaw, dt, dyaw), tol,
                                                time.perf_counter(), self.deadlines, sources=sources)
-            self.voted += 1
+            self.voted.add(k)
+            self.out_of_time |= bool(res.stage1.get("out_of_time"))
             if res or res.candidates:
                 found[("vote", k)] = res
         return found
@@ -171,16 +175,16 @@ def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float
     n, tried = search.linemap.n_regions, len(search.tried)
     if not found:
         spent = f"; the time budget of {tol.time_budget_ms:g} ms ran out" if search.out_of_time else ""
-        return LocalizeResult(False, f"no region gave an accepted hypothesis ({search.voted} voted places and "
+        return LocalizeResult(False, f"no region gave an accepted hypothesis ({len(search.voted)} voted places and "
                               f"{tried} of {n} regions tried{spent})",
-                              time_ms={"total": total_ms, "regions_tried": tried, "places_tried": search.voted})
+                              time_ms={"total": total_ms, "regions_tried": tried, "places_tried": len(search.voted)})
     # Every answer: each region's pose, or the poses it could not tell apart.
     answers = sorted(((c, res) for res in found.values() for c in _answers(res)), key=lambda a: (-a[0][1], a[0][2]))
     best = answers[0][1]
     kept = ambiguity.rivals([a for a, _ in answers], tol.internals, ambiguity.spread_of(best.pose_std) if best else None)
     best.time_ms["total"] = total_ms
     best.time_ms["regions_tried"] = tried
-    best.time_ms["places_tried"] = search.voted
+    best.time_ms["places_tried"] = len(search.voted)
     # The best of the regions searched, not of all: the result says so.
     best.stage1["out_of_time"] = search.out_of_time
     if len(kept) > 1:
