@@ -280,17 +280,39 @@ def encode(m: LineMap) -> bytes:
         (b"WHOL", np.asarray(m.wall_is_hole, dtype="u1").tobytes(), _ZLIB),
         (b"WPTS", dw.astype("<i4").reshape(-1).tobytes(), _ZLIB),
     ]
+    return write_chunks([(tag, codec, raw) for tag, raw, codec in chunks])
+
+
+def write_chunks(chunks, raw_sizes: dict | None = None) -> bytes:
+    """A file of ``chunks`` ``(tag, codec, payload)`` (payload before
+    compression), with the header and checksums; ``raw_sizes`` (tag -> int)
+    overrides the raw size a chunk declares (tests of hostile files)."""
     header = np.zeros((), dtype=_HEADER)
     header["magic"], header["major"], header["minor"] = MAGIC, FORMAT_MAJOR, FORMAT_MINOR
     header["n_chunks"] = len(chunks)
     out = [header.tobytes()]
-    for tag, raw, codec in chunks:
+    for tag, codec, raw in chunks:
         stored = zlib.compress(raw, 9) if codec == _ZLIB else raw
         ch = np.zeros((), dtype=_CHUNK)
-        ch["tag"], ch["codec"], ch["raw_size"] = tag, codec, len(raw)
+        ch["tag"], ch["codec"], ch["raw_size"] = tag, codec, (raw_sizes or {}).get(tag, len(raw))
         ch["stored_size"], ch["crc32"] = len(stored), zlib.crc32(stored)
         out += [ch.tobytes(), stored]
     return b"".join(out)
+
+
+def read_chunks(data: bytes) -> list[list]:
+    """``[tag, codec, payload]`` (payload inflated) of each chunk of a
+    well-formed file, for tools and tests that rewrite a map's chunks; it
+    trusts the file (:func:`decode` is the reader that checks everything)."""
+    header = np.frombuffer(data, dtype=_HEADER, count=1)[0]
+    pos, out = _HEADER.itemsize, []
+    for _ in range(int(header["n_chunks"])):
+        ch = np.frombuffer(data, dtype=_CHUNK, count=1, offset=pos)[0]
+        pos += _CHUNK.itemsize
+        stored = data[pos:pos + int(ch["stored_size"])]
+        pos += len(stored)
+        out.append([bytes(ch["tag"]), int(ch["codec"]), zlib.decompress(stored) if int(ch["codec"]) == _ZLIB else stored])
+    return out
 
 
 def _quantize_deltas(points: np.ndarray) -> np.ndarray:

@@ -7,44 +7,16 @@ from __future__ import annotations
 
 import json
 import tracemalloc
-import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from linemap.lmap import _CHUNK, _HEADER, LmapError, decode
+from linemap.lmap import LmapError, decode
+from linemap.lmap import read_chunks as _read_chunks
+from linemap.lmap import write_chunks as _write_chunks
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def _read_chunks(blob: bytes) -> list[list]:
-    """[tag, codec, payload] of each chunk of a valid file (payload inflated)."""
-    header = np.frombuffer(blob, dtype=_HEADER, count=1)[0]
-    pos, out = _HEADER.itemsize, []
-    for _ in range(int(header["n_chunks"])):
-        ch = np.frombuffer(blob, dtype=_CHUNK, count=1, offset=pos)[0]
-        pos += _CHUNK.itemsize
-        stored = blob[pos:pos + int(ch["stored_size"])]
-        pos += len(stored)
-        payload = zlib.decompress(stored) if int(ch["codec"]) == 1 else stored
-        out.append([bytes(ch["tag"]), int(ch["codec"]), payload])
-    return out
-
-
-def _write_chunks(chunks, raw_sizes: dict | None = None) -> bytes:
-    """A file of ``chunks`` with correct checksums; ``raw_sizes`` overrides
-    the raw size a chunk declares."""
-    header = np.zeros((), dtype=_HEADER)
-    header["magic"], header["major"], header["minor"], header["n_chunks"] = b"\x89LMP\r\n\x1a\n", 1, 0, len(chunks)
-    parts = [header.tobytes()]
-    for tag, codec, payload in chunks:
-        stored = zlib.compress(payload, 9) if codec == 1 else payload
-        ch = np.zeros((), dtype=_CHUNK)
-        ch["tag"], ch["codec"], ch["stored_size"], ch["crc32"] = tag, codec, len(stored), zlib.crc32(stored)
-        ch["raw_size"] = (raw_sizes or {}).get(tag, len(payload))
-        parts += [ch.tobytes(), stored]
-    return b"".join(parts)
 
 
 @pytest.fixture(scope="module")

@@ -47,7 +47,6 @@ import struct
 import sys
 import time
 import traceback
-import zlib
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -281,37 +280,16 @@ def mesh_case(rng: random.Random, name: str = "mesh") -> Case:
 
 def _lmap_chunks(blob: bytes) -> list[list]:
     """[tag, codec, payload] of each chunk of a valid file (payload inflated)."""
-    import numpy as np
+    from linemap.lmap import read_chunks
 
-    from linemap.lmap import _CHUNK, _HEADER
-
-    header = np.frombuffer(blob, dtype=_HEADER, count=1)[0]
-    pos, out = _HEADER.itemsize, []
-    for _ in range(int(header["n_chunks"])):
-        ch = np.frombuffer(blob, dtype=_CHUNK, count=1, offset=pos)[0]
-        pos += _CHUNK.itemsize
-        stored = blob[pos:pos + int(ch["stored_size"])]
-        pos += len(stored)
-        out.append([bytes(ch["tag"]), int(ch["codec"]), zlib.decompress(stored) if int(ch["codec"]) == 1 else stored])
-    return out
+    return read_chunks(blob)
 
 
 def _lmap_encode(chunks) -> bytes:
     """A file of ``chunks`` with valid checksums."""
-    import numpy as np
+    from linemap.lmap import write_chunks
 
-    from linemap.lmap import _CHUNK, _HEADER
-
-    header = np.zeros((), dtype=_HEADER)
-    header["magic"], header["major"], header["minor"], header["n_chunks"] = b"\x89LMP\r\n\x1a\n", 1, 0, len(chunks)
-    parts = [header.tobytes()]
-    for tag, codec, payload in chunks:
-        stored = zlib.compress(payload, 9) if codec == 1 else payload
-        ch = np.zeros((), dtype=_CHUNK)
-        ch["tag"], ch["codec"], ch["stored_size"], ch["crc32"] = tag, codec, len(stored), zlib.crc32(stored)
-        ch["raw_size"] = len(payload)
-        parts += [ch.tobytes(), stored]
-    return b"".join(parts)
+    return write_chunks(chunks)
 
 
 def _mutate_meta(payload: bytes, rng: random.Random) -> tuple[bytes, str]:
