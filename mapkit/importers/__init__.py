@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import logging
 from pathlib import Path
 
 from mapkit.errors import MapkitError
@@ -69,3 +70,10 @@ def _json_importer(path: Path):
             return module
     known = "; ".join(m.DESCRIPTION for m in modules)
     raise MapkitError(f"{path}: a JSON file of no known kind; accepted: {known}")
+
+
+def warn_decision(warnings: list[str], message: str) -> None:
+    """Report an importer's decision once: to the ``mapkit`` log and in
+    ``warnings`` (the list that becomes ``scene.info["warnings"]``)."""
+    logging.getLogger("mapkit").warning(message)
+    warnings.append(message)

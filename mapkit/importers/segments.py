@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import csv
 import json
-import logging
 import math
 from pathlib import Path
 
@@ -39,6 +38,7 @@ from shapely.geometry import MultiPolygon, Polygon
 
 from linemap.geometry import segment_is_vertical
 from linemap.lmap import KIND_NAMES, SegmentKind
+from mapkit.importers import warn_decision
 from mapkit.errors import MapkitError
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene
@@ -48,7 +48,6 @@ from mapkit.units import parse_units
 
 SUFFIXES = (".csv",)
 DESCRIPTION = 'a segments file ({"segments": [[x1, y1, z1, x2, y2, z2], ...], optional "outline" and "walls"})'
-log = logging.getLogger("mapkit")
 
 
 def accepts(doc) -> bool:
@@ -71,7 +70,7 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     warnings: list[str] = []
     keep = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1) >= options.min_edge_length
     if not keep.all():
-        _warn(warnings, f"{int((~keep).sum())} segment(s) shorter than --min-edge-length "
+        warn_decision(warnings, f"{int((~keep).sum())} segment(s) shorter than --min-edge-length "
                         f"{options.min_edge_length:g} m left out")
         segments, kinds = segments[keep], kinds[keep]
     if len(segments) == 0:
@@ -194,8 +193,3 @@ def _is_number(text: str) -> bool:
     except ValueError:
         return False
 
-
-def _warn(warnings: list[str], message: str) -> None:
-    """Report a decision once: to the log and in ``scene.info["warnings"]``."""
-    log.warning(message)
-    warnings.append(message)

@@ -12,12 +12,13 @@
 
 from __future__ import annotations
 
-import logging
+from functools import partial
 
 import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
 
+from mapkit.importers import warn_decision
 from mapkit.errors import MapkitError, NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
@@ -29,17 +30,13 @@ from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP
 
-log = logging.getLogger("mapkit")
-
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
     """Build the scene of a plan; ``info`` (units, layers, warnings) is completed and stored in it."""
     info = dict(info or {})
     warnings = info.setdefault("warnings", [])
 
-    def warn(message: str) -> None:
-        log.warning(message)
-        warnings.append(message)
+    warn = partial(warn_decision, warnings)
 
     wall_result = build_walls(drawing.role("walls"), options.max_wall_thickness)
     walls = wall_result.walls

@@ -15,13 +15,13 @@ derive them from the walls.
 
 from __future__ import annotations
 
-import logging
 from pathlib import Path
 
 import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon
 
+from mapkit.importers import warn_decision
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers.mesh.hidden import drop_hidden
 from mapkit.importers.mesh.load import load_mesh
@@ -34,8 +34,6 @@ from mapkit.tolerances import AXIS_DEG, MESH_LEVEL, MESH_MAX_SECTIONS, MESH_OBST
 
 SUFFIXES = (".obj", ".ply", ".stl", ".glb", ".gltf", ".off")
 
-log = logging.getLogger("mapkit")
-
 
 def load_scene(path: Path, options: BuildOptions) -> Scene:
     """Import a mesh file; see the module docstring for the steps."""
@@ -46,13 +44,13 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     if top <= MESH_LEVEL:
         raise NoWallsError(f"{path}: the model is flat (nothing stands above the floor); check --up")
     if options.wall_height != BuildOptions.wall_height:
-        _warn(warnings, f"--wall-height {options.wall_height:g} is for DXF plans; a mesh's walls are as high as "
+        warn_decision(warnings, f"--wall-height {options.wall_height:g} is for DXF plans; a mesh's walls are as high as "
                         f"the model's ({top:.3g} m)")
     cam_h = float(options.camera.get("height_m", 1.2))
     # The section must cut the walls: keep it strictly between floor and top.
     z = float(np.clip(cam_h, MESH_LEVEL, top - MESH_LEVEL))
     if z != cam_h:
-        _warn(warnings, f"camera height {cam_h:g} m is outside the walls (0 to {top:.3g} m); walls cut at {z:.3g} m")
+        warn_decision(warnings, f"camera height {cam_h:g} m is outside the walls (0 to {top:.3g} m); walls cut at {z:.3g} m")
 
     sections = MeshSections(mesh)
     walls, _ = sections.cut(z)
@@ -81,7 +79,7 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     segments, kinds = feature_edges(mesh, options.crease_deg, options.min_edge_length, 0.0, top)
     segments, kinds, hidden_warnings = drop_hidden(segments, kinds, sections, options.min_edge_length)
     for w in hidden_warnings:
-        _warn(warnings, w)
+        warn_decision(warnings, w)
     segments, kinds = merge_overlapping(segments, kinds)
     counts = np.bincount(kinds, minlength=len(KIND_NAMES))
     info.update(
@@ -92,12 +90,6 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     )
     return Scene(walls=walls, openings=[], free_space=free, wall_height=top, obstacles=obstacles,
                  segments=segments, kinds=kinds, info=info)
-
-
-def _warn(warnings: list[str], message: str) -> None:
-    """Report a decision once: to the log and in ``scene.info["warnings"]``."""
-    log.warning(message)
-    warnings.append(message)
 
 
 def floor_area(mesh) -> MultiPolygon:

@@ -11,12 +11,13 @@ with its own ceiling; free-standing parts (kitchen islands) are obstacles.
 
 from __future__ import annotations
 
-import logging
+from functools import partial
 
 import numpy as np
 import shapely
 from shapely.geometry import LineString, MultiPolygon, Polygon
 
+from mapkit.importers import warn_decision
 from mapkit.errors import MapkitError
 from mapkit.importers.zind.annotations import ZindFloor, ZindOpening
 from mapkit.options import BuildOptions
@@ -31,16 +32,12 @@ from mapkit.tolerances import (
     ZIND_WALL_THICKNESS,
 )
 
-log = logging.getLogger("mapkit")
-
 
 def scene_from_floor(floor: ZindFloor, options: BuildOptions) -> Scene:
     """The scene of one ZInD floor; see the module docstring."""
     warnings = list(floor.warnings)
 
-    def warn(message: str) -> None:
-        log.warning(message)
-        warnings.append(message)
+    warn = partial(warn_decision, warnings)
 
     rooms = [_polygon(r.outline, r.name, warn) for r in floor.rooms]
     inside = shapely.union_all(rooms)
