@@ -41,6 +41,11 @@ class ImageLines:
     eps_off: np.ndarray
     mid_rays: np.ndarray
     pieces: np.ndarray | None = None
+    searched: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.searched is None:
+            self.searched = self.usable
 
 
 def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLines:
@@ -57,7 +62,34 @@ def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLi
     mid = camera.pixel_rays(0.5 * (und[:, 0] + und[:, 1]))
     mid /= np.linalg.norm(mid, axis=1, keepdims=True)
     pieces = line_pieces(und, normals, eps, 2.0 * tol.line_end_px)
-    return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid, pieces)
+    return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid, pieces,
+                      searched=searched_lines(und, usable, vert, tol))
+
+
+def searched_lines(lines: np.ndarray, usable: np.ndarray, vertical: np.ndarray, tol: Tolerances) -> np.ndarray:
+    """(M,) bool: the lines stage 1 searches with: the longest
+    ``search_lines`` of the ``usable`` ones, at most ``search_vertical_lines``
+    of them vertical candidates (``vertical`` (M,) bool)."""
+    vert = longest(lines, usable & vertical, tol.search_vertical_lines)
+    return longest(lines, (usable & ~vertical) | vert, tol.search_lines)
+
+
+def longest(lines: np.ndarray, usable: np.ndarray, k: int) -> np.ndarray:
+    """(M,) bool: the ``k`` longest of the ``usable`` (M,) lines (M, 2, 2)
+    (all of them when there are no more)."""
+    if usable.sum() <= k:
+        return usable.copy()
+    length = np.where(usable, np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1), -1.0)
+    out = np.zeros(len(lines), dtype=bool)
+    out[np.argsort(-length, kind="stable")[:k]] = True
+    return out
+
+
+def lines_needed(img: ImageLines, tol: Tolerances) -> int:
+    """How many lines an accepted pose must explain in this frame:
+    ``min_matches`` and a share of the lines searched (a wrong pose among
+    clutter explains some by chance; ``Internals.chance_fit_share``)."""
+    return tol.min_matches + int(tol.internals.chance_fit_share * int(img.searched.sum()))
 
 
 def too_few_lines(img: ImageLines, tol: Tolerances) -> str:

@@ -22,7 +22,7 @@ from matcher import ambiguity
 from matcher.budget import NO_LIMIT, Deadlines
 from matcher.candidates import Candidates, select_candidates
 from matcher.checks import check_lines, check_prior
-from matcher.frame import ImageLines, prepare_lines, too_few_lines
+from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
 from matcher.result import LocalizeResult
 from matcher.stage2.covariance import pose_std_of
 from matcher.stage2.fit import coverage
@@ -121,6 +121,13 @@ def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, 
     if predicted >= work.coverage_min_predicted and seen < work.coverage_min_share * predicted:
         return LocalizeResult(False, f"the best pose predicts {predicted} map segments in view and the image shows "
                               f"{seen} of them: the lines do not look like the map there", **common)
+    # Counted among the lines searched: the ones added back from the rest
+    # (stage 2 judges every line) come with clutter of their own.
+    n_best = int(np.unique(ranked_h.line[(ranked_h.hyp == best) & img.searched[ranked_h.line]]).size)
+    needed = lines_needed(img, tol)
+    if n_best < needed:
+        return LocalizeResult(False, f"the best pose explains {n_best} of the {int(img.searched.sum())} longest "
+                              f"lines, fewer than the {needed} that clutter makes needed", **common)
     res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
                          matches=matches_of(best), **common)
     # Worked out when first read (a few tenths of a millisecond a robot

@@ -89,7 +89,7 @@ def find_correspondences(segments: np.ndarray, camera: Camera, img: ImageLines, 
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
     tpar = np.einsum("nk,nk->n", ce - segments[:, 0], v)
     near = segments[:, 0] + tpar[:, None] * v  # point of each line nearest the prior centre
-    usable = img.usable
+    usable = img.searched  # the longest usable lines (Tolerances.search_lines)
 
     ih = np.nonzero(~vert_seg)[0]
     uh, _ = unary_constraint(camera, img.normals, img.eps, segments[ih], (xe, ye, yaw_e), dt, dyaw, tol.model_m)
