@@ -3,7 +3,7 @@
 
     python tools/bench_real.py /path/to/zind/000              # the tour's first floor
     python tools/bench_real.py TOUR --jobs 2 --overlays /tmp/overlays
-    python tools/bench_real.py TOUR --headings 1 --peq 1 5 --lost-every 0 --budget-ms inf   # times unbounded
+    python tools/bench_real.py TOUR --headings 1 --peq 1 5 --lost-every 0 --budget-ms inf   # no time budget at all
     python tools/bench_real.py TOUR --check 6 --overlays /tmp/check   # ground truth only
 
 ZInD (Zillow Indoor Dataset, its own terms of use: download it yourself; no
@@ -215,7 +215,8 @@ def run_pano(task):
     m = matcher.load_map(lmap_path)
     height_m = float(m.meta["camera"]["height_m"])
     panorama = cv2.imread(views[0]["image"], cv2.IMREAD_GRAYSCALE)
-    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms) if not math.isinf(args.budget_ms) else None
+    # inf: no budget at all (the matcher's own default would be 30 s).
+    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
     rows = []
     for view in views:
         camera = view_camera(view, height_m)
