@@ -316,7 +316,7 @@ def annuli(centres: np.ndarray, r_in: np.ndarray, r_out: np.ndarray, sides: int 
     if (~disk).any():
         inner = centres[~disk, None, :] + r_in[~disk, None, None] * ring[None, ::-1]
         holes = shapely.linearrings(inner)
-        out[~disk] = [shapely.Polygon(s, [hh]) for s, hh in zip(shells[~disk], holes)]
+        out[~disk] = shapely.polygons(shells[~disk], holes[:, None])
     return out
 
 
