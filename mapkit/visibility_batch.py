@@ -67,11 +67,14 @@ def visibility_polygons(points: np.ndarray, occ: Occluders, radius: float) -> tu
 
 
 def polygons_of(coords: np.ndarray, owner: np.ndarray, n: int) -> np.ndarray:
-    """(n,) shapely Polygons from :func:`visibility_polygons`' ragged output
-    (every point has at least the four corners of its square)."""
-    rings = shapely.linearrings(coords, indices=owner)
+    """(n,) shapely Polygons from :func:`visibility_polygons`' ragged output;
+    an empty polygon for a point without vertices."""
     out = np.empty(n, dtype=object)
-    out[:] = list(shapely.polygons(rings))
+    out[:] = [shapely.Polygon()] * n
+    present = np.unique(owner)
+    if len(present):
+        rings = shapely.linearrings(coords, indices=np.searchsorted(present, owner))
+        out[present] = list(shapely.polygons(rings))
     return out
 
 

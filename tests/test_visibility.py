@@ -347,3 +347,12 @@ def test_batched_visibility_polygons_equal_the_per_point_sweep(plan, options):
             assert np.array_equal(g, visibility_polygon(p, occ, radius))
         polys = polygons_of(coords, owner, len(points))
         assert shapely.equals_exact(polys[0], shapely.Polygon(got[0]), 0.0)
+
+
+def test_polygons_of_keeps_points_without_vertices_in_place():
+    from mapkit.visibility_batch import polygons_of
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    polys = polygons_of(np.concatenate([square, square + 5.0]), np.repeat([0, 2], 4), 4)
+    assert [p.is_empty for p in polys] == [False, True, False, True]
+    assert polys[2].equals(shapely.Polygon(square + 5.0))
