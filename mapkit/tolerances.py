@@ -332,8 +332,16 @@ MAX_FLOOR_AREA_M2 = 250_000.0
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.
 
 #: Rays x edges per numpy block in the visibility sweep: bounds its
-#: temporaries (~50 MB).
-VIS_BLOCK = 400_000
+#: temporaries (~4 MB, so that they stay in the processor's cache).
+VIS_BLOCK = 50_000
+
+#: Points x occluder edges per chunk of the batched sweep's range test
+#: (:mod:`mapkit.visibility_batch`; booleans, about 4 MB).
+VIS_NEAR_BLOCK = 4_000_000
+
+#: Near occluder edges per chunk of the batched sweep: it casts four rays per
+#: edge and keeps about twenty numbers per ray (about 30 MB).
+VIS_SWEEP_EDGES = 50_000
 
 #: Region lists are compared and packed this many listed segments (or
 #: segment slots) at a time (bounds the temporaries to about 10 MB).
@@ -344,8 +352,8 @@ VIR_PAIR_CHUNK = 500_000
 
 #: The visibility sweep tries a point's nearest this many occluder edges
 #: first, then batches twice as large (most sight rays end on the nearest
-#: walls; see ``mapkit.visibility._nearest_hits``).
-VIS_FIRST_EDGES = 32
+#: walls, a room's own few; see ``mapkit.visibility._nearest_hits``).
+VIS_FIRST_EDGES = 8
 
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).

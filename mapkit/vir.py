@@ -214,10 +214,11 @@ class Leaves:
     size: float
     depth: int
 
-    def lists(self, leaves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def lists(self, leaves: np.ndarray, ordered: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """The lists of ``leaves`` (L,) leaf indices as ``(owner, seg)``, both
         int32: pairs sorted by position in ``leaves`` then segment id
-        (``owner`` indexes ``leaves``)."""
+        (``owner`` indexes ``leaves``); in no particular order if not
+        ``ordered`` (the sort is most of the cost)."""
         owners, segs = [], []
         cur = self.node[np.asarray(leaves, dtype=np.int64)]
         pos = np.arange(len(cur), dtype=np.int32)
@@ -229,8 +230,13 @@ class Leaves:
             pos, cur = pos[up >= 0], up[up >= 0]
         owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int32)
         seg = np.concatenate(segs) if segs else np.zeros(0, dtype=np.int32)
-        order = np.lexsort((seg, owner))
-        return owner[order], seg[order]
+        if not ordered:
+            return owner, seg
+        # One sort of owner * n + seg: a value sort, much cheaper than lexsort.
+        n = max(self.n_segments, 1)
+        key = owner.astype(np.int64) * n + seg
+        key.sort()
+        return (key // n).astype(np.int32), (key % n).astype(np.int32)
 
 
 def _ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
@@ -243,13 +249,26 @@ def _ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
     return first + np.arange(total)
 
 
-def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, boxes: np.ndarray, bi: np.ndarray) -> np.ndarray:
-    """``predicate(geoms[gi], boxes[bi])`` (P,) bool, ``VIR_PAIR_CHUNK`` pairs at
-    a time: the gathered object arrays would otherwise take 16 bytes a pair."""
+def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cells: np.ndarray) -> np.ndarray:
+    """``predicate(geoms[gi], *(c[bi] for c in cells))`` (P,) bool,
+    ``VIR_PAIR_CHUNK`` pairs at a time: the gathered arrays would otherwise
+    take 16 bytes a pair."""
     out = np.empty(len(gi), dtype=bool)
     for i in range(0, len(gi), VIR_PAIR_CHUNK):
-        out[i : i + VIR_PAIR_CHUNK] = predicate(geoms[gi[i : i + VIR_PAIR_CHUNK]], boxes[bi[i : i + VIR_PAIR_CHUNK]])
+        j = bi[i : i + VIR_PAIR_CHUNK]
+        out[i : i + VIR_PAIR_CHUNK] = predicate(geoms[gi[i : i + VIR_PAIR_CHUNK]], *(c[j] for c in cells))
     return out
+
+
+def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray) -> np.ndarray:
+    """(P,) bool: whether ``grown[ps]`` meets cell box ``boxes[pc]``. A region
+    holding the cell's centre ``(cx, cy)[pc]`` meets it; that point test costs
+    a quarter of the box test and settles most pairs (GEOS's predicates are
+    exact, so the answers are those of the box test alone)."""
+    hit = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy)
+    rest = np.nonzero(~hit)[0]
+    hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes)
+    return hit
 
 
 def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
@@ -296,12 +315,12 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         alive = keep[pc]
         pc, ps = remap[pc[alive]], ps[alive]
         ix, iy, node, boxes = ix[keep], iy[keep], node[keep], boxes[keep]
-        hit = _pairwise(shapely.intersects, grown, ps, boxes, pc)
+        hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2)
         pc, ps = pc[hit], ps[hit]
         if lev == depth:  # smallest cells keep every segment that may be seen
             full = np.ones(len(pc), dtype=bool)
         else:
-            full = _pairwise(shapely.covers, grown, ps, boxes, pc)
+            full = _pairwise(shapely.covers, grown, ps, pc, boxes)
         dec_node.append(node[pc[full]].astype(np.int32))
         dec_seg.append(ps[full].astype(np.int32))
         pc, ps = pc[~full], ps[~full]
@@ -444,7 +463,7 @@ def list_bitsets(leaves: Leaves, which: np.ndarray) -> list[int]:
     step = max(1, VIR_LIST_CHUNK // max(n, 1))
     for i in range(0, len(which), step):
         k = np.asarray(which[i : i + step])
-        owner, seg = leaves.lists(k)
+        owner, seg = leaves.lists(k, ordered=False)
         rows = np.zeros((len(k), n), dtype=bool)
         rows[owner, seg] = True
         packed = np.packbits(rows, axis=1, bitorder="little")
@@ -488,30 +507,55 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     parent = list(range(n_comp))
     version = [0] * n_comp
 
-    def cost(a: int, b: int) -> float:
+    def entry(a: int, b: int, owner: int) -> tuple:
+        """The queue entry of merging a and b (a < b): cost, then ties broken
+        by (a, b, their versions); ``owner`` the end it is the cheapest of."""
         u = (bits[a] | bits[b]).bit_count()
-        return area[a] * (u - count[a]) + area[b] * (u - count[b])
+        return (area[a] * (u - count[a]) + area[b] * (u - count[b]), a, b, version[a], version[b], owner)
 
-    heap = [(cost(a, b), a, b, 0, 0) for a, b in pair_ids]
+    def cheapest(n: int):
+        """The entry of n's cheapest merge with a current neighbour, or None
+        (:func:`entry` inlined: this is the hot loop)."""
+        bits_n, count_n, area_n, version_n = bits[n], count[n], area[n], version[n]
+        top = None
+        for x in nbrs[n]:
+            u = (bits_n | bits[x]).bit_count()
+            if n < x:
+                e = (area_n * (u - count_n) + area[x] * (u - count[x]), n, x, version_n, version[x], n)
+            else:
+                e = (area[x] * (u - count[x]) + area_n * (u - count_n), x, n, version[x], version_n, n)
+            if top is None or e < top:
+                top = e
+        return top
+
+    # The queue holds, for every region, its cheapest merge (and outdated
+    # entries, skipped when popped). Every current pair (a, b) then has an
+    # entry in the queue no later than its own: that of a or b, or of the
+    # one of them whose cheapest merge it was when it last changed. So the
+    # first current entry popped is the cheapest current pair, ties broken
+    # by (a, b, versions), as if every pair were queued. When an outdated
+    # entry's owner is still as it was (its partner changed), the owner's
+    # cheapest merge is queued anew; it cannot come before the popped one.
+    best: list = [None] * n_comp
+    for a, b in pair_ids:
+        e = entry(a, b, a)
+        if best[a] is None or e < best[a]:
+            best[a] = e
+        if best[b] is None or e[:5] < best[b][:5]:
+            best[b] = e[:5] + (b,)
     del pair_ids
+    heap = [e for e in best if e is not None]
+    del best
     heapq.heapify(heap)
     spent = 0.0
-    live = len(heap)  # pairs of current neighbours, at the last compaction
-
-    def current(entry) -> bool:
-        _, a, b, va, vb = entry
-        return version[a] == va and version[b] == vb and parent[a] == a and parent[b] == b
-
     while heap and budget > 0:
-        if len(heap) > 2 * live + 1024:
-            # Entries outdated by later merges pile up; dropping them keeps
-            # the heap (memory, pops) in proportion to the live pairs. The
-            # current entries, and so the order of merges, are unchanged.
-            heap = [e for e in heap if current(e)]
-            heapq.heapify(heap)
-            live = len(heap)
-        c, a, b, va, vb = heapq.heappop(heap)
-        if not current((c, a, b, va, vb)):
+        c, a, b, va, vb, owner = heapq.heappop(heap)
+        if version[a] != va or version[b] != vb or parent[a] != a or parent[b] != b:
+            vo = va if owner == a else vb
+            if parent[owner] == owner and version[owner] == vo:
+                e = cheapest(owner)
+                if e is not None:
+                    heapq.heappush(heap, e)
             continue
         if spent + c > budget:
             break
@@ -530,8 +574,9 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
                 nbrs[a].add(x)
         nbrs[a].discard(b)
         nbrs[b] = set()
-        for x in nbrs[a]:
-            heapq.heappush(heap, (cost(a, x), a, x, version[a], version[x]) if a < x else (cost(x, a), x, a, version[x], version[a]))
+        e = cheapest(a)
+        if e is not None:
+            heapq.heappush(heap, e)
     root = np.array(parent)
     while True:  # path compression to the final representatives
         nxt = root[root]

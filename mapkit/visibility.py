@@ -140,19 +140,27 @@ def visibility_polygon(p: np.ndarray, occ: Occluders, radius: float) -> np.ndarr
 def clip_segments(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Clip segments ``a -> b`` ((M, 2) each) to the box ``[lo, hi]`` (Liang-Barsky,
     vectorised); segments outside the box, or reduced to a point, are dropped."""
+    a, b, _ = clip_box(a, b, lo, hi)
+    return a, b
+
+
+def clip_box(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`clip_segments`, also returning the (M,) bool mask of the segments
+    kept; ``lo``, ``hi`` are (2,) for one box or (M, 2) for a box per segment."""
+    lo, hi = np.broadcast_to(lo, a.shape), np.broadcast_to(hi, a.shape)
     d = b - a
     t0, t1 = np.zeros(len(a)), np.ones(len(a))
     keep = np.ones(len(a), dtype=bool)
     with np.errstate(divide="ignore", invalid="ignore"):
         for k in (0, 1):
             flat = d[:, k] == 0
-            keep &= ~flat | ((a[:, k] >= lo[k]) & (a[:, k] <= hi[k]))
-            ta, tb = (lo[k] - a[:, k]) / d[:, k], (hi[k] - a[:, k]) / d[:, k]
+            keep &= ~flat | ((a[:, k] >= lo[:, k]) & (a[:, k] <= hi[:, k]))
+            ta, tb = (lo[:, k] - a[:, k]) / d[:, k], (hi[:, k] - a[:, k]) / d[:, k]
             t0 = np.where(flat, t0, np.maximum(t0, np.minimum(ta, tb)))
             t1 = np.where(flat, t1, np.minimum(t1, np.maximum(ta, tb)))
     keep &= t1 > t0
     a, d, t0, t1 = a[keep], d[keep], t0[keep], t1[keep]
-    return a + t0[:, None] * d, a + t1[:, None] * d
+    return a + t0[:, None] * d, a + t1[:, None] * d, keep
 
 
 def _nearest_hits(d: np.ndarray, a: np.ndarray, e: np.ndarray) -> np.ndarray:
@@ -308,7 +316,7 @@ def annuli(centres: np.ndarray, r_in: np.ndarray, r_out: np.ndarray, sides: int 
     if (~disk).any():
         inner = centres[~disk, None, :] + r_in[~disk, None, None] * ring[None, ::-1]
         holes = shapely.linearrings(inner)
-        out[~disk] = [shapely.Polygon(s, [hh]) for s, hh in zip(shells[~disk], holes)]
+        out[~disk] = shapely.polygons(shells[~disk], holes[:, None])
     return out
 
 
@@ -422,12 +430,12 @@ def segment_regions(
     # ---- visibility polygons, one per distinct xy sample point
     xy = np.array(xy_list).reshape(-1, 2)
     box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
-    vp = np.empty(len(xy), dtype=object)
-    for k in tqdm(range(len(xy)), desc="visibility polygons", disable=not progress, leave=False):
-        vp[k] = visibility_polygon(xy[k], occ, box)
+    from mapkit.visibility_batch import polygons_of, visibility_polygons
+
+    with step("visibility polygons", progress):
+        raw = polygons_of(*visibility_polygons(xy, occ, box), len(xy))
     # Rays hitting one edge give collinear points; each later overlay pays per
     # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
-    raw = np.array([Polygon(v) for v in vp] + [None])[:-1]
     vp = shapely.simplify(raw, VIS_COLLINEAR, preserve_topology=False)
     bad = ~shapely.is_valid(vp)
     vp[bad] = raw[bad]

@@ -14,7 +14,7 @@ from visibility_oracle import VisibilityOracle, random_points
 from mapkit.assemble import assemble_map
 from linemap.lmap import load_map, save_map
 from mapkit.vir import build_regions
-from synthetic_building import apartment, scene_from_walls, single_room
+from synthetic_building import apartment, scene_from_walls, single_room, two_rooms
 from linemap.camera import Camera
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)
@@ -232,3 +232,62 @@ def test_a_huge_plan_caps_the_quadtree_depth():
     assert sum(p.area for p in part.polygons) == pytest.approx(1800.0)
     q = [r for r, g in enumerate(part.polygons) if g.intersects(Point(5.0, 1.5))]
     assert all(0 in part.lists[r] for r in q)
+
+
+@pytest.mark.parametrize("growth", [0.02, 0.15, 1.0])
+def test_merging_follows_the_cheapest_pair_first(growth):
+    """merge_leaves queues one entry per region (its cheapest merge); it must
+    merge exactly as the plain greedy that looks at every pair each time."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from mapkit.tolerances import VIR_MIN_CELL
+    from mapkit.vir import adjacent_pairs, equal_lists, grow_regions, leaf_raster, list_bitsets, merge_leaves, quadtree_leaves
+    from mapkit.visibility import Occluders, segment_regions
+
+    scene = two_rooms()
+    sr = segment_regions(scene.segments, Occluders.from_geometry(scene.walls), CAMERA.height_m, CAMERA.elevation_range(),
+                         max_range=10.0, min_visible_length=0.3)
+    leaves = quadtree_leaves(grow_regions(sr.regions, scene.free_space, EPS), scene.free_space, VIR_MIN_CELL)
+    group, bits = merge_leaves(leaves, growth)
+
+    # The plain greedy: equal lists first, then the cheapest current pair
+    # (cost, then the smaller ids) until the budget is spent.
+    m = len(leaves.level)
+    pairs = adjacent_pairs(leaf_raster(leaves).labels)
+    same = pairs[equal_lists(leaves, pairs)]
+    _, comp = connected_components(coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(m, m)), directed=False)
+    n = comp.max() + 1
+    first = np.full(n, -1)
+    first[comp[::-1]] = np.arange(m)[::-1]
+    area = np.bincount(comp, weights=(leaves.size / 2.0**leaves.level) ** 2, minlength=n).tolist()
+    lists = list_bitsets(leaves, first)
+    count = [b.bit_count() for b in lists]
+    label = list(range(n))
+
+    def cost(p):
+        a, b = p
+        u = (lists[a] | lists[b]).bit_count()
+        return area[a] * (u - count[a]) + area[b] * (u - count[b])
+
+    links = {(int(a), int(b)) for a, b in np.unique(np.sort(comp[pairs], axis=1), axis=0) if a != b}
+    costs = {p: cost(p) for p in links}
+    budget, spent = growth * sum(a * c for a, c in zip(area, count)), 0.0
+    while costs:
+        a, b = min(costs, key=lambda p: (costs[p], p))
+        if spent + costs[(a, b)] > budget:
+            break
+        spent += costs[(a, b)]
+        lists[a] |= lists[b]
+        count[a], area[a] = lists[a].bit_count(), area[a] + area[b]
+        label = [a if x == b else x for x in label]
+        moved = {}
+        for (x, y), c in costs.items():
+            x, y = sorted((a if x == b else x, a if y == b else y))
+            if x != y:
+                moved[(x, y)] = cost((x, y)) if a in (x, y) else c
+        costs = moved
+    reps, ref_group = np.unique(np.array(label)[comp], return_inverse=True)
+    assert len(bits) == len(reps) < n
+    assert np.array_equal(group, ref_group.ravel())
+    assert bits == [lists[r] for r in reps]

@@ -315,3 +315,44 @@ def test_self_intersecting_walls_are_repaired_not_dropped():
     assert len(occ.edges) == 6 and occ.geometry.area == pytest.approx(2.0, rel=0.03)  # two triangles, shrunk
     poly = shapely.Polygon(visibility_polygon(np.array([-1.0, 1.0]), occ, 5.0))
     assert not poly.contains(Point(3.0, 1.0))  # behind the bow tie's waist
+
+
+# --------------------------------------------------------------------------
+# The batched sweep (mapkit.visibility_batch) against the per-point one
+
+
+@pytest.mark.parametrize("plan,options", [
+    ("maps/flat.dxf", {}),
+    ("tests/data/barcelona-pavilion.dxf", {"walls": ["Walls", "Columns"], "windows": ["Crystal"]}),
+])
+def test_batched_visibility_polygons_equal_the_per_point_sweep(plan, options):
+    """Bit for bit, at random free-space points and at wall vertices (rays
+    through shared vertices, grazing faces) of a real plan."""
+    from pathlib import Path
+
+    from mapkit.importers import load_scene
+    from mapkit.options import BuildOptions
+    from mapkit.visibility_batch import polygons_of, visibility_polygons
+
+    scene = load_scene(Path(__file__).resolve().parent.parent / plan, BuildOptions(**options))
+    occ = Occluders.from_geometry(scene.walls)
+    rng = np.random.default_rng(3)
+    corners = occ.edges[rng.choice(len(occ.edges), 100), 0]
+    points = np.concatenate([random_points(scene.free_space, 300, rng), corners])
+    for radius in (RANGE, 2.0):
+        coords, owner = visibility_polygons(points, occ, radius)
+        assert np.array_equal(np.unique(owner), np.arange(len(points)))
+        got = np.split(coords, np.cumsum(np.bincount(owner, minlength=len(points)))[:-1])
+        for p, g in zip(points, got):
+            assert np.array_equal(g, visibility_polygon(p, occ, radius))
+        polys = polygons_of(coords, owner, len(points))
+        assert shapely.equals_exact(polys[0], shapely.Polygon(got[0]), 0.0)
+
+
+def test_polygons_of_keeps_points_without_vertices_in_place():
+    from mapkit.visibility_batch import polygons_of
+
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    polys = polygons_of(np.concatenate([square, square + 5.0]), np.repeat([0, 2], 4), 4)
+    assert [p.is_empty for p in polys] == [False, True, False, True]
+    assert polys[2].equals(shapely.Polygon(square + 5.0))
