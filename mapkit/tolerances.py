@@ -86,6 +86,13 @@ BRIDGE_ANGLE_DEG = 15.0
 #: walls, not places a camera can stand.
 MIN_FREE_AREA = 0.05
 
+#: No coordinate of a building lies farther than this from its file's
+#: origin, metres (UTM northings reach 10^7 m): a farther one is a damaged
+#: value (1e308 where the rest spans metres), and the squares and buffers of
+#: such values overflow. Importers of coordinates given as numbers (segments
+#: files, ZInD) refuse it, naming where it is.
+MAX_COORDINATE = 1e8
+
 # ---- segments files (mapkit/importers/segments.py) -----------------------
 #: Two end heights within this many metres are one level (a horizontal
 #: segment; the floor and ceiling levels).
