@@ -335,6 +335,18 @@ DXF_MAX_ENTITIES = 100_000
 #: raises it.
 MAX_FLOOR_AREA_M2 = 250_000.0
 
+#: Most sight tests per square metre of free space the region builder may
+#: make (``mapkit.visibility.sight_work``: its sample points, each against
+#: the wall edges within --max-range of it). Buildings need 1 000 to 4 000
+#: (tests/data/hospital.stl 1 200, maps/flat.dxf 3 200, a 10 x 10 office
+#: 2 200); a mesh whose faces cross the building leaves a tangle of wall
+#: edges in its section: 47 000 for a damaged hospital.stl that built in
+#: 60 to 130 s against 4 s. Floors smaller than ``SIGHT_WORK_MIN_AREA_M2``
+#: are judged as that large (their work is seconds whatever their detail).
+#: ``--max-sight-work`` raises it.
+MAX_SIGHT_WORK_PER_M2 = 20_000.0
+SIGHT_WORK_MIN_AREA_M2 = 100.0
+
 # ---- work sizes ---------------------------------------------------------------
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.
 
@@ -353,6 +365,10 @@ VIR_PAIR_CHUNK = 500_000
 #: first, then batches twice as large (most sight rays end on the nearest
 #: walls; see ``mapkit.visibility._nearest_hits``).
 VIS_FIRST_EDGES = 32
+
+#: Sample points whose edges in sight are counted to estimate the region
+#: builder's sight tests (the mean over them stands for all).
+SIGHT_WORK_PROBES = 512
 
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).
