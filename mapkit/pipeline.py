@@ -73,6 +73,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     if scene.camera_height is not None and options.camera_from_source:
         camera = Camera.from_dict({**camera.to_dict(), "height_m": round(float(scene.camera_height), 4)})
 
+    _check_floor(scene.free_space, options, plan)  # before the edges too: GEOS's buffers misbehave kilometres out
     t = time.perf_counter()
     if scene.segments is not None:
         segments, kinds = np.asarray(scene.segments, float), np.asarray(scene.kinds, np.uint8)
@@ -83,7 +84,6 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     if len(segments) == 0:
         raise MapkitError(f"{plan}: no straight wall edges found; check the layer choice with 'mapkit preview'")
 
-    _check_floor(scene.free_space, options, plan)
     _check_sight_work(segments, scene, options, plan)
     t = time.perf_counter()
     part = build_regions(
