@@ -178,6 +178,8 @@ def _floor(doc: dict, floor_name: str | None) -> ZindFloor:
 def _room(room_name: str, partials: dict, scale: float, where: str) -> tuple[ZindRoom, list[ZindPano]]:
     """A complete room from the primary panorama of its first partial room that has one;
     its ceiling the median of its partial rooms' (each from its primary panorama)."""
+    if not partials:
+        raise _Malformed(f"{where} holds no partial room")
     panos, ceilings, chosen = [], [], None
     for partial_name, pano_dict in sorted(partials.items()):
         here = f"{where}/{partial_name}"
