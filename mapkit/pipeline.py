@@ -158,11 +158,11 @@ def _check_sight_work(segments: np.ndarray, scene, options: BuildOptions, plan: 
                               min_visible_length=options.min_visible_length, stop_above=allowed)
     if work > allowed:
         raise MapkitError(
-            f"{plan.name}: the walls are too tangled for the region builder: {work:.2g} sight tests ({points} sample "
-            f"points against the wall edges near each) over {area:.0f} m2 of free space, "
-            f"{work / max(area, SIGHT_WORK_MIN_AREA_M2):.0f} per m2 where buildings need under 4000 (limit "
-            f"{options.max_sight_work:g}, MAX_SIGHT_WORK_PER_M2); faces crossing the building or segments kilometres "
-            f"long? repair the model, or raise the limit with --max-sight-work"
+            f"{plan.name}: the region builder would make {work:.2g} sight tests ({points} sample points, each against "
+            f"the wall edges near it) over {area:.0f} m2 of free space, {work / max(area, SIGHT_WORK_MIN_AREA_M2):.0f} "
+            f"per m2 where buildings need under 5000 (limit {options.max_sight_work:g}, MAX_SIGHT_WORK_PER_M2): walls "
+            f"tangled by faces that cross the building, or segments kilometres long? repair the input, or raise the "
+            f"limit with --max-sight-work"
         )
 
 

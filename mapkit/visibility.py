@@ -33,6 +33,7 @@ from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
     OVERLAY_GRID,
+    SIGHT_POINT_COST,
     SIGHT_WORK_PROBES,
     VIS_BLOCK,
     VIS_FIRST_EDGES,
@@ -355,22 +356,23 @@ def sight_work(segments: np.ndarray, occluders, *, max_range: float, min_visible
     """What :func:`segment_regions` is about to do, estimated cheaply:
     ``(points, work)``, its distinct sample points (one visibility polygon
     each) and its sight tests, each point against the occluder edges within
-    ``max_range`` of it (the edges its sweep considers), plus one for the
-    point itself: ``points * (1 + mean edges near a point)``, the mean over
-    at most ``SIGHT_WORK_PROBES`` points spread over them.
+    ``max_range`` of it (the edges its sweep considers), plus
+    ``SIGHT_POINT_COST`` for the point itself: ``points * (SIGHT_POINT_COST
+    + mean edges near a point)``, the mean over at most
+    ``SIGHT_WORK_PROBES`` points spread over them.
 
     ``segments`` (N, 2, 3) metres; ``occluders`` the wall solids (shapely).
-    Sampling is skipped, and ``points`` is their upper bound, when that
-    bound alone is past ``stop_above`` (a damaged segment kilometres long
-    would take gigabytes to sample)."""
+    Sampling is skipped, ``points`` is their upper bound and ``work`` that
+    times ``SIGHT_POINT_COST``, when this alone is past ``stop_above`` (a
+    damaged segment kilometres long would take gigabytes to sample)."""
     segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
     spacing = float(min_visible_length) / 2.0
     with np.errstate(over="ignore", invalid="ignore"):  # far coordinates: an infinite bound, refused
         vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
         lengths = np.linalg.norm(segs[~vertical, 1] - segs[~vertical, 0], axis=1)
         bound = float(vertical.sum() + np.sum(np.ceil(lengths / spacing) + 1.0))
-    if not bound <= stop_above:
-        return int(min(bound, 2**62)), float(bound) if math.isfinite(bound) else math.inf
+    if not bound * SIGHT_POINT_COST <= stop_above:
+        return int(min(bound, 2**62)), bound * SIGHT_POINT_COST if math.isfinite(bound) else math.inf
     pts = [segs[vertical, 0, :2]] + [sample_segment(s, spacing)[:, :2] for s in segs[~vertical]]
     xy = np.unique(np.round(np.concatenate(pts), 7), axis=0) if len(segs) else np.zeros((0, 2))
     if not len(xy):
@@ -380,7 +382,7 @@ def sight_work(segments: np.ndarray, occluders, *, max_range: float, min_visible
     probes = xy[:: max(1, -(-len(xy) // SIGHT_WORK_PROBES))]
     near = [int(np.count_nonzero((occ.hi[:, 0] >= p[0] - box) & (occ.lo[:, 0] <= p[0] + box)
                                  & (occ.hi[:, 1] >= p[1] - box) & (occ.lo[:, 1] <= p[1] + box))) for p in probes]
-    return len(xy), len(xy) * (1.0 + float(np.mean(near)))
+    return len(xy), len(xy) * (SIGHT_POINT_COST + float(np.mean(near)))
 
 
 def segment_regions(

@@ -161,7 +161,7 @@ def test_the_sight_work_limit_is_an_option(tmp_path, capsys):
     --max-sight-work the build is refused in one line naming it."""
     flat = Path(__file__).resolve().parents[1] / "maps" / "flat.dxf"
     code, out, err = run(capsys, "build", flat, "-o", tmp_path / "a.lmap", "--max-sight-work", "500")
-    _one_line_error(code, out, err, "too tangled", "per m2", "--max-sight-work")
+    _one_line_error(code, out, err, "sight tests", "per m2", "--max-sight-work")
     assert not (tmp_path / "a.lmap").exists()
 
 
@@ -169,11 +169,12 @@ def test_the_sight_work_estimate_counts_points_and_edges_in_sight():
     import numpy as np
     from shapely.geometry import box
 
+    from mapkit.tolerances import SIGHT_POINT_COST
     from mapkit.visibility import sight_work
 
     segs = np.array([[[0, 0, 0], [3, 0, 0]], [[1, 1, 0], [1, 1, 2]]], float)  # 3 m at 0.15 m: 21 points, 1 foot
     walls = box(-1, -1, 0, 0)  # 4 edges, in sight of every point
     points, work = sight_work(segs, walls, max_range=10.0, min_visible_length=0.3)
-    assert points == 22 and work == 22 * (1 + 4)
+    assert points == 22 and work == 22 * (SIGHT_POINT_COST + 4)
     points, work = sight_work(segs, walls, max_range=10.0, min_visible_length=0.3, stop_above=10)
-    assert points == 22 and work == 22  # not sampled: the upper bound of points
+    assert points == 22 and work == 22 * SIGHT_POINT_COST  # not sampled: the upper bound of points

@@ -36,7 +36,7 @@ def add_arguments(p) -> None:
                         f"(default {d.max_floor_area:g}; the region builder's time and memory grow with it)")
     g.add_argument("--max-sight-work", type=float, default=d.max_sight_work, metavar="N",
                    help=f"most sight tests of the region builder per square metre of free space (default "
-                        f"{d.max_sight_work:g}; buildings need under 4000, walls tangled by faces crossing the "
+                        f"{d.max_sight_work:g}; buildings need under 5000, walls tangled by faces crossing the "
                         f"building far more)")
     g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
