@@ -131,6 +131,9 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
         parts.append((np.asarray(loaded.vertices, dtype=np.float64), np.asarray(loaded.faces, dtype=np.int64)))
     if not parts:
         raise MapkitError(f"{path}: the file holds no triangles; export the model as a surface mesh")
+    for v, _ in parts:  # a damaged OBJ line 'v 4' leaves trimesh's vertices one number wide
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise MapkitError(f"{path}: its vertices are not (x, y, z) triples; the file is damaged, export it again")
     offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
     vertices = np.concatenate([v for v, _ in parts])
     for (v, f) in parts:  # damaged binary files name vertices they do not hold
