@@ -48,5 +48,6 @@ def test_the_mutations_change_the_document():
     original = json.dumps(fuzz.base_zind())
     texts = [fuzz.mutate_json_doc(fuzz.base_zind(), random.Random(i))[0] for i in range(20)]
     assert sum(t != original for t in texts) >= 18
-    deep = fuzz.mutate_json_doc({"a": [1, 2]}, random.Random(3))
-    assert deep[0] and deep[1]
+    nested = [fuzz.mutate_json_doc({"a": [1, 2], "b": {"c": 3}}, random.Random(i)) for i in range(200)]
+    deep = [text for text, note in nested if "nest@" in note]
+    assert deep and any("[" * 50 in text for text in deep)  # nested past what json.dumps could write

@@ -347,7 +347,8 @@ def mutate_json_doc(doc, rng: random.Random) -> tuple[str, str]:
     r = rng.random()
     if r < 0.1:
         cut = rng.randrange(len(text) + 1)
-        text, _ = text[:cut], done.append(f"truncate@{cut}")
+        text = text[:cut]
+        done.append(f"truncate@{cut}")
     elif r < 0.2:
         text, note = mutate_lines(text, rng)
         done.append(note)
