@@ -339,7 +339,7 @@ MAX_FLOOR_AREA_M2 = 250_000.0
 #: make (``mapkit.visibility.sight_work``: its sample points, each against
 #: the wall edges within --max-range of it, plus ``SIGHT_POINT_COST``).
 #: Buildings need 1 000 to 4 500 (tests/data/hospital.stl 3 000,
-#: maps/flat.dxf 4 100, a 10 x 10 office 4 100); a mesh whose faces cross
+#: maps/flat.dxf 4 100, a 10 x 10 office 4 150); a mesh whose faces cross
 #: the building leaves a tangle of wall edges in its section: 54 000 for a
 #: damaged hospital.stl that built in 60 to 130 s against 4 s; segments
 #: kilometres long over a small floor, millions. Floors smaller than
@@ -347,6 +347,12 @@ MAX_FLOOR_AREA_M2 = 250_000.0
 #: seconds whatever their detail). ``--max-sight-work`` raises it.
 MAX_SIGHT_WORK_PER_M2 = 20_000.0
 SIGHT_WORK_MIN_AREA_M2 = 100.0
+
+#: A sample point's own cost in the sight-work estimate, counted in sight
+#: tests: its sweep's setup, the square's sides and its polygon take about
+#: 0.3 ms, as long as 150 tests of an edge in sight (2 us each). The
+#: estimate is then about the region builder's time in units of 2 us.
+SIGHT_POINT_COST = 150
 
 # ---- work sizes ---------------------------------------------------------------
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.
@@ -370,12 +376,6 @@ VIS_FIRST_EDGES = 32
 #: Sample points whose edges in sight are counted to estimate the region
 #: builder's sight tests (the mean over them stands for all).
 SIGHT_WORK_PROBES = 512
-
-#: A sample point's own cost in the sight-work estimate, counted in sight
-#: tests: its sweep's setup, the square's sides and its polygon take about
-#: 0.3 ms, as long as 150 tests of an edge in sight (2 us each). The
-#: estimate is then about the region builder's time in units of 2 us.
-SIGHT_POINT_COST = 150
 
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).
