@@ -231,6 +231,16 @@ MESH_FLOOR_RISE = 0.5
 #: thickness, metres, so that they occlude and bound the free space.
 MESH_THIN_WALL = 0.05
 
+#: Single-surface walls meet at their ends (corners, T junctions): a
+#: section line of them crosses under one other on average. Lines that
+#: cross more than this many others each are faces across the building (a
+#: damaged mesh: 8.8 for a hospital.stl with face lines duplicated, whose
+#: thickening took minutes); such a section is refused. Sections of fewer
+#: than ``MESH_SHEET_MIN_LINES`` lines are judged as that many (they are
+#: fast whatever their tangle).
+MESH_SHEET_CROSSINGS = 4.0
+MESH_SHEET_MIN_LINES = 100
+
 #: A connected surface whose border edges make more than this fraction of
 #: its edge length is an open sheet (thickened as above); below it, a solid
 #: with a few holes (a lost sliver, a scan gap).
