@@ -371,8 +371,10 @@ def sight_work(segments: np.ndarray, occluders, *, max_range: float, min_visible
         vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
         lengths = np.linalg.norm(segs[~vertical, 1] - segs[~vertical, 0], axis=1)
         bound = float(vertical.sum() + np.sum(np.ceil(lengths / spacing) + 1.0))
-    if not bound * SIGHT_POINT_COST <= stop_above:
-        return int(min(bound, 2**62)), bound * SIGHT_POINT_COST if math.isfinite(bound) else math.inf
+    if not math.isfinite(bound):
+        return 0, math.inf
+    if bound * SIGHT_POINT_COST > stop_above:
+        return int(bound), bound * SIGHT_POINT_COST
     pts = [segs[vertical, 0, :2]] + [sample_segment(s, spacing)[:, :2] for s in segs[~vertical]]
     xy = np.unique(np.round(np.concatenate(pts), 7), axis=0) if len(segs) else np.zeros((0, 2))
     if not len(xy):
