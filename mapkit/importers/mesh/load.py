@@ -112,7 +112,8 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     _check_binary_stl_length(path)
     _check_text_mesh_counts(path)
     try:
-        loaded = trimesh.load(str(path), process=False)
+        with np.errstate(all="ignore"):  # NaN and overflowing values are refused below, without numpy's warnings
+            loaded = trimesh.load(str(path), process=False)
     except FileNotFoundError as exc:  # the file exists (checked by the CLI): a buffer or texture it names does not
         raise MapkitError(f"{path}: a file it refers to is missing ({exc.filename or exc}); put it beside "
                           f"{path.name} or export the model as one .glb") from None
