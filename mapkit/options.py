@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
-from mapkit.tolerances import DXF_MAX_ENTITIES, MAX_FLOOR_AREA_M2, VIR_MERGE_GROWTH
+from mapkit.tolerances import DXF_MAX_ENTITIES, MAX_FLOOR_AREA_M2, MAX_SIGHT_WORK_PER_M2, VIR_MERGE_GROWTH
 
 
 @dataclass
@@ -83,6 +83,8 @@ class BuildOptions:
     max_entities: int = DXF_MAX_ENTITIES
     #: Largest floor, square metres (bounding box of the free space).
     max_floor_area: float = MAX_FLOOR_AREA_M2
+    #: Most sight tests of the region builder per square metre of free space.
+    max_sight_work: float = MAX_SIGHT_WORK_PER_M2
 
     def to_meta(self) -> dict:
         """JSON-able record of every option that shapes the map (stored in
@@ -94,4 +96,4 @@ class BuildOptions:
 
 
 #: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
-LIMITS = ("max_entities", "max_floor_area")
+LIMITS = ("max_entities", "max_floor_area", "max_sight_work")

@@ -73,6 +73,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     if scene.camera_height is not None and options.camera_from_source:
         camera = Camera.from_dict({**camera.to_dict(), "height_m": round(float(scene.camera_height), 4)})
 
+    _check_floor(scene.free_space, options, plan)  # before the edges too: GEOS's buffers misbehave kilometres out
     t = time.perf_counter()
     if scene.segments is not None:
         segments, kinds = np.asarray(scene.segments, float), np.asarray(scene.kinds, np.uint8)
@@ -83,7 +84,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     if len(segments) == 0:
         raise MapkitError(f"{plan}: no straight wall edges found; check the layer choice with 'mapkit preview'")
 
-    _check_floor(scene.free_space, options, plan)
+    _check_sight_work(segments, scene, options, plan)
     t = time.perf_counter()
     part = build_regions(
         segments,
@@ -138,6 +139,30 @@ def _check_floor(free_space, options: BuildOptions, plan: Path) -> None:
             f"{plan.name}: the floor spans {x1 - x0:.0f} x {y1 - y0:.0f} m ({area:.3g} m2), more than the "
             f"{options.max_floor_area:g} m2 a map is built for (MAX_FLOOR_AREA_M2: the region builder's time and "
             f"memory grow with it, about 2 GB at 10^6 m2); check the units, or raise it with --max-floor-area"
+        )
+
+
+def _check_sight_work(segments: np.ndarray, scene, options: BuildOptions, plan: Path) -> None:
+    """MapkitError naming --max-sight-work when the region builder would
+    make more sight tests per square metre of free space than any building
+    needs (``MAX_SIGHT_WORK_PER_M2``): wall sections tangled by faces that
+    cross the building, which would keep it busy for minutes."""
+    from mapkit.tolerances import SIGHT_WORK_MIN_AREA_M2
+    from mapkit.visibility import sight_work
+
+    if scene.free_space is None or scene.free_space.is_empty:
+        return
+    area = float(scene.free_space.area)
+    allowed = options.max_sight_work * max(area, SIGHT_WORK_MIN_AREA_M2)
+    points, work = sight_work(segments, scene.walls, max_range=options.max_range,
+                              min_visible_length=options.min_visible_length, stop_above=allowed)
+    if work > allowed:
+        raise MapkitError(
+            f"{plan.name}: the region builder would make {work:.2g} sight tests ({points} sample points, each against "
+            f"the wall edges near it) over {area:.0f} m2 of free space, {work / max(area, SIGHT_WORK_MIN_AREA_M2):.0f} "
+            f"per m2 where buildings need under 5000 (limit {options.max_sight_work:g}, MAX_SIGHT_WORK_PER_M2): walls "
+            f"tangled by faces that cross the building, or segments kilometres long? repair the input, or raise the "
+            f"limit with --max-sight-work"
         )
 
 

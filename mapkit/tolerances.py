@@ -86,6 +86,13 @@ BRIDGE_ANGLE_DEG = 15.0
 #: walls, not places a camera can stand.
 MIN_FREE_AREA = 0.05
 
+#: No coordinate of a building lies farther than this from its file's
+#: origin, metres (UTM northings reach 10^7 m): a farther one is a damaged
+#: value (1e308 where the rest spans metres), and the squares and buffers of
+#: such values overflow. Importers of coordinates given as numbers (segments
+#: files, ZInD) refuse it, naming where it is.
+MAX_COORDINATE = 1e8
+
 # ---- segments files (mapkit/importers/segments.py) -----------------------
 #: Two end heights within this many metres are one level (a horizontal
 #: segment; the floor and ceiling levels).
@@ -224,6 +231,16 @@ MESH_FLOOR_RISE = 0.5
 #: thickness, metres, so that they occlude and bound the free space.
 MESH_THIN_WALL = 0.05
 
+#: Single-surface walls meet at their ends (corners, T junctions): a
+#: section line of them crosses under one other on average. Lines that
+#: cross more than this many others each are faces across the building (a
+#: damaged mesh: 8.8 for a hospital.stl with face lines duplicated, whose
+#: thickening took minutes); such a section is refused. Sections of fewer
+#: than ``MESH_SHEET_MIN_LINES`` lines are judged as that many (they are
+#: fast whatever their tangle).
+MESH_SHEET_CROSSINGS = 4.0
+MESH_SHEET_MIN_LINES = 100
+
 #: A connected surface whose border edges make more than this fraction of
 #: its edge length is an open sheet (thickened as above); below it, a solid
 #: with a few holes (a lost sliver, a scan gap).
@@ -328,6 +345,25 @@ DXF_MAX_ENTITIES = 100_000
 #: raises it.
 MAX_FLOOR_AREA_M2 = 250_000.0
 
+#: Most sight tests per square metre of free space the region builder may
+#: make (``mapkit.visibility.sight_work``: its sample points, each against
+#: the wall edges within --max-range of it, plus ``SIGHT_POINT_COST``).
+#: Buildings need 1 000 to 4 500 (tests/data/hospital.stl 3 000,
+#: maps/flat.dxf 4 100, a 10 x 10 office 4 150); a mesh whose faces cross
+#: the building leaves a tangle of wall edges in its section: 54 000 for a
+#: damaged hospital.stl that built in 60 to 130 s against 4 s; segments
+#: kilometres long over a small floor, millions. Floors smaller than
+#: ``SIGHT_WORK_MIN_AREA_M2`` are judged as that large (their work is
+#: seconds whatever their detail). ``--max-sight-work`` raises it.
+MAX_SIGHT_WORK_PER_M2 = 20_000.0
+SIGHT_WORK_MIN_AREA_M2 = 100.0
+
+#: A sample point's own cost in the sight-work estimate, counted in sight
+#: tests: its sweep's setup, the square's sides and its polygon take about
+#: 0.3 ms, as long as 150 tests of an edge in sight (2 us each). The
+#: estimate is then about the region builder's time in units of 2 us.
+SIGHT_POINT_COST = 150
+
 # ---- work sizes ---------------------------------------------------------------
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.
 
@@ -354,6 +390,10 @@ VIR_PAIR_CHUNK = 500_000
 #: first, then batches twice as large (most sight rays end on the nearest
 #: walls, a room's own few; see ``mapkit.visibility._nearest_hits``).
 VIS_FIRST_EDGES = 8
+
+#: Sample points whose edges in sight are counted to estimate the region
+#: builder's sight tests (the mean over them stands for all).
+SIGHT_WORK_PROBES = 512
 
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).

@@ -2,7 +2,7 @@
 case under a time and memory bound.
 
     python tools/fuzz.py                                  # small campaign
-    python tools/fuzz.py --dxf 2000 --mesh 500 --lmap 500 --matcher 2000 --save /tmp/fuzz-failures
+    python tools/fuzz.py --dxf 2000 --mesh 500 --zind 500 --segments 500 --lmap 500 --matcher 2000 --save /tmp/fuzz-failures
 
 Families (each case is drawn from ``random.Random(f"{family}:{seed}:{i}")``,
 so a run is reproducible and any case can be drawn again by its number):
@@ -14,6 +14,15 @@ so a run is reproducible and any case can be drawn again by its number):
 - ``mesh``: every mesh format (OBJ, OFF, ASCII and binary PLY and STL, GLB)
   with the same kind of damage to its text lines or its bytes (flipped bits,
   overwritten floats, counts, truncation); then ``mapkit build``.
+- ``zind``: a ZInD-shaped floor (three rooms, doors, a window, an opening,
+  an island) with values made NaN, huge, tiny or of the wrong type, keys
+  and items deleted, lists emptied or repeated, values nested thousands
+  deep, the text cut short; or floors of random rooms; then ``mapkit
+  build`` (mostly) or ``preview``.
+- ``segments``: segments files, CSV (the example map's segments) with
+  cells damaged, removed or added, lines or bytes damaged, and JSON (two
+  rooms with an outline and walls) damaged as ZInD's; or random segments;
+  then ``mapkit build``.
 - ``lmap``: ``maps/flat.lmap`` with flipped bits, overwritten bytes, cuts
   and appended bytes, or its chunks re-encoded with valid checksums around
   a damaged payload; then ``mapkit info/query/export`` or ``matcher localize``.
@@ -53,7 +62,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
-FAMILIES = ("dxf", "mesh", "lmap", "matcher")
+FAMILIES = ("dxf", "mesh", "zind", "segments", "lmap", "matcher")
 #: The example map in a case's command; ``{ROOT}`` is the checkout, so saved cases run from any clone.
 FLAT_LMAP = "{ROOT}/maps/flat.lmap"
 
@@ -274,6 +283,302 @@ def mesh_case(rng: random.Random, name: str = "mesh") -> Case:
     ext = "." + src.rsplit(".", 1)[1]
     return Case("mesh", name, {"model" + ext: blob}, ["mapkit", "build", "model" + ext, "-o", "out.lmap"],
                 f"{src}: {note}")
+
+
+# ---- JSON documents ------------------------------------------------------------
+
+#: Values any value of a JSON document may become: NaN, infinities, huge and
+#: tiny numbers (10**400 overflows a float), wrong types.
+HOSTILE_JSON_VALUES = (math.nan, math.inf, -math.inf, 1e308, -1e308, 1e30, -1e30, 0, -1, 1e-320, 2 ** 70,
+                       10 ** 400, "x", "", "1.5", None, True, False, [], {}, [1, 2], [[1, 2]], [[[1, 2]]],
+                       {"x": 1})
+
+
+def _json_paths(doc) -> list[list]:
+    """Every path (keys and indices) into ``doc``, the first 20 items of each list."""
+    paths = []
+
+    def walk(node, path):
+        items = node.items() if isinstance(node, dict) else enumerate(node[:20]) if isinstance(node, list) else ()
+        for k, v in items:
+            paths.append(path + [k])
+            walk(v, path + [k])
+
+    walk(doc, [])
+    return paths
+
+
+def mutate_json_doc(doc, rng: random.Random) -> tuple[str, str]:
+    """``doc`` with 1-3 mutations at random places (a value made hostile or
+    scaled, a key or item deleted, a list emptied or repeated, a value
+    nested thousands deep), as JSON text, sometimes then cut short or with
+    lines deleted, swapped or duplicated; returns it and what was done."""
+    doc = json.loads(json.dumps(doc))
+    done, nests = [], {}
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        paths = _json_paths(doc)
+        if not paths:
+            break
+        path = rng.choice(paths)
+        parent = doc
+        for k in path[:-1]:
+            parent = parent[k]
+        key, value = path[-1], parent[path[-1]]
+        op = rng.choice(("value", "value", "value", "scale", "delete", "empty", "repeat", "nest"))
+        if op == "scale" and isinstance(value, (int, float)) and not isinstance(value, bool):
+            parent[key] = value * rng.choice((-1, 1e3, 1e9, 1e-9, 1e300))
+        elif op == "delete":
+            del parent[key]
+        elif op == "empty" and isinstance(value, (list, dict)):
+            parent[key] = type(value)()
+        elif op == "repeat" and isinstance(value, list):
+            parent[key] = value * rng.choice((2, 50, 600))
+        elif op == "nest":  # written into the text below: json.dumps would recurse too deep
+            marker = f"@nest{len(nests)}@"
+            nests[marker] = rng.choice((3, 50, 5000, 100_000))
+            parent[key] = marker
+        else:
+            op = "value"
+            parent[key] = rng.choice(HOSTILE_JSON_VALUES)
+        done.append(f"{op}@{'/'.join(map(str, path))}")
+    text = json.dumps(doc, indent=rng.choice((None, 1)))
+    for marker, depth in nests.items():
+        text = text.replace(json.dumps(marker), "[" * depth + "1" + "]" * depth)
+    r = rng.random()
+    if r < 0.1:
+        cut = rng.randrange(len(text) + 1)
+        text = text[:cut]
+        done.append(f"truncate@{cut}")
+    elif r < 0.2:
+        text, note = mutate_lines(text, rng)
+        done.append(note)
+    return text, " ".join(done)
+
+
+def _random_ring(rng: random.Random, centre: tuple[float, float], size: float) -> list[list[float]]:
+    """3-30 points around ``centre`` at random angles and radii (often crossing itself)."""
+    n = rng.randint(3, 30)
+    angles = sorted(rng.uniform(0, 2 * math.pi) for _ in range(n)) if rng.random() < 0.7 else \
+        [rng.uniform(0, 2 * math.pi) for _ in range(n)]
+    return [[round(centre[0] + rng.uniform(0.1, 1) * size * math.cos(a), 4),
+             round(centre[1] + rng.uniform(0.1, 1) * size * math.sin(a), 4)] for a in angles]
+
+
+# ---- ZInD annotations ----------------------------------------------------------
+
+#: Metres per plan coordinate of the ZInD-shaped floor the cases start from.
+ZIND_SCALE = 0.5
+
+
+def _zind_local(world, centre, unit: float, rotation_deg: float) -> list:
+    """World points (n, 2) in metres -> a panorama's own frame (the inverse of
+    ``mapkit.importers.zind.annotations._plan_to_world``)."""
+    a = math.radians(rotation_deg)
+    c, s = math.cos(a), math.sin(a)
+    out = []
+    for x, y in world:
+        px, py = (x - centre[0]) / ZIND_SCALE, (-(y - centre[1])) / ZIND_SCALE
+        lx, ly = px * c + py * s, -px * s + py * c  # (plan - shift) @ rot.T
+        out.append([round(lx / (unit / ZIND_SCALE), 6), round(ly / (unit / ZIND_SCALE), 6)])
+    return out
+
+
+def _zind_pano(centre, outline, ceiling_m, rotation_deg=0.0, unit=1.25, gaps=None, internal=(), primary=True):
+    """A panorama annotating the room ``outline`` (world metres) from ``centre``:
+    ZInD's layout in the panorama's frame, heights in its units."""
+    gaps = gaps or {}
+    layout = {"vertices": _zind_local(outline, centre, unit, rotation_deg), "internal":
+              [_zind_local(v, centre, unit, rotation_deg) for v in internal]}
+    for kind in ("doors", "windows", "openings"):
+        layout[kind] = [p for a, b, lo, hi in gaps.get(kind, ())
+                        for p in (*_zind_local([a, b], centre, unit, rotation_deg), [lo / unit - 1, hi / unit - 1])]
+    return {"label": "room", "is_primary": primary, "is_inside": True, "is_ceiling_flat": True,
+            "ceiling_height": ceiling_m / unit, "camera_height": 1.0, "floor_number": 1,
+            "image_path": "panos/none.jpg", "layout_raw": layout, "layout_complete": layout,
+            "floor_plan_transformation": {"translation": [centre[0] / ZIND_SCALE, -centre[1] / ZIND_SCALE],
+                                          "rotation": rotation_deg, "scale": unit / ZIND_SCALE}}
+
+
+@lru_cache(maxsize=None)
+def base_zind() -> dict:
+    """A ZInD-shaped floor of three rooms (one of two partial rooms, one with
+    a kitchen island, panoramas turned), doors seen from both sides, a
+    window, an opening; ``mapkit build`` makes a map of it."""
+    a, b, c = [(0, 0), (5, 0), (5, 4), (0, 4)], [(5.2, 0), (9.2, 0), (9.2, 4), (5.2, 4)], \
+        [(0, 4.2), (4, 4.2), (4, 7), (0, 7)]
+    door_ab, door_ba = ((5.0, 1.0), (5.0, 2.0), 0.0, 2.0), ((5.2, 2.0), (5.2, 1.0), 0.0, 2.0)
+    door_ac, door_ca = ((1.0, 4.0), (2.0, 4.0), 0.0, 2.1), ((2.0, 4.2), (1.0, 4.2), 0.0, 2.1)
+    floor = {
+        "complete_room_01": {
+            "partial_room_01": {"pano_1": _zind_pano((2.5, 2.0), a, 2.5, 30.0, gaps={
+                "doors": [door_ab, door_ac], "windows": [((0.0, 1.0), (0.0, 2.5), 0.9, 2.1)]})},
+            "partial_room_02": {"pano_2": _zind_pano((1.0, 1.0), a, 2.52, -75.0, 1.2, primary=True),
+                                "pano_3": _zind_pano((3.5, 3.0), a, 2.48, 190.0, 1.3, primary=False)}},
+        "complete_room_02": {"partial_room_03": {"pano_4": _zind_pano(
+            (7.2, 2.0), b, 2.4, 0.0, gaps={"doors": [door_ba], "openings": [((6.0, 0.0), (8.0, 0.0), 0.0, 2.45)]},
+            internal=[[(7.0, 2.5), (8.0, 2.5), (8.0, 3.2), (7.0, 3.2)]])}},
+        "complete_room_03": {"partial_room_04": {"pano_5": _zind_pano((2.0, 5.6), c, 2.6, 120.0,
+                                                                      gaps={"doors": [door_ca]})}},
+    }
+    return {"scale_meters_per_coordinate": {"floor_01": ZIND_SCALE}, "merger": {"floor_01": floor},
+            "redraw": {"floor_01": {}}}
+
+
+def _random_zind(rng: random.Random) -> tuple[dict, str]:
+    """A ZInD-shaped floor of random rooms (outlines that may cross, overlap,
+    be huge or tiny) and random gaps on them."""
+    size = rng.choice((0.01, 1.0, 5.0, 50.0, 1e4))
+    floor = {}
+    for k in range(rng.randint(1, 6)):
+        centre = (rng.uniform(-2, 2) * size, rng.uniform(-2, 2) * size)
+        ring = _random_ring(rng, centre, size)
+        gaps = {}
+        for kind in ("doors", "windows", "openings"):
+            gaps[kind] = []
+            for _ in range(rng.randint(0, 3)):
+                i = rng.randrange(len(ring))
+                a, b = ring[i], ring[(i + 1) % len(ring)]
+                t0, t1 = sorted((rng.random(), rng.random()))
+                gaps[kind].append(((a[0] + t0 * (b[0] - a[0]), a[1] + t0 * (b[1] - a[1])),
+                                   (a[0] + t1 * (b[0] - a[0]), a[1] + t1 * (b[1] - a[1])),
+                                   rng.uniform(-1, 2), rng.uniform(0, 4)))
+        internal = [_random_ring(rng, centre, size / 4)] if rng.random() < 0.3 else []
+        floor[f"complete_room_{k}"] = {"partial_room_0": {"pano_0": _zind_pano(
+            centre, ring, rng.uniform(0.5, 4.0), rng.uniform(-360, 360), rng.uniform(0.5, 2), gaps, internal)}}
+    doc = {"scale_meters_per_coordinate": {"floor_01": ZIND_SCALE}, "merger": {"floor_01": floor},
+           "redraw": {"floor_01": {}}}
+    return doc, f"random: {len(floor)} rooms, size {size:g}"
+
+
+def zind_case(rng: random.Random, name: str = "zind") -> Case:
+    """A damaged or random ZInD floor and ``mapkit build`` (or ``preview``) on it."""
+    if rng.random() < 0.2:
+        doc, note = _random_zind(rng)
+        text = json.dumps(doc)
+        if rng.random() < 0.3:
+            text, more = mutate_json_doc(doc, rng)
+            note += f"; {more}"
+    else:
+        text, note = mutate_json_doc(base_zind(), rng)
+    cmd = rng.choices(("build", "preview"), weights=(9, 1))[0]
+    argv = [cmd, "zind_data.json", "-o", "out.lmap" if cmd == "build" else "out.png"]
+    return Case("zind", name, {"zind_data.json": text.encode()}, ["mapkit", *argv], note)
+
+
+# ---- segments files ------------------------------------------------------------
+
+def _box_rows(x0: float, y0: float, w: float, d: float, h: float) -> list[list[float]]:
+    """A w x d room h high at (x0, y0): 4 floor, 4 ceiling and 4 vertical segments."""
+    c = [(x0, y0), (x0 + w, y0), (x0 + w, y0 + d), (x0, y0 + d)]
+    rows = [[*c[i], z, *c[(i + 1) % 4], z] for z in (0.0, h) for i in range(4)]
+    return rows + [[x, y, 0.0, x, y, h] for x, y in c]
+
+
+@lru_cache(maxsize=None)
+def base_segments() -> dict:
+    """A segments JSON file of two rooms with an outline, walls, units and
+    rows of both forms (lists and {"from", "to", "kind"})."""
+    rows = _box_rows(0, 0, 4, 3, 2.5) + _box_rows(4.2, 0, 3, 3, 2.5)
+    rows[-4:] = [{"from": r[:3], "to": r[3:], "kind": "vertical"} for r in rows[-4:]]
+    rows.append({"from": [4.0, 1.0, 2.0], "to": [4.0, 2.0, 2.0], "kind": "lintel"})
+    return {"segments": rows, "outline": [[0, 0], [7.2, 0], [7.2, 3], [0, 3]],
+            "walls": [[[4.0, 0], [4.2, 0], [4.2, 1.0], [4.0, 1.0]], [[4.0, 2.0], [4.2, 2.0], [4.2, 3], [4.0, 3]]],
+            "units": "m"}
+
+
+@lru_cache(maxsize=None)
+def base_segments_csv() -> str:
+    """The example map's segments with their kinds, a CSV with a header row."""
+    from linemap.lmap import KIND_NAMES, load_map
+
+    m = load_map(ROOT / "maps" / "flat.lmap")
+    rows = ["x1,y1,z1,x2,y2,z2,kind"] + [",".join(f"{v:.4f}" for v in s.ravel()) + f",{KIND_NAMES[k]}"
+                                          for s, k in zip(m.segments, m.kinds)]
+    return "\n".join(rows) + "\n"
+
+
+#: What a damaged CSV cell becomes.
+BAD_CELLS = BAD_NUMBERS + ("wall", "FLOOR", " floor ", "vertical,", '"', '"1,2"', "\ufeff", "é")
+
+
+def _mutate_csv(text: str, rng: random.Random) -> tuple[str, str]:
+    """A CSV with 1-3 cells damaged, removed or added; then sometimes line damage."""
+    rows = text.split("\n")
+    done = []
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        i = rng.randrange(len(rows))
+        cells = rows[i].split(",")
+        j = rng.randrange(len(cells))
+        op = rng.choice(("cell", "cell", "cell", "drop", "add", "scale"))
+        if op == "cell":
+            cells[j] = rng.choice(BAD_CELLS)
+        elif op == "drop":
+            del cells[j]
+        elif op == "add":
+            cells.insert(j, rng.choice(BAD_CELLS + ("1.0", "floor")))
+        else:
+            with contextlib.suppress(ValueError, OverflowError):
+                cells[j] = repr(float(cells[j]) * 10.0 ** rng.randint(2, 300))
+        rows[i] = ",".join(cells)
+        done.append(f"{op}@{i},{j}")
+    text = "\n".join(rows)
+    if rng.random() < 0.3:
+        text, note = mutate_lines(text, rng)
+        done.append(note)
+    return text, " ".join(done)
+
+
+def _random_segment_rows(rng: random.Random) -> tuple[list, str]:
+    """1-150 segments at random, some on a few levels, within a random size
+    (up to a floor 30 m across, or 100 km: refused by its size; a floor of
+    100 m of random segments builds as slowly as a building that large)."""
+    size = rng.choice((0.01, 1.0, 10.0, 30.0, 1e5))
+    levels = [0.0, rng.uniform(0.5, 4) * min(size, 10)]
+    rows = []
+    for _ in range(rng.randint(1, 150)):
+        p, q = [rng.uniform(0, size) for _ in range(2)], [rng.uniform(0, size) for _ in range(2)]
+        r = rng.random()
+        if r < 0.4:
+            z = rng.choice(levels)
+            rows.append([*p, z, *q, z])
+        elif r < 0.7:
+            rows.append([*p, levels[0], *p, levels[1]])
+        else:
+            rows.append([*p, rng.uniform(0, size), *q, rng.uniform(0, size)])
+    return [[round(v, 4) for v in row] for row in rows], f"random: {len(rows)} segments, size {size:g}"
+
+
+def segments_case(rng: random.Random, name: str = "segments") -> Case:
+    """A damaged or random segments file (CSV or JSON) and ``mapkit build`` on it."""
+    form = rng.choice(("csv", "json", "json"))
+    if form == "csv":
+        if rng.random() < 0.2:
+            rows, note = _random_segment_rows(rng)
+            text = "\n".join(",".join(map(str, r)) for r in rows)
+        else:
+            text, note = base_segments_csv(), "flat.csv"
+        if rng.random() < 0.15:
+            blob, more = mutate_bytes(text.encode(), rng)
+        else:
+            text, more = _mutate_csv(text, rng)
+            blob = text.encode()
+        note += f": {more}"
+    else:
+        if rng.random() < 0.2:
+            rows, note = _random_segment_rows(rng)
+            doc = {"segments": rows}
+            if rng.random() < 0.5:
+                doc["outline"] = _random_ring(rng, (rng.uniform(0, 50), rng.uniform(0, 50)), rng.uniform(0.1, 100))
+        else:
+            doc, note = base_segments(), "two rooms"
+        text, more = mutate_json_doc(doc, rng) if doc is base_segments() or rng.random() < 0.5 else \
+            (json.dumps(doc), "")
+        blob, note = text.encode(), f"{note}: {more}"
+    fname = f"segments.{form}"
+    argv = ["build", fname, "-o", "out.lmap"]
+    if rng.random() < 0.1:
+        argv += ["--units", rng.choice(("mm", "cm", "ft", "in", "km"))]
+    return Case("segments", name, {fname: blob}, ["mapkit", *argv], note)
 
 
 # ---- .lmap ---------------------------------------------------------------------
@@ -624,7 +929,8 @@ def _frames_case(rng, name):
     return Case("matcher", name, files, argv, f"frames: {note}")
 
 
-MAKERS = {"dxf": dxf_case, "mesh": mesh_case, "lmap": lmap_case, "matcher": matcher_case}
+MAKERS = {"dxf": dxf_case, "mesh": mesh_case, "zind": zind_case, "segments": segments_case, "lmap": lmap_case,
+          "matcher": matcher_case}
 
 
 def make_case(family: str, seed: int, i: int) -> Case:
@@ -802,6 +1108,8 @@ def preload() -> None:
     import mapkit.edges  # noqa: F401
     import mapkit.importers.dxf  # noqa: F401
     import mapkit.importers.mesh  # noqa: F401
+    import mapkit.importers.segments  # noqa: F401
+    import mapkit.importers.zind  # noqa: F401
     import mapkit.pipeline  # noqa: F401
     import mapkit.preview  # noqa: F401
     import mapkit.vir  # noqa: F401
@@ -813,6 +1121,7 @@ def preload() -> None:
 
     base_frame()
     base_run()
+    base_segments_csv()
 
 
 def campaign(counts: dict[str, int], seed: int, workers: int, bound_s: float, mem_gb: float, save: Path | None,
@@ -876,6 +1185,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--dxf", type=int, default=40, help="DXF cases (default 40)")
     ap.add_argument("--mesh", type=int, default=20, help="mesh cases (default 20)")
+    ap.add_argument("--zind", type=int, default=40, help="ZInD annotation cases (default 40)")
+    ap.add_argument("--segments", type=int, default=40, help="segments-file cases (default 40)")
     ap.add_argument("--lmap", type=int, default=100, help=".lmap cases (default 100)")
     ap.add_argument("--matcher", type=int, default=100, help="matcher-input cases (default 100)")
     ap.add_argument("--seed", type=int, default=0)
@@ -895,7 +1206,8 @@ def main(argv=None) -> int:
             print(f"{out.kind} in {out.seconds:.1f} s: {out.detail}")
             return 0 if out.kind in (ERROR, VALID, FALSY) else 1
         t0 = time.monotonic()
-        counts = {"dxf": args.dxf, "mesh": args.mesh, "lmap": args.lmap, "matcher": args.matcher}
+        counts = {"dxf": args.dxf, "mesh": args.mesh, "zind": args.zind, "segments": args.segments, "lmap": args.lmap,
+                  "matcher": args.matcher}
         table = campaign(counts, args.seed, args.workers, args.bound_s, args.mem_gb, args.save, Path(scratch),
                          minutes=args.minutes)
     print(f"seed {args.seed}, {args.workers} workers, bound {args.bound_s:g} s and {args.mem_gb:g} GiB a case")

@@ -34,6 +34,10 @@ def add_arguments(p) -> None:
     g.add_argument("--max-floor-area", type=float, default=d.max_floor_area, metavar="M2",
                    help=f"largest floor a map is built for, square metres, bounding box of the free space "
                         f"(default {d.max_floor_area:g}; the region builder's time and memory grow with it)")
+    g.add_argument("--max-sight-work", type=float, default=d.max_sight_work, metavar="N",
+                   help=f"most sight tests of the region builder per square metre of free space (default "
+                        f"{d.max_sight_work:g}; buildings need under 5000, walls tangled by faces crossing the "
+                        f"building far more)")
     g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
@@ -71,6 +75,9 @@ def options_from_args(args):
     if not args.max_floor_area > 0:
         raise MapkitError(f"--max-floor-area must be a positive number of square metres, got {args.max_floor_area}")
     o.max_floor_area = args.max_floor_area
+    if not args.max_sight_work > 0:
+        raise MapkitError(f"--max-sight-work must be a positive number, got {args.max_sight_work}")
+    o.max_sight_work = args.max_sight_work
     return o
 
 

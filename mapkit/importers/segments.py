@@ -43,7 +43,14 @@ from mapkit.errors import MapkitError
 from mapkit.options import BuildOptions
 from mapkit.scene import Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import AXIS_DEG, MIN_FREE_AREA, SEGMENTS_CLOSE_GAP, SEGMENTS_LEVEL, SEGMENTS_WALL_FACE
+from mapkit.tolerances import (
+    AXIS_DEG,
+    MAX_COORDINATE,
+    MIN_FREE_AREA,
+    SEGMENTS_CLOSE_GAP,
+    SEGMENTS_LEVEL,
+    SEGMENTS_WALL_FACE,
+)
 from mapkit.units import parse_units
 
 SUFFIXES = (".csv",)
@@ -104,8 +111,15 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
 
 def _read_csv(path: Path) -> list:
     """Rows of a CSV segments file (a header row is skipped)."""
-    with open(path, newline="", encoding="utf-8-sig") as f:
-        rows = [r for r in csv.reader(f) if r and any(c.strip() for c in r)]
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            rows = [r for r in csv.reader(f) if r and any(c.strip() for c in r)]
+    except UnicodeDecodeError as e:
+        raise MapkitError(f"{path}: not UTF-8 text (byte {e.start}); save the CSV as UTF-8") from None
+    except csv.Error as e:  # a NUL byte, a field past the csv module's size limit
+        raise MapkitError(f"{path}: not a readable CSV ({e}); one segment a row: x1,y1,z1,x2,y2,z2[,kind]") from None
+    if not rows:
+        raise MapkitError(f"{path}: no rows; one segment a row: x1,y1,z1,x2,y2,z2[,kind]")
     if rows and not _is_number(rows[0][0]):
         rows = rows[1:]
     return rows
@@ -119,17 +133,22 @@ def _segments(path: Path, rows, scale: float) -> tuple[np.ndarray, np.ndarray]:
     pts, names = [], []
     for i, row in enumerate(rows):
         if isinstance(row, dict):
-            xyz, kind = [*(row.get("from") or []), *(row.get("to") or [])], row.get("kind")
+            ends = [row.get("from"), row.get("to")]
+            xyz = [v for end in ends for v in end] if all(isinstance(e, list) for e in ends) else []
+            kind = row.get("kind")
         elif isinstance(row, (list, tuple)):
             xyz, kind = list(row[:6]), (row[6] if len(row) > 6 else None)
         else:
             xyz, kind = [], None
         try:
             values = [float(v) for v in xyz]
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             values = []
         if len(values) != 6 or not all(math.isfinite(v) for v in values):
             raise MapkitError(f"{path}: segment {i + 1} is not six finite numbers x1, y1, z1, x2, y2, z2: {row!r}"[:300])
+        if max(abs(v) for v in values) * scale > MAX_COORDINATE:
+            raise MapkitError(f"{path}: segment {i + 1} has a coordinate farther than {MAX_COORDINATE:g} m from the "
+                              f"origin (a damaged value?); check that row and the units: {row!r}"[:300])
         if kind not in (None, "") and str(kind).strip().lower() not in KIND_NAMES:
             raise MapkitError(f"{path}: segment {i + 1} has kind {kind!r}; use one of {', '.join(KIND_NAMES)}")
         pts.append(values)
@@ -157,15 +176,21 @@ def _infer_kinds(segments: np.ndarray) -> np.ndarray:
 def _polygons(path: Path, what: str, value, scale: float, rings_are_polygons: bool = False) -> MultiPolygon:
     """Polygons of an ``outline`` (a ring or a list of rings, holes by
     even-odd) or of ``walls`` (a list of rings, each a solid)."""
+    if not isinstance(value, list):
+        raise MapkitError(f"{path}: \"{what}\" must be rings of at least 3 [x, y] points")
     rings = value if value and isinstance(value[0], list) and value[0] and isinstance(value[0][0], list) else [value]
     polys = []
     for ring in rings:
         try:
-            xy = np.asarray(ring, dtype=float) * scale
-        except (TypeError, ValueError):
+            with np.errstate(over="ignore"):
+                xy = np.asarray(ring, dtype=float) * scale
+        except (TypeError, ValueError, OverflowError):
             xy = np.zeros((0, 2))
         if xy.ndim != 2 or xy.shape[1] != 2 or len(xy) < 3 or not np.isfinite(xy).all():
             raise MapkitError(f"{path}: \"{what}\" must be rings of at least 3 [x, y] points")
+        if np.abs(xy).max() > MAX_COORDINATE:
+            raise MapkitError(f"{path}: \"{what}\" has a point farther than {MAX_COORDINATE:g} m from the origin "
+                              "(a damaged value?); check it and the units")
         polys.append(shapely.make_valid(Polygon(xy)))
     if rings_are_polygons:
         return MultiPolygon(polygon_parts(shapely.union_all(polys)))

@@ -69,7 +69,12 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
             raise MapkitError(
                 f"{path}: the mesh has no floor and its walls enclose no room; add a floor surface or close the walls"
             )
-    free = shapely.difference(area, shapely.union_all([walls, obstacles]))
+    try:
+        free = shapely.difference(area, shapely.union_all([walls, obstacles]))
+    except shapely.errors.GEOSException as exc:  # as in MeshSections.section: faces crossing each other
+        reason = str(exc).split(". ")[0][:100]
+        raise MapkitError(f"{path}: the floor less the walls is not a valid outline ({reason}): the mesh's faces "
+                          "cross each other; repair the model or export it again") from None
     if options.robot_radius > 0:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in as_multipolygon(free).geoms if p.area >= MIN_FREE_AREA])

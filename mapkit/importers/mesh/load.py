@@ -112,7 +112,8 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
     _check_binary_stl_length(path)
     _check_text_mesh_counts(path)
     try:
-        loaded = trimesh.load(str(path), process=False)
+        with np.errstate(all="ignore"):  # NaN and overflowing values are refused below, without numpy's warnings
+            loaded = trimesh.load(str(path), process=False)
     except FileNotFoundError as exc:  # the file exists (checked by the CLI): a buffer or texture it names does not
         raise MapkitError(f"{path}: a file it refers to is missing ({exc.filename or exc}); put it beside "
                           f"{path.name} or export the model as one .glb") from None
@@ -131,6 +132,9 @@ def read_triangles(path: Path) -> tuple[np.ndarray, np.ndarray]:
         parts.append((np.asarray(loaded.vertices, dtype=np.float64), np.asarray(loaded.faces, dtype=np.int64)))
     if not parts:
         raise MapkitError(f"{path}: the file holds no triangles; export the model as a surface mesh")
+    for v, _ in parts:  # a damaged OBJ line 'v 4' leaves trimesh's vertices one number wide
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise MapkitError(f"{path}: its vertices are not (x, y, z) triples; the file is damaged, export it again")
     offsets = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
     vertices = np.concatenate([v for v, _ in parts])
     for (v, f) in parts:  # damaged binary files name vertices they do not hold

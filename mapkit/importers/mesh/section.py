@@ -24,7 +24,14 @@ from shapely.geometry import MultiLineString, MultiPolygon
 
 from mapkit.errors import MapkitError
 from mapkit.importers.mesh.edges import edge_faces, face_normals
-from mapkit.tolerances import MERGE, MESH_OPEN_FRACTION, MESH_SECTION_CHUNK, MESH_THIN_WALL
+from mapkit.tolerances import (
+    MERGE,
+    MESH_OPEN_FRACTION,
+    MESH_SECTION_CHUNK,
+    MESH_SHEET_CROSSINGS,
+    MESH_SHEET_MIN_LINES,
+    MESH_THIN_WALL,
+)
 
 
 @dataclass
@@ -68,6 +75,12 @@ class MeshSections:
             return Section(MultiPolygon(), MultiLineString(), MultiPolygon(), MultiPolygon())
         seg = orient(np.asarray(lines)[:, :, :2], self.normals[face, :2])
         thin = self.open_face[face]
+        crossings = sheet_crossings(seg[thin])
+        if crossings > MESH_SHEET_CROSSINGS * max(int(thin.sum()), MESH_SHEET_MIN_LINES):
+            raise MapkitError(f"the mesh's section at {z:.3f} m is a tangle: its {int(thin.sum())} lines of single "
+                              f"surfaces cross one another {crossings} times (more than MESH_SHEET_CROSSINGS = "
+                              f"{MESH_SHEET_CROSSINGS:g} a line): its faces cross the building; repair the model or "
+                              "export it again")
         try:
             return section_regions(seg[~thin], seg[thin])
         except shapely.errors.GEOSException as exc:
@@ -76,6 +89,16 @@ class MeshSections:
             reason = str(exc).split(". ")[0][:100]
             raise MapkitError(f"the mesh's section at {z:.3f} m is not a valid outline ({reason}): its faces cross "
                               "each other; repair the model or export it again") from None
+
+
+def sheet_crossings(thin: np.ndarray) -> int:
+    """How many times the section lines ``thin`` (T, 2, 2) of single
+    surfaces cross or touch one another: the pieces their noding makes
+    beyond their own number."""
+    if len(thin) == 0:
+        return 0
+    noded = shapely.get_parts(shapely.union_all(shapely.linestrings(snap_ends(thin))))
+    return max(0, int(np.sum(shapely.get_num_coordinates(noded) - 1)) - len(thin))
 
 
 def open_faces(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

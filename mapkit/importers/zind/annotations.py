@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from mapkit.errors import MapkitError
+from mapkit.tolerances import MAX_COORDINATE
 
 #: What ZInD calls the three kinds of gap in a wall.
 OPENING_KINDS = ("doors", "windows", "openings")
@@ -169,6 +170,7 @@ def _floor(doc: dict, floor_name: str | None) -> ZindFloor:
         panos += room_panos
     if not rooms:
         raise _Malformed(f"merger/{name} holds no room")
+    _check_reach(np.array([p.camera_height for p in panos]), f"merger/{name}: a panorama's camera height")
     camera = float(np.median([p.camera_height for p in panos]))
     return ZindFloor(name, rooms, panos, camera, warnings)
 
@@ -176,6 +178,8 @@ def _floor(doc: dict, floor_name: str | None) -> ZindFloor:
 def _room(room_name: str, partials: dict, scale: float, where: str) -> tuple[ZindRoom, list[ZindPano]]:
     """A complete room from the primary panorama of its first partial room that has one;
     its ceiling the median of its partial rooms' (each from its primary panorama)."""
+    if not partials:
+        raise _Malformed(f"{where} holds no partial room")
     panos, ceilings, chosen = [], [], None
     for partial_name, pano_dict in sorted(partials.items()):
         here = f"{where}/{partial_name}"
@@ -201,7 +205,16 @@ def _room(room_name: str, partials: dict, scale: float, where: str) -> tuple[Zin
     openings = []
     for key in OPENING_KINDS:
         openings += _openings(layout.get(key, []), key, to_world, cam_local, unit, f"{here}/{key}")
-    internal = [to_world(_points(v, f"{here}/internal", 3)) for v in layout.get("internal", []) or []]
+    islands = layout.get("internal") or []
+    if not isinstance(islands, list):
+        raise _Malformed(f"{here}/internal must be a list of outlines")
+    internal = [to_world(_points(v, f"{here}/internal", 3)) for v in islands]
+    _check_reach(outline, f"{here}/vertices")
+    for xy in internal:
+        _check_reach(xy, f"{here}/internal")
+    for o in openings:
+        _check_reach(o.ends, f"{here}/{o.kind}s")
+    _check_reach(np.array(ceilings), f"{where}: a ceiling_height")
     room = ZindRoom(room_name, pano.label, outline, float(np.median(ceilings)), openings, internal)
     return room, panos
 
@@ -223,12 +236,27 @@ def _pano(name: str, room: str, data: dict, scale: float, where: str) -> tuple[Z
 
 
 def _plan_to_world(data: dict, scale: float, where: str):
-    """The function taking a panorama's (n, 2) local points to world metres."""
+    """The function taking a panorama's (n, 2) local points to world metres
+    (infinite where a damaged value overflows: :func:`_check_reach` says so)."""
     t = data["floor_plan_transformation"]
     a = math.radians(float(t["rotation"]))
     rot = np.array([[math.cos(a), math.sin(a)], [-math.sin(a), math.cos(a)]])
     s, shift = float(t["scale"]), np.asarray(t["translation"], float)
-    return lambda local: (local @ rot * s + shift) * scale * (1.0, -1.0)
+
+    def to_world(local):
+        with np.errstate(over="ignore", invalid="ignore"):
+            return (local @ rot * s + shift) * scale * (1.0, -1.0)
+
+    return to_world
+
+
+def _check_reach(xy: np.ndarray, where: str) -> None:
+    """_Malformed unless the world coordinates ``xy`` (points or heights,
+    metres) are finite and within ``MAX_COORDINATE`` of the origin (a
+    damaged value, once scaled, is not)."""
+    if xy.size and not (np.isfinite(xy).all() and np.abs(xy).max() <= MAX_COORDINATE):
+        raise _Malformed(f"{where} lies farther than {MAX_COORDINATE:g} m from the origin once placed on the plan "
+                         "(a damaged value or transformation?)")
 
 
 def _openings(triples, key: str, to_world, cam_local: float, unit: float, where: str) -> list[ZindOpening]:
@@ -240,6 +268,7 @@ def _openings(triples, key: str, to_world, cam_local: float, unit: float, where:
     for k in range(0, len(pts), 3):
         ends = to_world(pts[k:k + 2])
         bottom, top = ((float(v) + cam_local) * unit for v in pts[k + 2])
+        _check_reach(np.array([bottom, top]), f"{where}: the heights of {key} {k // 3 + 1}")
         out.append(ZindOpening(key.rstrip("s"), ends, bottom, top))
     return out
 
@@ -262,7 +291,7 @@ def _dict(value, where: str) -> dict:
 def _number(value, where: str, positive: bool = False) -> float:
     try:
         v = float(value)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise _Malformed(f"{where} must be a number, got {str(value)[:40]!r}") from None
     if not math.isfinite(v) or (positive and v <= 0):
         raise _Malformed(f"{where} must be a {'positive' if positive else 'finite'} number, got {v}")
@@ -273,7 +302,7 @@ def _points(value, where: str, at_least: int) -> np.ndarray:
     """(n, 2) finite floats from a list of pairs."""
     try:
         a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise _Malformed(f"{where} must be a list of (x, y) pairs") from None
     if a.ndim != 2 or a.shape[1] != 2 or len(a) < at_least or not np.isfinite(a).all():
         raise _Malformed(f"{where} must be a list of at least {at_least} finite (x, y) pairs")
