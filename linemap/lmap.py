@@ -557,7 +557,9 @@ def validate(m: LineMap, name: str = "map") -> None:
 
     if m.segments.shape != (n, 2, 3) or not np.isfinite(m.segments).all():
         raise bad("segments must be a finite (N, 2, 3) array")
-    if n and (np.linalg.norm(m.segments[:, 1] - m.segments[:, 0], axis=1) < 1e-9).any():
+    # The largest coordinate difference, not the norm: squaring a crafted
+    # map's 1e155 m coordinates would overflow (a numpy warning on stderr).
+    if n and (np.abs(m.segments[:, 1] - m.segments[:, 0]).max(axis=1) < 1e-9).any():
         raise bad("a segment has zero length")
     if m.kinds.shape != (n,) or (n and int(m.kinds.max()) >= len(SegmentKind)):
         raise bad("segment kinds out of range")
