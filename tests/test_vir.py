@@ -291,3 +291,24 @@ def test_merging_follows_the_cheapest_pair_first(growth):
     assert len(bits) == len(reps) < n
     assert np.array_equal(group, ref_group.ravel())
     assert bits == [lists[r] for r in reps]
+
+
+@pytest.mark.parametrize("workers", [2, 3])
+def test_threads_give_the_same_partition(flat, workers):
+    scene, part = flat
+    other = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS, workers=workers)
+    assert [shapely.to_wkb(p) for p in other.polygons] == [shapely.to_wkb(p) for p in part.polygons]
+    assert all(np.array_equal(a, b) for a, b in zip(other.lists, part.lists, strict=True))
+
+
+def test_chunks_that_run_together_share_no_geometry():
+    from mapkit.parallel import map_chunks, split_by_owner
+
+    rng = np.random.default_rng(1)
+    owner = rng.integers(0, 50, 1000)
+    order, bounds = split_by_owner(owner, 50, 2)
+    chunks = [set(owner[order[i:j]].tolist()) for i, j in zip(bounds[:-1], bounds[1:])]
+    assert sum(len(c) for c in chunks) == len(set(owner.tolist()))
+    assert np.array_equal(np.sort(order), np.arange(1000))
+    x = rng.random(1000)
+    assert np.array_equal(map_chunks(np.sqrt, [x], 3), np.sqrt(x))

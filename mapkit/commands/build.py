@@ -12,6 +12,7 @@ HELP = "build a .lmap map from a DXF floor plan, a 3D mesh or ZInD annotations"
 def add_arguments(p) -> None:
     from mapkit.commands._import_args import add_float_options, add_import_arguments
     from mapkit.options import BuildOptions
+    from mapkit.parallel import MAX_DEFAULT_JOBS
 
     d = BuildOptions()
     p.add_argument("plan", metavar="PLAN", help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off) or ZInD zind_data.json")
@@ -35,6 +36,9 @@ def add_arguments(p) -> None:
                    help=f"largest floor a map is built for, square metres, bounding box of the free space "
                         f"(default {d.max_floor_area:g}; the region builder's time and memory grow with it)")
     g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
+    p.add_argument("-j", "--jobs", type=int, default=d.jobs, metavar="N",
+                   help=f"threads for the region stage's geometry work (default {d.jobs}: the cores available, "
+                        f"at most {MAX_DEFAULT_JOBS}; 1: one thread); the map is the same byte for byte")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
@@ -71,6 +75,7 @@ def options_from_args(args):
     if not args.max_floor_area > 0:
         raise MapkitError(f"--max-floor-area must be a positive number of square metres, got {args.max_floor_area}")
     o.max_floor_area = args.max_floor_area
+    o.jobs = args.jobs
     return o
 
 
