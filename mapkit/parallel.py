@@ -8,8 +8,8 @@ one call on the whole arrays, bit for bit.
 
 GEOS geometries may be read by several threads at once, with one exception:
 a *prepared* geometry builds its indexes on first use, unguarded. Chunks that
-run at the same time must not share a prepared geometry (split by geometry,
-see ``bounds``).
+run at the same time must not share a prepared geometry: :func:`map_owned`
+groups rows by the geometry they use.
 """
 
 from __future__ import annotations
@@ -38,20 +38,18 @@ def default_jobs() -> int:
     return max(1, min(cores, MAX_DEFAULT_JOBS))
 
 
-def map_chunks(fn, arrays, workers: int, bounds=None):
+def map_chunks(fn, arrays, workers: int):
     """``fn(*arrays)``, computed as ``fn(*(a[i:j] for a in arrays))`` over
     consecutive chunks ``[i, j)`` in ``workers`` threads, the results (1-D
     arrays, one element per row) concatenated in order.
 
-    ``fn`` must treat rows independently. ``bounds`` (K + 1,) ints, the chunk
-    boundaries (from 0 to the row count); by default ``CHUNKS_PER_WORKER``
-    even chunks per thread. With ``workers <= 1``: ``fn(*arrays)``, one call."""
+    ``fn`` must treat rows independently. ``CHUNKS_PER_WORKER`` even chunks
+    per thread. With ``workers <= 1``: ``fn(*arrays)``, one call."""
     arrays = list(arrays)
     n = len(arrays[0])
     if workers <= 1 or n < 2:
         return fn(*arrays)
-    if bounds is None:
-        bounds = np.linspace(0, n, workers * CHUNKS_PER_WORKER + 1).astype(np.int64)
+    bounds = np.linspace(0, n, workers * CHUNKS_PER_WORKER + 1).astype(np.int64)
     cuts = [(int(i), int(j)) for i, j in zip(bounds[:-1], bounds[1:]) if j > i]
     if len(cuts) < 2:
         return fn(*arrays)
@@ -60,19 +58,30 @@ def map_chunks(fn, arrays, workers: int, bounds=None):
     return np.concatenate(parts)
 
 
-def split_by_owner(owner: np.ndarray, n_owners: int, workers: int) -> tuple[np.ndarray, np.ndarray]:
-    """Chunks of rows such that no two chunks share an owner (a prepared
-    geometry), with about equal row counts: returns ``(order, bounds)``,
-    the rows grouped by chunk (in their order within each) and the chunk
-    boundaries in ``order``, for :func:`map_chunks`."""
-    n_chunks = max(1, workers * CHUNKS_PER_WORKER)
-    count = np.cumsum(np.bincount(owner, minlength=n_owners))
-    # Owner k goes to the chunk holding its first row's share of the rows.
-    chunk_of_owner = (np.concatenate([[0], count[:-1]]) * n_chunks // max(1, len(owner))).astype(np.int16)
-    chunk = chunk_of_owner[owner]
-    order = np.argsort(chunk, kind="stable")  # a radix sort on 16-bit keys
-    bounds = np.searchsorted(chunk[order], np.arange(n_chunks + 1))
-    return order, bounds
+def map_owned(fn, owner: np.ndarray, n_owners: int, workers: int, dtype=bool) -> np.ndarray:
+    """``fn(rows)`` (one result per row of ``rows``) over groups of rows in
+    ``workers`` threads, the results put back in row order: (R,) ``dtype``.
+
+    Each group holds every row of the owners it has (``owner`` (R,) ints
+    below ``n_owners``, e.g. the prepared geometry a row tests), so groups
+    running at once share no owner; owners go to groups in order, about
+    equal row counts each. A group's rows are found when it runs, so only
+    the running groups' index arrays exist at a time."""
+    out = np.empty(len(owner), dtype=dtype)
+    n_groups = max(1, workers * CHUNKS_PER_WORKER)
+    count = np.bincount(owner, minlength=n_owners)
+    before = np.cumsum(count) - count
+    # Owner k goes to the group holding its first row's share of the rows.
+    group = (before * n_groups // max(1, len(owner))).astype(np.int16)[owner]
+
+    def run(g: int) -> None:
+        rows = np.flatnonzero(group == g)
+        if len(rows):
+            out[rows] = fn(rows)  # rows of other groups are other elements
+
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        list(pool.map(run, range(n_groups)))
+    return out
 
 
-__all__ = ["default_jobs", "map_chunks", "split_by_owner"]
+__all__ = ["default_jobs", "map_chunks", "map_owned"]

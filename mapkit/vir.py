@@ -34,7 +34,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from mapkit.memory import release_memory
-from mapkit.parallel import map_chunks, split_by_owner
+from mapkit.parallel import map_chunks, map_owned
 from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
@@ -273,10 +273,7 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
 
     if workers <= 1:
         return test(gi, bi)
-    order, bounds = split_by_owner(gi, len(geoms), workers)
-    out = np.empty(len(gi), dtype=bool)
-    out[order] = map_chunks(test, [gi[order], bi[order]], workers, bounds)
-    return out
+    return map_owned(lambda rows: test(gi[rows], bi[rows]), gi, len(geoms), workers)
 
 
 def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray, workers: int = 1) -> np.ndarray:

@@ -302,13 +302,18 @@ def test_threads_give_the_same_partition(flat, workers):
 
 
 def test_chunks_that_run_together_share_no_geometry():
-    from mapkit.parallel import map_chunks, split_by_owner
+    from mapkit.parallel import map_chunks, map_owned
 
     rng = np.random.default_rng(1)
     owner = rng.integers(0, 50, 1000)
-    order, bounds = split_by_owner(owner, 50, 2)
-    chunks = [set(owner[order[i:j]].tolist()) for i, j in zip(bounds[:-1], bounds[1:])]
-    assert sum(len(c) for c in chunks) == len(set(owner.tolist()))
-    assert np.array_equal(np.sort(order), np.arange(1000))
+    seen: dict[int, set] = {}
+
+    def fn(rows):
+        seen[int(rows[0])] = set(owner[rows].tolist())
+        return owner[rows] * 2
+
+    assert np.array_equal(map_owned(fn, owner, 50, 2, dtype=np.int64), owner * 2)
+    groups = list(seen.values())
+    assert sum(len(g) for g in groups) == len(set(owner.tolist()))  # no owner in two groups
     x = rng.random(1000)
     assert np.array_equal(map_chunks(np.sqrt, [x], 3), np.sqrt(x))
