@@ -40,8 +40,9 @@ def default_jobs() -> int:
 
 def map_chunks(fn, arrays, workers: int):
     """``fn(*arrays)``, computed as ``fn(*(a[i:j] for a in arrays))`` over
-    consecutive chunks ``[i, j)`` in ``workers`` threads, the results (1-D
-    arrays, one element per row) concatenated in order.
+    consecutive chunks ``[i, j)`` in ``workers`` threads, the results
+    concatenated in order (``fn`` returns an array, or a tuple of arrays
+    concatenated member by member).
 
     ``fn`` must treat rows independently. ``CHUNKS_PER_WORKER`` even chunks
     per thread. With ``workers <= 1``: ``fn(*arrays)``, one call."""
@@ -55,6 +56,8 @@ def map_chunks(fn, arrays, workers: int):
         return fn(*arrays)
     with ThreadPoolExecutor(max_workers=min(workers, len(cuts))) as pool:
         parts = list(pool.map(lambda c: fn(*(a[c[0] : c[1]] for a in arrays)), cuts))
+    if isinstance(parts[0], tuple):
+        return tuple(np.concatenate(p) for p in zip(*parts))
     return np.concatenate(parts)
 
 

@@ -151,7 +151,7 @@ def build_regions(
     stats["time_merge_s"] = t4 - t3
 
     with step("region outlines", progress):
-        polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
+        polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs), workers)
     t5 = time.perf_counter()
     stats["time_geometry_s"] = t5 - t4
     stats["time_total_s"] = t5 - t0
@@ -639,15 +639,15 @@ def leaf_squares(leaves: Leaves) -> np.ndarray:
     return out
 
 
-def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int):
+def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int, workers: int = 1):
     """Outlines (union of each region's leaf squares, cut to the free space),
     lists, and the Morton order used. Regions left empty by the cut are dropped.
 
     Squares are unioned with GEOS's coverage union (see :func:`leaf_squares`),
     collinear grid vertices are dropped, then the free space, clipped to the
-    region's bounding box, cuts the result. Regions are numbered by the
-    Morton key of their first leaf (an aligned quadtree cell's lowest key is
-    its lower-left finest cell)."""
+    region's bounding box, cuts the result, in ``workers`` threads. Regions
+    are numbered by the Morton key of their first leaf (an aligned quadtree
+    cell's lowest key is its lower-left finest cell)."""
     n_groups = len(bits)
     scale = 2 ** (leaves.depth - leaves.level)
     key = _morton(leaves.ix * scale, leaves.iy * scale)
@@ -657,14 +657,18 @@ def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_spa
     squares = leaf_squares(leaves)
     by_group = np.argsort(group, kind="stable")
     bounds = np.searchsorted(group[by_group], np.arange(n_groups + 1))
-    merged = np.array(
-        [shapely.coverage_union_all(squares[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None]
-    )[:-1]
-    merged = shapely.simplify(merged, 0.0)
-    # Each region meets the free space only near itself: clip that first, so
-    # the overlay sees a few local edges rather than the whole plan's.
-    local = np.array([shapely.clip_by_rect(free_space, *b) for b in shapely.bounds(merged)] + [None])[:-1]
-    cut = polygonal(shapely.intersection(merged, polygonal(local)))
+
+    def outline(groups: np.ndarray) -> np.ndarray:
+        merged = np.array(
+            [shapely.coverage_union_all(squares[by_group[bounds[g] : bounds[g + 1]]]) for g in groups] + [None]
+        )[:-1]
+        merged = shapely.simplify(merged, 0.0)
+        # Each region meets the free space only near itself: clip that first,
+        # so the overlay sees a few local edges rather than the whole plan's.
+        local = np.array([shapely.clip_by_rect(free_space, *b) for b in shapely.bounds(merged)] + [None])[:-1]
+        return polygonal(shapely.intersection(merged, polygonal(local)))
+
+    cut = map_chunks(outline, [np.arange(n_groups)], workers)
     polygons, lists = [], []
     ids = np.arange(n_segments)
     for g in order:

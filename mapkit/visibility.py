@@ -451,7 +451,7 @@ def segment_regions(
     from mapkit.visibility_batch import polygons_of, visibility_polygons
 
     with step("visibility polygons", progress):
-        raw = polygons_of(*visibility_polygons(xy, occ, box), len(xy))
+        raw = polygons_of(*visibility_polygons(xy, occ, box, workers), len(xy))
     # Rays hitting one edge give collinear points; each later overlay pays per
     # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
     vp = map_chunks(_simplified, [raw], workers)
