@@ -302,7 +302,7 @@ def test_threads_give_the_same_partition(flat, workers):
 
 
 def test_chunks_that_run_together_share_no_geometry():
-    from mapkit.parallel import map_chunks, map_owned
+    from mapkit.parallel import map_chunks, map_owned, run_all
 
     rng = np.random.default_rng(1)
     owner = rng.integers(0, 50, 1000)
@@ -317,3 +317,5 @@ def test_chunks_that_run_together_share_no_geometry():
     assert sum(len(g) for g in groups) == len(set(owner.tolist()))  # no owner in two groups
     x = rng.random(1000)
     assert np.array_equal(map_chunks(np.sqrt, [x], 3), np.sqrt(x))
+    with pytest.raises(ZeroDivisionError):  # a failing chunk fails the call
+        run_all([lambda: 1, lambda: 1 // 0, lambda: 2], 2)
