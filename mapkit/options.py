@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
 
+from mapkit.parallel import default_jobs
 from mapkit.tolerances import DXF_MAX_ENTITIES, MAX_FLOOR_AREA_M2, MAX_SIGHT_WORK_PER_M2, VIR_MERGE_GROWTH
 
 
@@ -85,6 +86,9 @@ class BuildOptions:
     max_floor_area: float = MAX_FLOOR_AREA_M2
     #: Most sight tests of the region builder per square metre of free space.
     max_sight_work: float = MAX_SIGHT_WORK_PER_M2
+    #: Threads for the region stage's GEOS work (1: one thread); the map's
+    #: bytes do not depend on it.
+    jobs: int = field(default_factory=default_jobs)
 
     def to_meta(self) -> dict:
         """JSON-able record of every option that shapes the map (stored in
@@ -96,4 +100,4 @@ class BuildOptions:
 
 
 #: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
-LIMITS = ("max_entities", "max_floor_area", "max_sight_work")
+LIMITS = ("max_entities", "max_floor_area", "max_sight_work", "jobs")

@@ -96,6 +96,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
         eps=options.eps,
         merge_growth=options.merge_growth,
         progress=progress,
+        workers=options.jobs,
     )
     report.seconds["regions"] = time.perf_counter() - t
 
@@ -184,6 +185,8 @@ def _check_options(o: BuildOptions) -> None:
     if not 0 <= o.window_sill < o.window_head <= o.wall_height:
         raise MapkitError(f"windows need 0 <= --window-sill < --window-head <= --wall-height, got "
                           f"{o.window_sill:g}, {o.window_head:g}, {o.wall_height:g}")
+    if not (isinstance(o.jobs, int) and o.jobs >= 1):
+        raise MapkitError(f"--jobs is a number of threads, at least 1, got {o.jobs}")
     if not 0 <= o.merge_growth <= 10:
         raise MapkitError(f"--merge-growth is a fraction in [0, 10], got {o.merge_growth}")
     for name in ("robot_radius", "min_edge_length"):

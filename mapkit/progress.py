@@ -1,7 +1,6 @@
 """Progress on a terminal: a tqdm bar for each build step that may take a
-while. Steps that loop over many items show a bar of their own (visibility
-polygons, segment regions, quadtree levels); the others show their name
-and, once done, are cleared. Disabled (no output at all) unless the caller
+while. The quadtree, which loops over its levels, shows a bar of its own;
+the other steps show their name and, once done, are cleared. Disabled (no output at all) unless the caller
 asks, which ``mapkit build`` does only when stderr is a terminal."""
 
 from __future__ import annotations

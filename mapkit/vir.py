@@ -34,6 +34,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from mapkit.memory import release_memory
+from mapkit.parallel import map_chunks, map_owned
 from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
@@ -76,6 +77,7 @@ def build_regions(
     progress: bool = False,
     min_cell: float = VIR_MIN_CELL,
     merge_growth: float = VIR_MERGE_GROWTH,
+    workers: int = 1,
 ) -> RegionPartition:
     """Partition ``free_space`` into view-invariant regions.
 
@@ -88,6 +90,8 @@ def build_regions(
       docs/visibility.md; ``min_cell`` (m) the smallest quadtree cell;
       ``merge_growth`` the allowed relative growth of the mean list length
       when merging regions (0: merge equal lists only).
+    - ``workers``: threads for the GEOS overlays and predicates
+      (:mod:`mapkit.parallel`); the result does not depend on it.
 
     Guarantee: for every point q of the free space and every segment S
     visible from q, S is in the list of every region within ``eps`` of q.
@@ -118,19 +122,20 @@ def build_regions(
         max_range=max_range,
         min_visible_length=min_visible_length,
         progress=progress,
+        workers=workers,
     )
     stats.update(sr.stats)
     t1 = time.perf_counter()
     stats["time_segment_regions_total_s"] = t1 - t0
 
     with step("region growth", progress):
-        grown = grow_regions(sr.regions, free_space, eps)
+        grown = grow_regions(sr.regions, free_space, eps, workers)
     del sr  # memory: each step's input is freed once the next holds what it needs
     release_memory()
     t2 = time.perf_counter()
     stats["time_grow_s"] = t2 - t1
 
-    leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress)
+    leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress, workers=workers)
     del grown
     release_memory()
     t3 = time.perf_counter()
@@ -146,7 +151,7 @@ def build_regions(
     stats["time_merge_s"] = t4 - t3
 
     with step("region outlines", progress):
-        polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs))
+        polygons, lists, _ = region_geometry(leaves, groups, bits, free_space, len(segs), workers)
     t5 = time.perf_counter()
     stats["time_geometry_s"] = t5 - t4
     stats["time_total_s"] = t5 - t0
@@ -164,20 +169,24 @@ def build_regions(
 # Step 2: grow the visibility regions by eps
 
 
-def grow_regions(regions: np.ndarray, free_space, eps: float) -> np.ndarray:
+def grow_regions(regions: np.ndarray, free_space, eps: float, workers: int = 1) -> np.ndarray:
     """``(R_S & free_space) + disk(eps + VIR_EPS_SLACK)``, the disk circumscribed
     by the buffer's chords. ``regions`` (N,) object array; returns (N,) prepared
-    geometries (empty where S is never visible)."""
-    # Each region meets the free space only within its own extent: clip that
-    # first (cheap, no overlay), so each overlay sees the few rooms near it
-    # and not the whole plan's outline.
-    bounds = shapely.bounds(regions)
-    local = np.array([shapely.clip_by_rect(free_space, *b) if np.isfinite(b).all() else Polygon() for b in bounds] + [None])[:-1]
-    clipped = polygonal(shapely.intersection(regions, local, grid_size=OVERLAY_GRID))
+    geometries (empty where S is never visible). ``workers`` threads."""
     radius = (eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS))
-    grown = shapely.buffer(clipped, radius, quad_segs=VIR_QUAD_SEGS)
-    shapely.prepare(grown)
-    return grown
+
+    def grow(part: np.ndarray) -> np.ndarray:
+        # Each region meets the free space only within its own extent: clip
+        # that first (cheap, no overlay), so each overlay sees the few rooms
+        # near it and not the whole plan's outline.
+        bounds = shapely.bounds(part)
+        local = np.array([shapely.clip_by_rect(free_space, *b) if np.isfinite(b).all() else Polygon() for b in bounds] + [None])[:-1]
+        clipped = polygonal(shapely.intersection(part, local, grid_size=OVERLAY_GRID))
+        grown = shapely.buffer(clipped, radius, quad_segs=VIR_QUAD_SEGS)
+        shapely.prepare(grown)
+        return grown
+
+    return map_chunks(grow, [regions], workers)
 
 
 # --------------------------------------------------------------------------
@@ -249,29 +258,36 @@ def _ranges(start: np.ndarray, count: np.ndarray) -> np.ndarray:
     return first + np.arange(total)
 
 
-def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cells: np.ndarray) -> np.ndarray:
+def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cells: np.ndarray, workers: int = 1) -> np.ndarray:
     """``predicate(geoms[gi], *(c[bi] for c in cells))`` (P,) bool,
     ``VIR_PAIR_CHUNK`` pairs at a time: the gathered arrays would otherwise
-    take 16 bytes a pair."""
-    out = np.empty(len(gi), dtype=bool)
-    for i in range(0, len(gi), VIR_PAIR_CHUNK):
-        j = bi[i : i + VIR_PAIR_CHUNK]
-        out[i : i + VIR_PAIR_CHUNK] = predicate(geoms[gi[i : i + VIR_PAIR_CHUNK]], *(c[j] for c in cells))
-    return out
+    take 16 bytes a pair. In ``workers`` threads, each chunk of pairs with
+    geometries of its own (``geoms`` are prepared: see :mod:`mapkit.parallel`)."""
+
+    def test(g: np.ndarray, b: np.ndarray) -> np.ndarray:
+        out = np.empty(len(g), dtype=bool)
+        for i in range(0, len(g), VIR_PAIR_CHUNK):
+            j = b[i : i + VIR_PAIR_CHUNK]
+            out[i : i + VIR_PAIR_CHUNK] = predicate(geoms[g[i : i + VIR_PAIR_CHUNK]], *(c[j] for c in cells))
+        return out
+
+    if workers <= 1:
+        return test(gi, bi)
+    return map_owned(lambda rows: test(gi[rows], bi[rows]), gi, len(geoms), workers)
 
 
-def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray) -> np.ndarray:
+def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray, workers: int = 1) -> np.ndarray:
     """(P,) bool: whether ``grown[ps]`` meets cell box ``boxes[pc]``. A region
     holding the cell's centre ``(cx, cy)[pc]`` meets it; that point test costs
     a quarter of the box test and settles most pairs (GEOS's predicates are
     exact, so the answers are those of the box test alone)."""
-    hit = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy)
+    hit = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
     rest = np.nonzero(~hit)[0]
-    hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes)
+    hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes, workers=workers)
     return hit
 
 
-def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False) -> Leaves:
+def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False, workers: int = 1) -> Leaves:
     """Subdivide until each cell's list is decided (see the module docstring).
 
     Per level, every still-undecided (cell, segment) pair is tested at once
@@ -279,7 +295,8 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     (S may be listed) then ``covers`` (S is listed for every child too; not
     asked at the finest level, which lists whatever meets it).
     Children test only their parent's undecided segments; what a cell is
-    covered by is stored once, at that cell (:class:`Leaves`).
+    covered by is stored once, at that cell (:class:`Leaves`). The pair tests
+    run in ``workers`` threads.
     """
     from tqdm import tqdm
 
@@ -315,12 +332,12 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         alive = keep[pc]
         pc, ps = remap[pc[alive]], ps[alive]
         ix, iy, node, boxes = ix[keep], iy[keep], node[keep], boxes[keep]
-        hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2)
+        hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
         pc, ps = pc[hit], ps[hit]
         if lev == depth:  # smallest cells keep every segment that may be seen
             full = np.ones(len(pc), dtype=bool)
         else:
-            full = _pairwise(shapely.covers, grown, ps, pc, boxes)
+            full = _pairwise(shapely.covers, grown, ps, pc, boxes, workers=workers)
         dec_node.append(node[pc[full]].astype(np.int32))
         dec_seg.append(ps[full].astype(np.int32))
         pc, ps = pc[~full], ps[~full]
@@ -622,15 +639,15 @@ def leaf_squares(leaves: Leaves) -> np.ndarray:
     return out
 
 
-def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int):
+def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int, workers: int = 1):
     """Outlines (union of each region's leaf squares, cut to the free space),
     lists, and the Morton order used. Regions left empty by the cut are dropped.
 
     Squares are unioned with GEOS's coverage union (see :func:`leaf_squares`),
     collinear grid vertices are dropped, then the free space, clipped to the
-    region's bounding box, cuts the result. Regions are numbered by the
-    Morton key of their first leaf (an aligned quadtree cell's lowest key is
-    its lower-left finest cell)."""
+    region's bounding box, cuts the result, in ``workers`` threads. Regions
+    are numbered by the Morton key of their first leaf (an aligned quadtree
+    cell's lowest key is its lower-left finest cell)."""
     n_groups = len(bits)
     scale = 2 ** (leaves.depth - leaves.level)
     key = _morton(leaves.ix * scale, leaves.iy * scale)
@@ -640,14 +657,18 @@ def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_spa
     squares = leaf_squares(leaves)
     by_group = np.argsort(group, kind="stable")
     bounds = np.searchsorted(group[by_group], np.arange(n_groups + 1))
-    merged = np.array(
-        [shapely.coverage_union_all(squares[by_group[bounds[g] : bounds[g + 1]]]) for g in range(n_groups)] + [None]
-    )[:-1]
-    merged = shapely.simplify(merged, 0.0)
-    # Each region meets the free space only near itself: clip that first, so
-    # the overlay sees a few local edges rather than the whole plan's.
-    local = np.array([shapely.clip_by_rect(free_space, *b) for b in shapely.bounds(merged)] + [None])[:-1]
-    cut = polygonal(shapely.intersection(merged, polygonal(local)))
+
+    def outline(groups: np.ndarray) -> np.ndarray:
+        merged = np.array(
+            [shapely.coverage_union_all(squares[by_group[bounds[g] : bounds[g + 1]]]) for g in groups] + [None]
+        )[:-1]
+        merged = shapely.simplify(merged, 0.0)
+        # Each region meets the free space only near itself: clip that first,
+        # so the overlay sees a few local edges rather than the whole plan's.
+        local = np.array([shapely.clip_by_rect(free_space, *b) for b in shapely.bounds(merged)] + [None])[:-1]
+        return polygonal(shapely.intersection(merged, polygonal(local)))
+
+    cut = map_chunks(outline, [np.arange(n_groups)], workers)
     polygons, lists = [], []
     ids = np.arange(n_segments)
     for g in order:

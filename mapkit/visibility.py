@@ -28,6 +28,7 @@ import shapely
 from shapely.geometry import Polygon
 
 from mapkit.memory import release_memory
+from mapkit.parallel import map_chunks
 from mapkit.progress import step
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
@@ -338,6 +339,21 @@ def polygonal(geoms: np.ndarray) -> np.ndarray:
     return out
 
 
+def _simplified(raw: np.ndarray) -> np.ndarray:
+    """Visibility polygons without their collinear vertices (within
+    ``VIS_COLLINEAR``), each kept as it was where dropping them would make it
+    invalid."""
+    vp = shapely.simplify(raw, VIS_COLLINEAR, preserve_topology=False)
+    bad = ~shapely.is_valid(vp)
+    vp[bad] = raw[bad]
+    return vp
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The areal part of ``a & b``, elementwise, on the overlay grid."""
+    return polygonal(shapely.intersection(a, b, grid_size=OVERLAY_GRID))
+
+
 @dataclass
 class SegmentRegions:
     """What :func:`segment_regions` returns.
@@ -404,6 +420,7 @@ def segment_regions(
     max_range: float,
     min_visible_length: float,
     progress: bool = False,
+    workers: int = 1,
 ) -> SegmentRegions:
     """For every segment S, a region R_S containing every floor point S is visible from.
 
@@ -419,10 +436,11 @@ def segment_regions(
     and the disk ``|q-m| <= sqrt(min dmin^2 - delta^2/4)`` lies in their union.
     Vertical S: visibility polygon of its xy point within the distance band
     where its visible z-extent reaches min(L, its length).
+
+    The overlays run in ``workers`` threads (:mod:`mapkit.parallel`); the
+    regions do not depend on it.
     """
     import time
-
-    from tqdm import tqdm
 
     t0 = time.perf_counter()
     segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
@@ -472,12 +490,10 @@ def segment_regions(
     from mapkit.visibility_batch import polygons_of, visibility_polygons
 
     with step("visibility polygons", progress):
-        raw = polygons_of(*visibility_polygons(xy, occ, box), len(xy))
+        raw = polygons_of(*visibility_polygons(xy, occ, box, workers), len(xy))
     # Rays hitting one edge give collinear points; each later overlay pays per
     # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
-    vp = shapely.simplify(raw, VIS_COLLINEAR, preserve_topology=False)
-    bad = ~shapely.is_valid(vp)
-    vp[bad] = raw[bad]
+    vp = map_chunks(_simplified, [raw], workers)
     del raw  # the largest arrays of the stage: free them before the overlays
     release_memory()
     # A point inside a (shrunk) wall is seen from nowhere: every sight line
@@ -498,7 +514,7 @@ def segment_regions(
         if ok.any():
             idx = np.nonzero(ok)[0]
             ann = annuli(xy[np.asarray(vert_keys)[idx]], dmin[idx], dmax[idx])
-            regions[vert_ids[idx]] = polygonal(shapely.intersection(vp[np.asarray(vert_keys)[idx]], ann, grid_size=OVERLAY_GRID))
+            regions[vert_ids[idx]] = map_chunks(_overlap, [vp[np.asarray(vert_keys)[idx]], ann], workers)
 
     # ---- pairs: V(s_i) & V(s_j), the polygon pair shared by equal xy pairs
     n_pairs = len(pair_seg)
@@ -508,18 +524,27 @@ def segment_regions(
         uniq, inv = np.unique(lo_k * len(xy) + hi_k, return_inverse=True)
         ua, ub = uniq // len(xy), uniq % len(xy)
         with step("visibility overlaps", progress):
-            both = polygonal(shapely.intersection(vp[ua], vp[ub], grid_size=OVERLAY_GRID))
-            ann = annuli(np.array(pair_mid), np.array(pair_rin), np.array(pair_rout))
-            pieces = polygonal(shapely.intersection(both[inv], ann))
-        del both, ann, vp
+            both = map_chunks(lambda a, b: _overlap(vp[a], vp[b]), [ua, ub], workers)
+            pieces = map_chunks(
+                lambda k, mid, r_in, r_out: polygonal(shapely.intersection(both[k], annuli(mid, r_in, r_out))),
+                [inv, np.array(pair_mid), np.array(pair_rin), np.array(pair_rout)],
+                workers,
+            )
+        del both, vp
         release_memory()
         pair_seg = np.array(pair_seg)
         order = np.argsort(pair_seg, kind="stable")
         bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
-        for i in tqdm(range(n), desc="segment regions", disable=not progress, leave=False):
-            if bounds[i + 1] > bounds[i]:
-                regions[i] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
-        regions = polygonal(regions)
+
+        def unite(ids: np.ndarray) -> np.ndarray:
+            out = regions[ids]
+            for k, i in enumerate(ids):
+                if bounds[i + 1] > bounds[i]:
+                    out[k] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
+            return polygonal(out)
+
+        with step("segment regions", progress):
+            regions = map_chunks(unite, [np.arange(n)], workers)
     t_union = time.perf_counter()
     stats = {
         "segments": n,

@@ -21,6 +21,7 @@ import math
 import numpy as np
 import shapely
 
+from mapkit.parallel import map_chunks
 from mapkit.tolerances import (
     VIS_BLOCK,
     VIS_FIRST_EDGES,
@@ -32,14 +33,23 @@ from mapkit.tolerances import (
 from mapkit.visibility import Occluders, clip_box
 
 
-def visibility_polygons(points: np.ndarray, occ: Occluders, radius: float) -> tuple[np.ndarray, np.ndarray]:
+def visibility_polygons(points: np.ndarray, occ: Occluders, radius: float, workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Visibility polygons of ``points`` (P, 2) metres, each within the square
     of half-side ``radius`` around its point.
 
     Returns ``(coords, owner)``: (V, 2) vertices and (V,) int64 point index,
     grouped by point in point order, each point's vertices counter-clockwise
-    as :func:`mapkit.visibility.visibility_polygon` returns them."""
+    as :func:`mapkit.visibility.visibility_polygon` returns them. Chunks of
+    points are swept in ``workers`` threads (numpy releases the GIL in its
+    array loops); each point's polygon does not depend on its chunk."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if workers > 1:
+
+        def sweep(idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            coords, owner = visibility_polygons(points[idx], occ, radius)
+            return coords, idx[owner]
+
+        return map_chunks(sweep, [np.arange(len(points))], workers)
     coords, owners = [np.zeros((0, 2))], [np.zeros(0, dtype=np.int64)]
     n_edges = max(1, len(occ.edges))
     step = max(1, VIS_NEAR_BLOCK // n_edges)

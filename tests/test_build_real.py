@@ -87,3 +87,18 @@ def test_thehouse(tmp_path, capsys):
     assert s["segments"] > 50 and s["regions"] > 10
     assert s["segments_per_kind"][SegmentKind.VERTICAL.label] > 20
     assert 40 < s["bbox"]["max"][1] - s["bbox"]["min"][1] < 50  # metres, not millimetres
+
+
+def test_threads_give_the_same_bytes(tmp_path):
+    # --jobs splits the region stage's GEOS work among threads; the chunks'
+    # results are put back in order, so the map is the one-thread map.
+    maps = {}
+    for jobs in ("1", "2", "3"):
+        (tmp_path / jobs).mkdir()
+        maps[jobs] = build(tmp_path / jobs, ROOT / "maps" / "flat.dxf", "--jobs", jobs).read_bytes()
+    assert maps["2"] == maps["1"] and maps["3"] == maps["1"]
+
+
+def test_jobs_must_be_positive(tmp_path, capsys):
+    assert main(["build", str(ROOT / "maps" / "flat.dxf"), "-o", str(tmp_path / "a.lmap"), "-q", "--jobs", "0"]) != 0
+    assert "--jobs" in capsys.readouterr().err

@@ -291,3 +291,31 @@ def test_merging_follows_the_cheapest_pair_first(growth):
     assert len(bits) == len(reps) < n
     assert np.array_equal(group, ref_group.ravel())
     assert bits == [lists[r] for r in reps]
+
+
+@pytest.mark.parametrize("workers", [2, 3])
+def test_threads_give_the_same_partition(flat, workers):
+    scene, part = flat
+    other = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS, workers=workers)
+    assert [shapely.to_wkb(p) for p in other.polygons] == [shapely.to_wkb(p) for p in part.polygons]
+    assert all(np.array_equal(a, b) for a, b in zip(other.lists, part.lists, strict=True))
+
+
+def test_chunks_that_run_together_share_no_geometry():
+    from mapkit.parallel import map_chunks, map_owned, run_all
+
+    rng = np.random.default_rng(1)
+    owner = rng.integers(0, 50, 1000)
+    seen: dict[int, set] = {}
+
+    def fn(rows):
+        seen[int(rows[0])] = set(owner[rows].tolist())
+        return owner[rows] * 2
+
+    assert np.array_equal(map_owned(fn, owner, 50, 2, dtype=np.int64), owner * 2)
+    groups = list(seen.values())
+    assert sum(len(g) for g in groups) == len(set(owner.tolist()))  # no owner in two groups
+    x = rng.random(1000)
+    assert np.array_equal(map_chunks(np.sqrt, [x], 3), np.sqrt(x))
+    with pytest.raises(ZeroDivisionError):  # a failing chunk fails the call
+        run_all([lambda: 1, lambda: 1 // 0, lambda: 2], 2)

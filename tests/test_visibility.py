@@ -347,6 +347,9 @@ def test_batched_visibility_polygons_equal_the_per_point_sweep(plan, options):
             assert np.array_equal(g, visibility_polygon(p, occ, radius))
         polys = polygons_of(coords, owner, len(points))
         assert shapely.equals_exact(polys[0], shapely.Polygon(got[0]), 0.0)
+        # In threads, over chunks of the points: the same arrays.
+        coords3, owner3 = visibility_polygons(points, occ, radius, workers=3)
+        assert np.array_equal(coords3, coords) and np.array_equal(owner3, owner)
 
 
 def test_polygons_of_keeps_points_without_vertices_in_place():

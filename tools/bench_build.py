@@ -16,6 +16,7 @@ the open-plan office < 30 s and 1 GB, the 100-room office < 30 s and 500 MB.
     python tools/bench_build.py            # every case
     python tools/bench_build.py flat       # cases whose name contains 'flat'
     python tools/bench_build.py office     # the generated offices
+    python tools/bench_build.py 10x10 --jobs 1   # the region stage in one thread
 """
 
 from __future__ import annotations
@@ -114,13 +115,16 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("only", nargs="*", help="run only cases whose name contains one of these")
     ap.add_argument("--load-repeats", type=int, default=20)
+    ap.add_argument("--jobs", type=int, help="mapkit build --jobs (default: build's own)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     args, extra = ap.parse_known_args(argv)
     if args.child:  # one build, its figures as JSON on the last line
         import logging
 
         logging.disable(logging.WARNING)
-        print(json.dumps(run_case(Path(args.child), [e for e in extra if e != "--"], args.load_repeats)))
+        # The build options follow "--": argparse hands them over as positionals.
+        opts = [e for e in [*args.only, *extra] if e != "--"]
+        print(json.dumps(run_case(Path(args.child), opts, args.load_repeats)))
         return 0
     cols = [
         ("input", 22, "s"), ("floor m2", 8, ".0f"), ("import", 6, ".2f"), ("edges", 5, ".2f"), ("regions", 7, ".2f"),
@@ -135,7 +139,8 @@ def main(argv: list[str] | None = None) -> int:
             if args.only and not any(o in name for o in args.only):
                 continue
             try:
-                r = run_in_child(case_path(rel, Path(tmp)), extra_opts, args.load_repeats)
+                jobs = ["--jobs", str(args.jobs)] if args.jobs else []
+                r = run_in_child(case_path(rel, Path(tmp)), [*extra_opts, *jobs], args.load_repeats)
             except Exception as exc:  # a benchmark reports every case, even a failing one
                 print(f"{name:<22} | failed: {exc}")
                 failed += 1

@@ -12,6 +12,7 @@ HELP = "build a .lmap map from a DXF floor plan, a 3D mesh or ZInD annotations"
 def add_arguments(p) -> None:
     from mapkit.commands._import_args import add_float_options, add_import_arguments
     from mapkit.options import BuildOptions
+    from mapkit.parallel import MAX_DEFAULT_JOBS
 
     d = BuildOptions()
     p.add_argument("plan", metavar="PLAN", help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off) or ZInD zind_data.json")
@@ -39,6 +40,9 @@ def add_arguments(p) -> None:
                         f"{d.max_sight_work:g}; buildings need under 5000, walls tangled by faces crossing the "
                         f"building far more)")
     g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
+    p.add_argument("-j", "--jobs", type=int, default=d.jobs, metavar="N",
+                   help=f"threads for the region stage's geometry work (default {d.jobs}: the cores available, "
+                        f"at most {MAX_DEFAULT_JOBS}; 1: one thread); the map is the same byte for byte")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
@@ -78,6 +82,7 @@ def options_from_args(args):
     if not args.max_sight_work > 0:
         raise MapkitError(f"--max-sight-work must be a positive number, got {args.max_sight_work}")
     o.max_sight_work = args.max_sight_work
+    o.jobs = args.jobs
     return o
 
 
