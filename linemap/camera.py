@@ -27,12 +27,6 @@ REQUIRED_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch
 #: (standard deviations: a camera not mounted exactly, a robot that rocks).
 #: 0 says the file is exact.
 ATTITUDE_FIELDS = ("roll_deg", "pitch_std_deg", "roll_std_deg")
-#: Largest roll, degrees, and largest standard deviation of pitch and roll
-#: the matcher takes: beyond, the image is not of a camera that looks
-#: ahead upright, and the homography of the correction bends lines far
-#: from the centre out of the image.
-MAX_ROLL_DEG = 45.0
-MAX_ATTITUDE_STD_DEG = 10.0
 
 
 class CameraError(ValueError):
@@ -314,13 +308,14 @@ def check_camera(cam: Camera) -> None:
         v = _number(f"camera {k}", getattr(cam, k))
         if not math.isfinite(v):
             raise CameraError(f"camera {k} must be finite, got {v}")
-    if not -MAX_ROLL_DEG <= cam.roll_deg <= MAX_ROLL_DEG:
-        raise CameraError(f"camera roll_deg must be in [-{MAX_ROLL_DEG:g}, {MAX_ROLL_DEG:g}] (positive: the right "
-                          f"side down), got {cam.roll_deg}")
+    # Beyond these the picture is not of a camera looking ahead upright (and
+    # the correction's homography bends lines far from the centre away).
+    if not -45.0 <= cam.roll_deg <= 45.0:
+        raise CameraError(f"camera roll_deg must be in [-45, 45] (positive: the right side down), got {cam.roll_deg}")
     for k in ("pitch_std_deg", "roll_std_deg"):
-        if not 0.0 <= getattr(cam, k) <= MAX_ATTITUDE_STD_DEG:
-            raise CameraError(f"camera {k} must be in [0, {MAX_ATTITUDE_STD_DEG:g}] degrees (0: the file's value "
-                              f"is exact), got {getattr(cam, k)}")
+        if not 0.0 <= getattr(cam, k) <= 10.0:
+            raise CameraError(f"camera {k} must be in [0, 10] degrees (0: the file's value is exact), "
+                              f"got {getattr(cam, k)}")
     if any(not math.isfinite(v) for v in cam.distortion):
         raise CameraError("camera distortion coefficients must be finite")
     if cam.distortion and len(cam.distortion) not in (4, 5, 8, 12, 14):
