@@ -17,7 +17,7 @@ import argparse
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +50,10 @@ class Frame:
     dyaw: float
     lines: np.ndarray
     truth: np.ndarray
+    #: The frame's own pitch and roll, degrees (the camera file's unless
+    #: :func:`make_frame` drew them).
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
 
     def true_matches(self) -> list[list[int]]:
         return sorted([int(s), j] for j, s in enumerate(self.truth) if s >= 0)
@@ -205,13 +209,24 @@ def random_free_pose(linemap, rng, margin: float = 0.0):
 
 
 def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, noise_deg: float = 1.0,
-               end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int = 9) -> Frame:
+               end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int = 9,
+               roll_deg: float = 0.0, pitch_error_deg: float = 0.0) -> Frame:
     """A frame of the paper's protocol: a pose seeing ``min_seen`` to ``max_seen``
-    segments (redrawn otherwise), noisy lines, clutter, a prior within PEQ bounds."""
+    segments (redrawn otherwise), noisy lines, clutter, a prior within PEQ bounds.
+
+    ``roll_deg``, ``pitch_error_deg``: the frame's camera is rolled and its
+    pitch off the camera file's by amounts drawn uniformly within these
+    bounds, degrees (a camera not mounted exactly, a robot that rocks); with
+    both 0 nothing is drawn (the frames are those of a level camera)."""
     dt, dyaw = PEQ[peq]
+    real = camera
+    if roll_deg or pitch_error_deg:
+        roll = camera.roll_deg + float(rng.uniform(-roll_deg, roll_deg))
+        pitch = camera.pitch_deg + float(rng.uniform(-pitch_error_deg, pitch_error_deg))
+        real = replace(camera, roll_deg=roll, pitch_deg=pitch)
     while True:
         pose = random_free_pose(linemap, rng)
-        ideal, ids = visible_lines(linemap, camera, pose)
+        ideal, ids = visible_lines(linemap, real, pose)
         if min_seen <= len(ids) <= max_seen:
             break
     noisy = add_noise(ideal, rng, noise_px, noise_deg, end_px, camera)
@@ -223,7 +238,7 @@ def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, no
     phi = rng.uniform(0, 2 * math.pi)
     prior = (pose[0] + r * math.cos(phi), pose[1] + r * math.sin(phi),
              float(math.degrees(wrap(math.radians(pose[2] + rng.uniform(-dyaw, dyaw))))))
-    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm])
+    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm], real.pitch_deg, real.roll_deg)
 
 
 def pose_error(a, b) -> tuple[float, float]:
