@@ -163,22 +163,22 @@ def _match_residuals(params, camera: Camera, seg_a, seg_b, rays):
 
 
 def fit_on_matches(camera: Camera, lines: np.ndarray, segments: np.ndarray, matches, pose, att: Attitude,
-                   tol: Tolerances) -> tuple[tuple, Attitude, float]:
+                   prior: Attitude, tol: Tolerances) -> tuple[tuple, Attitude, float]:
     """The pose ``(x, y, yaw)`` (radians), the attitude and the mean squared
     normalised residual fitted together on ``matches`` (pairs segment id,
     line index) from ``pose`` and ``att`` (step 2 of the module docstring):
     Gauss-Newton on the end points' residuals (each over the line's noise,
-    ``line_px`` at the focal length) and the file's values as a prior. The
+    ``line_px`` at the focal length) and ``prior`` (the estimate from the
+    vertical lines, with its standard deviations) as a Gaussian prior. The
     standard deviations are the fit's."""
     work = tol.internals
-    prior = of_file(camera)
     seg_ids = np.array([s for s, _ in matches])
     line_ids = np.array([j for _, j in matches])
     rays = camera.pixel_rays(lines[line_ids])
     rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
     sa, sb = segments[seg_ids, 0], segments[seg_ids, 1]
     sigma = tol.line_px / camera.fx
-    sd = np.array([max(prior.pitch_std, 1e-9), max(prior.roll_std, 1e-9)])
+    sd = np.array([max(prior.pitch_std, 1e-9), max(prior.roll_std, 1e-9)])  # (0: an exact value, held)
     x = np.array([pose[0], pose[1], pose[2], att.pitch, att.roll], dtype=float)
     h = work.attitude_fit_step
 
@@ -208,19 +208,20 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
     and roll uncertain: ``run(nominal_camera, lines, tolerances, prior)``
     localises lines of the nominal camera on the map whose ``segments``
     (N, 2, 3) are given (``prior`` None: as asked; else
-    ``(x, y, yaw_deg, dt, dyaw)``, a narrow prior around a first answer).
+    ``(x, y, yaw_deg, dt, dyaw)``, a narrow prior around a first answer);
+    ``run(..., quick=True)`` with the interpretation tree alone.
 
     Exact attitude: one homography, one run. Otherwise a first run on the
     lines moved with :func:`from_verticals`'s attitude and the tolerances
-    :func:`widened` by ``attitude_first_sigmas`` of what it left; the pose,
-    pitch and roll fitted on the matches of its best few hypotheses (the
-    one with most matches, then the least residual among those that fit);
-    the lines moved with that attitude and run again with the tolerances
-    widened by ``attitude_sigmas`` of what the fit left (``lost``: around
-    the first answer); again, up to ``attitude_rounds`` runs, until a run
-    with the fitted attitude is accepted. The result carries the attitude
-    (``pitch_deg``, ``roll_deg``), refitted on its own matches when it has
-    a pose."""
+    :func:`widened` by ``attitude_first_sigmas`` of what it left (again a
+    band of pitch higher, then lower, while no hypothesis fits); the pose,
+    pitch and roll fitted on the matches of its best few hypotheses, one
+    per attitude among those whose residuals fit; for each, the lines moved
+    with it and run again with the tolerances widened by
+    ``attitude_sigmas`` of what its fit left (``lost``: around its pose);
+    the run accepted with most matches, then the least E, stands. The
+    result carries the attitude (``pitch_deg``, ``roll_deg``), refitted on
+    its own matches when it has a pose."""
     import time
 
     from matcher.checks import check_lines
@@ -232,42 +233,68 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
     if not camera.attitude_free:
         return _carrying(run(nom, rectify(camera, arr, est), tol, None), est, t0)
     work = tol.internals
-    att, sigmas, res, near = est, work.attitude_first_sigmas, None, None
-    for _ in range(work.attitude_rounds):
-        res = run(nom, rectify(camera, arr, att), widened(tol, camera, att, sigmas), near)
-        done = bool(res) and sigmas == work.attitude_sigmas
-        fitted = _best_fit(camera, arr, segments, res, att, tol, done)
-        if fitted is None:
-            break
-        att, p = fitted
-        if done:
-            break
-        sigmas = work.attitude_sigmas
-        if lost:
-            near = (p[0], p[1], math.degrees(p[2]), work.attitude_again_m, work.attitude_again_deg)
-    return _carrying(res, att, t0)
+    # The first runs: bands of pitch ``attitude_band_deg`` wide over the
+    # estimate's ``attitude_sigmas`` standard deviations, nearest first,
+    # each widened by half a band and what the vertical lines left of the
+    # roll; the fits of all of them.
+    band = math.radians(work.attitude_band_deg)
+    k_max = int(math.ceil(max(work.attitude_sigmas * est.pitch_std / band - 0.5, 0.0)))
+    fits, first = [], None
+    for k in sorted(range(-k_max, k_max + 1), key=abs):
+        att = replace(est, pitch=est.pitch + k * band, pitch_std=0.5 * band)
+        wide = replace(widened(tol, camera, att, 1.0), max_nodes=min(tol.max_nodes, work.attitude_band_nodes),
+                       max_hypotheses=min(tol.max_hypotheses, work.attitude_band_hypotheses))
+        res = run(nom, rectify(camera, arr, att), wide, None, True)
+        first = res if first is None else first
+        fits += _fits(camera, arr, segments, res, att, est, tol)
+    fits = _distinct(sorted(fits, key=lambda f: f[:3]), work.attitude_same_deg)[: work.attitude_second_runs]
+    if not fits:
+        return _carrying(first, est, t0)
+    # Then each attitude the fits give (a wrong set can fit too, with an
+    # attitude of its own): the lines moved with it, the tolerances widened
+    # by what its fit left; the run accepted with most matches, then the
+    # least E, stands, with the attitude refitted on its matches.
+    best = None
+    for *_, att, p in fits:
+        near = (p[0], p[1], math.degrees(p[2]), work.attitude_again_m, work.attitude_again_deg) if lost else None
+        # Widened by what the fit left, at most half a band (matches that
+        # leave the pitch loose, vertical edges alone, came from a band).
+        cap = 0.5 * band / work.attitude_sigmas
+        left = replace(att, pitch_std=min(att.pitch_std, cap), roll_std=min(att.roll_std, cap))
+        res = run(nom, rectify(camera, arr, att), widened(tol, camera, left, work.attitude_sigmas), near)
+        if res:
+            pose = (res.pose[0], res.pose[1], math.radians(res.pose[2]))
+            att = fit_on_matches(camera, arr, segments, res.matches, pose, att, est, tol)[1]
+        rank = (bool(res), len(res.matches), -(res.score if res.score is not None else math.inf))
+        if best is None or rank > best[0]:
+            best = (rank, res, att)
+    return _carrying(best[1], best[2], t0)
 
 
-def _best_fit(camera: Camera, arr: np.ndarray, segments: np.ndarray, res, att: Attitude, tol: Tolerances,
-              final: bool):
-    """``(attitude, pose)`` fitted on the matches of the accepted pose of
-    ``res`` (``final``), else of its best ranked hypotheses (the one with
-    most matches, then the least residual, among those that fit); None when
-    none does."""
+def _fits(camera: Camera, arr: np.ndarray, segments: np.ndarray, res, att: Attitude, prior: Attitude,
+          tol: Tolerances) -> list:
+    """``(-matches, cost, attitude, pose)`` fitted on the matches of each of
+    the best ranked hypotheses of ``res`` whose residual stays within
+    ``attitude_fit_cost``."""
     work = tol.internals
-    ranked = [(0.0, res.matches, res.pose)] if final else res.ranked[: work.attitude_fit_keep]
     fits = []
-    for E, matches, pose in ranked:
+    for E, matches, pose in res.ranked[: work.attitude_fit_keep]:
         if not math.isfinite(E) or len(matches) < tol.min_matches:
             continue
         p, fit, cost = fit_on_matches(camera, arr, segments, matches, (pose[0], pose[1], math.radians(pose[2])),
-                                      att, tol)
-        if cost <= work.attitude_fit_cost or final:
-            fits.append((-len(matches), cost, len(fits), fit, p))
-    if not fits:
-        return None
-    *_, fit, p = min(fits)
-    return fit, p
+                                      att, prior, tol)
+        if cost <= work.attitude_fit_cost:
+            fits.append((-len(matches), cost, 0, fit, p))
+    return fits
+
+
+def _distinct(fits: list, same_deg: float) -> list:
+    """``fits`` less those within ``same_deg`` in pitch and roll of one before."""
+    out, same = [], math.radians(same_deg)
+    for f in fits:
+        if all(abs(f[3].pitch - g[3].pitch) > same or abs(f[3].roll - g[3].roll) > same for g in out):
+            out.append(f)
+    return out
 
 
 def _carrying(res, att: Attitude, t0: float):

@@ -46,21 +46,24 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
         tol = checked_types(linemap, camera, tolerances)
         check_prior(prior, dt, dyaw)
 
-        def run(nom, moved, tol_, near):
-            return localize_lines(linemap, nom, prepare_lines(nom, moved, tol_), prior, dt, dyaw, tol_)
+        def run(nom, moved, tol_, near, quick=False):
+            return localize_lines(linemap, nom, prepare_lines(nom, moved, tol_), prior, dt, dyaw, tol_,
+                                  sources=SOURCES[:1] if quick else SOURCES)
 
         return attitude.localize_with_attitude(camera, lines, tol, linemap.segments, run)
     tol, img = checked_inputs(linemap, camera, lines, tolerances)
     return localize_lines(linemap, camera, img, prior, dt, dyaw, tol, t0)
 
 
-def localize_lines(linemap, camera: Camera, img: ImageLines, prior, dt, dyaw, tol: Tolerances, t0=None):
+def localize_lines(linemap, camera: Camera, img: ImageLines, prior, dt, dyaw, tol: Tolerances, t0=None,
+                   sources=SOURCES):
     """:func:`localize` on prepared lines ``img`` (the lines moved to the
-    nominal camera by :mod:`matcher.attitude` need not lie in the image)."""
+    nominal camera by :mod:`matcher.attitude` need not lie in the image),
+    with the strategy's ``sources``."""
     t0 = time.perf_counter() if t0 is None else t0
     px = check_prior(prior, dt, dyaw)
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
-    return localize_prepared(linemap, camera, img, px, tol, t0, deadlines)
+    return localize_prepared(linemap, camera, img, px, tol, t0, deadlines, sources=sources)
 
 
 def checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:

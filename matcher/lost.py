@@ -61,7 +61,7 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
         # narrow prior around that answer.
         tol = from_prior.checked_types(linemap, camera, tolerances)
 
-        def run(nom, moved, tol_, near):
+        def run(nom, moved, tol_, near, quick=False):
             img_ = prepare_lines(nom, moved, tol_)
             if near is None:
                 return _localize_global(linemap, nom, img_, tol_, time.perf_counter(), first_accepted, progress,

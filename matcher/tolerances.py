@@ -299,10 +299,25 @@ class Internals:
     #: residual, in the lines' noise, is at most this: right ones gave 0.1
     #: to 2.3 (PEQ 3, 20 frames), wrong ones mostly 5 to thousands.
     attitude_fit_cost: float = 3.0
-    #: Most runs of the matcher per frame with an uncertain attitude: the
-    #: first (widened for what the vertical lines left), then with the
-    #: attitude fitted on the last run's matches until one is accepted.
-    attitude_rounds: int = 3
+    #: Two fitted attitudes closer than this, degrees, in pitch and roll
+    #: are one (one second run): a tenth of a degree moves the picture by
+    #: 1.6 px at f = 900, what the second run's widening covers.
+    attitude_same_deg: float = 0.1
+    #: Most second runs (attitudes tried), most matches first, then the
+    #: least residual: on 20 frames at PEQ 3 the right one was among the
+    #: first two.
+    attitude_second_runs: int = 3
+    #: The first runs cover the pitch the vertical lines leave in bands this
+    #: wide, degrees, one run each widened by half a band (0.5 degree: 8 px
+    #: at f = 900).
+    attitude_band_deg: float = 1.0
+    #: Each band's run is the interpretation tree alone (no second search,
+    #: no resection) with this node budget: it needs one set near the
+    #: truth among its best few, not the answer.
+    attitude_band_nodes: int = 500
+    #: ...and at most this many hypotheses for stage 2 (of which the best
+    #: ``attitude_fit_keep`` are fitted).
+    attitude_band_hypotheses: int = 10
     #: A line's plane noise is a bound (``line_px``, ``line_deg``); as a
     #: standard deviation it counts this share of it (a uniform error's is
     #: 0.58 of its bound).
