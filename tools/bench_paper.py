@@ -53,13 +53,19 @@ def is_correct(matches, truth_pairs, min_matches: int = 3, equivalent=None) -> b
     return len(s) >= min_matches and s <= ok
 
 
-def frame_camera(camera, frame):
-    """The camera as it took ``frame``: its own pitch and roll, exact."""
+def level_view(camera, frame):
+    """``(camera, frame)`` as the matcher sees them once the frame's own
+    pitch and roll are known: the nominal camera (the file's pitch, no
+    roll) and the frame's lines moved to it (:mod:`matcher.attitude`); the
+    camera and frame themselves for a level frame of an exact camera."""
     from dataclasses import replace
 
+    from matcher import attitude
+
     if frame.pitch_deg == camera.pitch_deg and frame.roll_deg == camera.roll_deg and not camera.attitude_free:
-        return camera
-    return replace(camera, pitch_deg=frame.pitch_deg, roll_deg=frame.roll_deg, pitch_std_deg=0.0, roll_std_deg=0.0)
+        return camera, frame
+    att = attitude.Attitude(math.radians(frame.pitch_deg), math.radians(frame.roll_deg), 0.0, 0.0)
+    return attitude.nominal(camera), replace(frame, lines=attitude.rectify(camera, frame.lines, att))
 
 
 def indistinguishable(linemap, camera, frame) -> set:
@@ -130,7 +136,7 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
     for i, fr in enumerate(frames):
         res = results[i]
         truth = {tuple(m) for m in fr.true_matches()}
-        equiv = indistinguishable(linemap, frame_camera(camera, fr), fr)
+        equiv = indistinguishable(linemap, *level_view(camera, fr))
         ranked = [(E, mm, p) for E, mm, p in res.ranked]
         first_ok = bool(ranked) and is_correct(ranked[0][1], truth, equivalent=equiv)
         first_strict = bool(ranked) and is_correct(ranked[0][1], truth)
@@ -174,7 +180,8 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
                 row["err_over_std"] = [e / s for e, s in zip(err, res.pose_std)]
         if i < args.baseline_poses:
             t0 = time.perf_counter()
-            pose, bm, nodes, timed_out = baseline_localize(linemap, frame_camera(camera, fr), fr.lines, fr.prior, fr.dt, fr.dyaw,
+            base_cam, base_fr = level_view(camera, fr)  # the baseline is given the frame's attitude
+            pose, bm, nodes, timed_out = baseline_localize(linemap, base_cam, base_fr.lines, fr.prior, fr.dt, fr.dyaw,
                                                            time_limit_s=args.baseline_limit)
             row["base_ms"] = (time.perf_counter() - t0) * 1e3
             row["base_timeout"] = timed_out
