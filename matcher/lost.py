@@ -64,8 +64,10 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
         def run(nom, moved, tol_, near, quick=False):
             img_ = prepare_lines(nom, moved, tol_)
             if near is None:
-                return _localize_global(linemap, nom, img_, tol_, time.perf_counter(), first_accepted, progress,
-                                        regions)
+                # A band's run (quick) needs a few hypotheses near the truth,
+                # not the best region: it stops at the first accepted one.
+                return _localize_global(linemap, nom, img_, tol_, time.perf_counter(), first_accepted or quick,
+                                        progress, regions)
             return from_prior.localize_lines(linemap, nom, img_, near[:3], near[3], near[4], tol_)
 
         return attitude.localize_with_attitude(camera, lines, tol, linemap.segments, run, lost=True)
