@@ -4,7 +4,9 @@ World: x, y horizontal, z up, metres. Camera: OpenCV pinhole, X right,
 Y down, Z forward; pixel ``u`` is the column, ``v`` the row. The camera
 centre is ``C = (x, y, h)``; ``yaw`` is the heading of the optical axis on
 the floor, counter-clockwise from +x; ``pitch`` is positive looking down;
-roll is zero. Angles are radians in code and degrees in files.
+``roll`` (about the optical axis) is positive when the camera's right side
+is down (clockwise seen from behind; the picture turns counter-clockwise),
+zero by default. Angles are radians in code and degrees in files.
 
 numpy only: the map builder imports this too (for the vertical field of view).
 """
@@ -20,6 +22,11 @@ from pathlib import Path
 import numpy as np
 
 REQUIRED_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch_deg")
+#: Optional fields of the mounting, degrees, 0 when absent: the roll, and
+#: how far the real pitch and roll of a frame may stray from the file's
+#: (standard deviations: a camera not mounted exactly, a robot that rocks).
+#: 0 says the file is exact.
+ATTITUDE_FIELDS = ("roll_deg", "pitch_std_deg", "roll_std_deg")
 
 
 class CameraError(ValueError):
@@ -31,7 +38,10 @@ class Camera:
     """A calibrated camera at a known height and pitch.
 
     ``distortion`` holds OpenCV's coefficients (k1, k2, p1, p2[, k3...]) or is
-    empty for an ideal pinhole.
+    empty for an ideal pinhole. ``roll_deg`` is the roll of the mounting;
+    ``pitch_std_deg`` and ``roll_std_deg`` how far a frame's own pitch and
+    roll may stray from the file's (the matcher then estimates them per
+    frame, :mod:`matcher.attitude`); all three 0 by default.
     """
 
     width: int
@@ -43,6 +53,9 @@ class Camera:
     height_m: float
     pitch_deg: float
     distortion: tuple[float, ...] = field(default=())
+    roll_deg: float = 0.0
+    pitch_std_deg: float = 0.0
+    roll_std_deg: float = 0.0
 
     def __post_init__(self) -> None:
         check_camera(self)
@@ -61,20 +74,24 @@ class Camera:
         if not isinstance(dist, (list, tuple)):
             raise CameraError(f"camera distortion must be a list of numbers, got {dist!r}")
         vals["distortion"] = tuple(_number("camera distortion", v) for v in dist)
+        for k in ATTITUDE_FIELDS:
+            if d.get(k) is not None:
+                vals[k] = _number(f"camera {k}", d[k])
         for k in ("width", "height"):
             if math.isfinite(vals[k]) and vals[k] == int(vals[k]):
                 vals[k] = int(vals[k])
         return cls(**vals)
 
     @classmethod
-    def load(cls, path: str | Path, height_m: float | None = None, pitch_deg: float | None = None) -> "Camera":
+    def load(cls, path: str | Path, height_m: float | None = None, pitch_deg: float | None = None,
+             roll_deg: float | None = None) -> "Camera":
         """Read a camera.json, an OpenCV calibration file (YAML, XML, JSON) or a
-        ROS camera_info YAML (:mod:`linemap.camera_files`); ``height_m`` and
-        ``pitch_deg``, when given, override the file's (calibration files
-        have neither)."""
+        ROS camera_info YAML (:mod:`linemap.camera_files`); ``height_m``,
+        ``pitch_deg`` and ``roll_deg``, when given, override the file's
+        (calibration files usually have none)."""
         from linemap.camera_files import load_camera
 
-        return load_camera(path, height_m, pitch_deg)
+        return load_camera(path, height_m, pitch_deg, roll_deg)
 
     @classmethod
     def from_fov(cls, hfov_deg: float, width: int, height: int, height_m: float, pitch_deg: float) -> "Camera":
@@ -97,6 +114,9 @@ class Camera:
         }
         if self.distortion:
             d["distortion"] = list(self.distortion)
+        for k in ATTITUDE_FIELDS:  # only when set: a level, exact camera's file is as it was
+            if getattr(self, k):
+                d[k] = getattr(self, k)
         return d
 
     # ---- geometry -------------------------------------------------------
@@ -105,13 +125,22 @@ class Camera:
         return math.radians(self.pitch_deg)
 
     @property
+    def roll(self) -> float:
+        return math.radians(self.roll_deg)
+
+    @property
+    def attitude_free(self) -> bool:
+        """Do the frames' pitch and roll stray from the file's (a standard deviation above 0)?"""
+        return self.pitch_std_deg > 0.0 or self.roll_std_deg > 0.0
+
+    @property
     def K(self) -> np.ndarray:
         """(3, 3) intrinsic matrix."""
         return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
     def world2cam(self, yaw: float) -> np.ndarray:
         """(3, 3) rotation R with rows (right, down, forward) in world coordinates."""
-        return world2cam_rotation(yaw, self.pitch)
+        return world2cam_rotation(yaw, self.pitch, self.roll)
 
     def centre(self, x: float, y: float) -> np.ndarray:
         return np.array([x, y, self.height_m])
@@ -176,9 +205,13 @@ class Camera:
             ]
         )
         rays = self.pixel_rays(border)
-        # World direction of a camera ray: R^T ray; its z component is d_z*Y + f_z*Z.
+        # World direction of a camera ray: R^T ray; its z component is d_z*Y + f_z*Z
+        # (and r_z*X with a roll).
         p = self.pitch
-        z = -math.cos(p) * rays[:, 1] - math.sin(p) * rays[:, 2]
+        if self.roll_deg:
+            z = rays @ self.world2cam(0.0)[:, 2]
+        else:
+            z = -math.cos(p) * rays[:, 1] - math.sin(p) * rays[:, 2]
         elev = np.arcsin(z / np.linalg.norm(rays, axis=1))
         return float(elev.min()), float(elev.max())
 
@@ -216,17 +249,28 @@ class Camera:
         return float(np.abs(np.arctan2(d[:, 1], d[:, 0])).max())
 
 
-def world2cam_rotation(yaw, pitch: float) -> np.ndarray:
+def world2cam_rotation(yaw, pitch: float, roll: float = 0.0) -> np.ndarray:
     """World-to-camera rotation(s), rows r, d, f of method.md section 2.
 
-    ``yaw`` a scalar gives (3, 3); an array of yaws (...,) gives (..., 3, 3)."""
+    ``yaw`` a scalar gives (3, 3); an array of yaws (...,) gives (..., 3, 3).
+    A ``roll`` (radians, the camera's right side down) turns the rows r and
+    d about f: ``roll_rotation(roll) @ R``."""
     cy_, sy_ = np.cos(yaw), np.sin(yaw)
     cp, sp = math.cos(pitch), math.sin(pitch)
     z = np.zeros_like(cy_)
     r = np.stack([sy_, -cy_, z], -1)
     d = np.stack([-sp * cy_, -sp * sy_, z - cp], -1)
     f = np.stack([cp * cy_, cp * sy_, z - sp], -1)
-    return np.stack([r, d, f], -2)
+    R = np.stack([r, d, f], -2)
+    return roll_rotation(roll) @ R if roll else R
+
+
+def roll_rotation(roll: float) -> np.ndarray:
+    """(3, 3) turn of the camera frame about its optical axis by ``roll``
+    radians (the right side down): the rows r, d become
+    ``cos*r + sin*d`` and ``-sin*r + cos*d``."""
+    c, s = math.cos(roll), math.sin(roll)
+    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _number(what: str, v) -> float:
@@ -260,6 +304,18 @@ def check_camera(cam: Camera) -> None:
         raise CameraError(f"camera height_m must be above the floor (> 0 m), got {cam.height_m}")
     if not -89.0 <= cam.pitch_deg <= 89.0:
         raise CameraError(f"camera pitch_deg must be in [-89, 89] (positive looks down), got {cam.pitch_deg}")
+    for k in ATTITUDE_FIELDS:
+        v = _number(f"camera {k}", getattr(cam, k))
+        if not math.isfinite(v):
+            raise CameraError(f"camera {k} must be finite, got {v}")
+    # Beyond these the picture is not of a camera looking ahead upright (and
+    # the correction's homography bends lines far from the centre away).
+    if not -45.0 <= cam.roll_deg <= 45.0:
+        raise CameraError(f"camera roll_deg must be in [-45, 45] (positive: the right side down), got {cam.roll_deg}")
+    for k in ("pitch_std_deg", "roll_std_deg"):
+        if not 0.0 <= getattr(cam, k) <= 10.0:
+            raise CameraError(f"camera {k} must be in [0, 10] degrees (0: the file's value is exact), "
+                              f"got {getattr(cam, k)}")
     if any(not math.isfinite(v) for v in cam.distortion):
         raise CameraError("camera distortion coefficients must be finite")
     if cam.distortion and len(cam.distortion) not in (4, 5, 8, 12, 14):

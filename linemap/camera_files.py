@@ -12,7 +12,10 @@
 The camera's height above the floor and its pitch are in none of the
 calibration files: they come from the caller (``height_m``, ``pitch_deg``;
 the command lines' ``--height-m`` and ``--pitch-deg``), which may also
-override those of a camera.json. Whatever is missing or wrong is a one-line
+override those of a camera.json; so does the roll (``roll_deg``,
+``--roll-deg``). A calibration file that carries ``height_m``,
+``pitch_deg``, ``roll_deg``, ``pitch_std_deg`` or ``roll_std_deg`` as
+numbers at its top level gives them too. Whatever is missing or wrong is a one-line
 :class:`~linemap.camera.CameraError` saying what to give. OpenCV (already a
 dependency of the matcher) parses the calibration formats; it is imported
 only for them.
@@ -26,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from linemap.camera import REQUIRED_FIELDS, Camera, CameraError
+from linemap.camera import ATTITUDE_FIELDS, REQUIRED_FIELDS, Camera, CameraError
 
 #: Names the camera matrix and the distortion coefficients go by in OpenCV's
 #: samples and in ROS files, in the order they are looked for.
@@ -40,10 +43,11 @@ _MAX_CALIBRATION_DEPTH = 32
 _PINHOLE_MODELS = ("", "plumb_bob", "rational_polynomial")
 
 
-def load_camera(path: str | Path, height_m: float | None = None, pitch_deg: float | None = None) -> Camera:
-    """The camera of ``path`` (any of the formats above), its height and
-    pitch from ``height_m`` and ``pitch_deg`` when given (else from the file:
-    a camera.json has them, calibration files do not)."""
+def load_camera(path: str | Path, height_m: float | None = None, pitch_deg: float | None = None,
+                roll_deg: float | None = None) -> Camera:
+    """The camera of ``path`` (any of the formats above), its height, pitch
+    and roll from ``height_m``, ``pitch_deg`` and ``roll_deg`` when given
+    (else from the file: a camera.json has them, calibration files do not)."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -61,16 +65,20 @@ def load_camera(path: str | Path, height_m: float | None = None, pitch_deg: floa
             d["height_m"] = height_m
         if pitch_deg is not None:
             d["pitch_deg"] = pitch_deg
+        if roll_deg is not None:
+            d["roll_deg"] = roll_deg
         return Camera.from_dict(d)
-    return _from_calibration(path, text, height_m, pitch_deg)
+    return _from_calibration(path, text, height_m, pitch_deg, roll_deg)
 
 
 def camera_from_k(k: tuple[float, float, float, float], size: tuple[int, int], height_m: float,
-                  pitch_deg: float = 0.0, distortion=()) -> Camera:
-    """A camera from ``k`` = (fx, fy, cx, cy) pixels, ``size`` = (width, height)."""
+                  pitch_deg: float = 0.0, distortion=(), **attitude) -> Camera:
+    """A camera from ``k`` = (fx, fy, cx, cy) pixels, ``size`` = (width, height);
+    ``attitude``: ``roll_deg``, ``pitch_std_deg``, ``roll_std_deg`` (None: 0)."""
     fx, fy, cx, cy = k
     return Camera.from_dict({"width": size[0], "height": size[1], "fx": fx, "fy": fy, "cx": cx, "cy": cy,
-                             "height_m": height_m, "pitch_deg": pitch_deg, "distortion": list(distortion)})
+                             "height_m": height_m, "pitch_deg": pitch_deg, "distortion": list(distortion),
+                             **attitude})
 
 
 def _our_json(text: str, path: Path) -> dict | None:
@@ -92,7 +100,7 @@ def _our_json(text: str, path: Path) -> dict | None:
     return d
 
 
-def _from_calibration(path: Path, text: str, height_m, pitch_deg) -> Camera:
+def _from_calibration(path: Path, text: str, height_m, pitch_deg, roll_deg=None) -> Camera:
     """A camera from an OpenCV or ROS calibration file's ``text``."""
     import cv2
 
@@ -135,6 +143,9 @@ def _from_calibration(path: Path, text: str, height_m, pitch_deg) -> Camera:
             raise CameraError(f"{what} has no image size (image_width and image_height, or image_size)")
         height_m = _number(fs, "height_m") if height_m is None else height_m
         pitch_deg = _number(fs, "pitch_deg") if pitch_deg is None else pitch_deg
+        attitude = {k: _number(fs, k) for k in ATTITUDE_FIELDS}
+        if roll_deg is not None:
+            attitude["roll_deg"] = roll_deg
     except (cv2.error, SystemError):  # a damaged matrix node ("dt" missing, data not a map, ...)
         raise CameraError(f"{what} is damaged: OpenCV cannot read its matrices; calibrate again or fix the "
                           "file") from None
@@ -150,7 +161,7 @@ def _from_calibration(path: Path, text: str, height_m, pitch_deg) -> Camera:
                           f"{K.round(6).tolist()}")
     if not np.isfinite(K).all():
         raise CameraError(f"{what}: the camera matrix holds a non-finite number")
-    return camera_from_k((K[0, 0], K[1, 1], K[0, 2], K[1, 2]), size, height_m, pitch_deg, dist)
+    return camera_from_k((K[0, 0], K[1, 1], K[0, 2], K[1, 2]), size, height_m, pitch_deg, dist, **attitude)
 
 
 def _bracket_depth(text: str) -> int:

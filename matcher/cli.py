@@ -76,6 +76,8 @@ def add_map_and_camera(p: argparse.ArgumentParser, camera_required: bool) -> Non
     p.add_argument("--image-size", metavar="WxH", help="image width and height in pixels (with --camera-k)")
     p.add_argument("--height-m", type=float, help="camera height above the floor, metres (needed with a "
                    "calibration file or --camera-k; overrides a camera.json's)")
+    p.add_argument("--roll-deg", type=float, help="camera roll, degrees, the right side down positive (default 0 "
+                   "with a calibration file or --camera-k; overrides a camera.json's)")
     p.add_argument("--pitch-deg", type=float, help="camera pitch, degrees, down positive (default 0 with a "
                    "calibration file or --camera-k; overrides a camera.json's)")
 
@@ -207,12 +209,12 @@ def _human(res, n_lines: int) -> str:
 
 def _camera(args, Camera):
     """The camera of --camera or of --camera-k and --image-size, with
-    --height-m and --pitch-deg; UsageError for a missing part."""
+    --height-m, --pitch-deg and --roll-deg; UsageError for a missing part."""
     if args.camera:
         if args.image_size:
             raise UsageError("--image-size goes with --camera-k (a camera file holds its size)")
         _input_file(args.camera, "camera file")
-        return Camera.load(args.camera, args.height_m, args.pitch_deg)
+        return Camera.load(args.camera, args.height_m, args.pitch_deg, getattr(args, "roll_deg", None))
     from linemap.camera_files import camera_from_k
 
     try:
@@ -229,7 +231,8 @@ def _camera(args, Camera):
         raise UsageError("--camera-k needs --image-size WxH (pixels, e.g. 640x480)")
     if args.height_m is None:
         raise UsageError("--camera-k needs --height-m (the camera's height above the floor, metres)")
-    return camera_from_k(k, size, args.height_m, 0.0 if args.pitch_deg is None else args.pitch_deg)
+    return camera_from_k(k, size, args.height_m, 0.0 if args.pitch_deg is None else args.pitch_deg,
+                         roll_deg=getattr(args, "roll_deg", None))
 
 
 def run_localize(args) -> int:

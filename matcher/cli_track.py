@@ -81,7 +81,7 @@ class _Source:
             if args.camera or args.camera_k:
                 self.camera = _camera(args, Camera)
             else:
-                self.camera = self.bag.camera(args.height_m, args.pitch_deg)
+                self.camera = self.bag.camera(args.height_m, args.pitch_deg, args.roll_deg)
             self.total = len(self.bag)
         else:
             for opt in ("image_topic", "camera_info_topic", "odom_topic"):

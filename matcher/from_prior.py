@@ -18,7 +18,7 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.geometry import wrap
 from linemap.lmap import LineMap
-from matcher import ambiguity
+from matcher import ambiguity, attitude
 from matcher.budget import NO_LIMIT, Deadlines
 from matcher.candidates import Candidates, select_candidates
 from matcher.checks import check_lines, check_prior
@@ -40,23 +40,49 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     a ``reason`` when no hypothesis is accepted. Bad input (shapes, NaN,
     ranges) raises ValueError."""
     t0 = time.perf_counter()
+    if attitude.applies(camera):
+        # The frame's own pitch and roll (matcher.attitude): the lines moved
+        # to the nominal camera, then localised as any.
+        tol = checked_types(linemap, camera, tolerances)
+        check_prior(prior, dt, dyaw)
+
+        def run(nom, moved, tol_, near, quick=False):
+            return localize_lines(linemap, nom, prepare_lines(nom, moved, tol_), prior, dt, dyaw, tol_,
+                                  sources=SOURCES[:1] if quick else SOURCES)
+
+        return attitude.localize_with_attitude(camera, lines, tol, linemap.segments, run)
     tol, img = checked_inputs(linemap, camera, lines, tolerances)
+    return localize_lines(linemap, camera, img, prior, dt, dyaw, tol, t0)
+
+
+def localize_lines(linemap, camera: Camera, img: ImageLines, prior, dt, dyaw, tol: Tolerances, t0=None,
+                   sources=SOURCES):
+    """:func:`localize` on prepared lines ``img`` (the lines moved to the
+    nominal camera by :mod:`matcher.attitude` need not lie in the image),
+    with the strategy's ``sources``."""
+    t0 = time.perf_counter() if t0 is None else t0
     px = check_prior(prior, dt, dyaw)
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
-    return localize_prepared(linemap, camera, img, px, tol, t0, deadlines)
+    return localize_prepared(linemap, camera, img, px, tol, t0, deadlines, sources=sources)
 
 
 def checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
     """ValueError unless the map, camera and tolerances are of their types
     and the lines valid; the tolerances to use and the prepared lines."""
+    tol = checked_types(linemap, camera, tolerances)
+    return tol, prepare_lines(camera, check_lines(lines, camera, tol), tol)
+
+
+def checked_types(linemap, camera, tolerances) -> Tolerances:
+    """ValueError unless the map, camera and tolerances are of their types;
+    the tolerances to use."""
     if not isinstance(linemap, LineMap):
         raise ValueError(f"linemap must be a map from matcher.load_map('map.lmap'), got {type(linemap).__name__}")
     if not isinstance(camera, Camera):
         raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
     if tolerances is not None and not isinstance(tolerances, Tolerances):
         raise ValueError(f"tolerances must be a matcher.Tolerances, got {type(tolerances).__name__}")
-    tol = tolerances or DEFAULT
-    return tol, prepare_lines(camera, check_lines(lines, camera, tol), tol)
+    return tolerances or DEFAULT
 
 
 def localize_prepared(linemap, camera: Camera, img: ImageLines, px, tol: Tolerances, t0: float,

@@ -16,9 +16,9 @@ from dataclasses import replace
 import numpy as np
 
 from linemap.camera import Camera
-from matcher import ambiguity, from_prior
+from matcher import ambiguity, attitude, from_prior
 from matcher.budget import Deadlines
-from matcher.frame import too_few_lines
+from matcher.frame import prepare_lines, too_few_lines
 from matcher.lost_votes import vote_places
 from matcher.result import LocalizeResult
 from matcher.strategy import SOURCES, TreeSearch
@@ -55,7 +55,29 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     whose budget covers part of the map each call passes the rest next).
     Returns a falsy result if no region gives one."""
     t0 = time.perf_counter()
+    if attitude.applies(camera):
+        # The frame's own pitch and roll (matcher.attitude); the second run,
+        # on the lines moved with the attitude the first answer gave, is a
+        # narrow prior around that answer.
+        tol = from_prior.checked_types(linemap, camera, tolerances)
+
+        def run(nom, moved, tol_, near, quick=False):
+            img_ = prepare_lines(nom, moved, tol_)
+            if near is None:
+                # A band's run (quick) needs a few hypotheses near the truth,
+                # not the best region: it stops at the first accepted one.
+                return _localize_global(linemap, nom, img_, tol_, time.perf_counter(), first_accepted or quick,
+                                        progress, regions)
+            return from_prior.localize_lines(linemap, nom, img_, near[:3], near[3], near[4], tol_)
+
+        return attitude.localize_with_attitude(camera, lines, tol, linemap.segments, run, lost=True)
     tol, img = from_prior.checked_inputs(linemap, camera, lines, tolerances)
+    return _localize_global(linemap, camera, img, tol, t0, first_accepted, progress, regions)
+
+
+def _localize_global(linemap, camera: Camera, img, tol: Tolerances, t0: float, first_accepted: bool, progress,
+                     regions) -> LocalizeResult:
+    """:func:`localize_global` on prepared lines ``img``."""
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
     if linemap.n_regions == 0:
         return LocalizeResult(False, "the map has no regions", time_ms={"total": 0.0, "regions_tried": 0})

@@ -35,6 +35,11 @@ class LocalizeResult:
     #: is falsy: dicts of x, y, yaw_deg, matches and score (lost mode).
     candidates: list[dict] = field(default_factory=list)
 
+    #: The frame's own pitch and roll, degrees, when the camera file gives a
+    #: roll or their standard deviations (matcher.attitude); else None.
+    pitch_deg: float | None = None
+    roll_deg: float | None = None
+
     _pose_std: object = field(default=None, repr=False, compare=False)
 
     def __bool__(self) -> bool:
@@ -77,6 +82,8 @@ class LocalizeResult:
             # Did the time budget cut the search (Tolerances.time_budget_ms)?
             "out_of_time": bool(self.stage1.get("out_of_time", False)),
         }
+        if self.pitch_deg is not None:  # only with a camera file that gives an attitude
+            d["pitch_deg"], d["roll_deg"] = float(self.pitch_deg), float(self.roll_deg)
         if self.candidates:
             d["candidates"] = [{k: (float(v) if k != "matches" else int(v)) for k, v in c.items()}
                                for c in self.candidates]

@@ -281,6 +281,69 @@ class Internals:
     slide_grid: int = 15
     slide_bisections: int = 8
 
+    # ---- the frame's own pitch and roll (matcher/attitude.py) ----------------
+    #: How many standard deviations of the camera file's pitch and roll the
+    #: estimate may stray (and lines that may be vertical edges are looked
+    #: for), and by how many of what the fit on the first run's matches
+    #: left the second run's tolerances widen: 2.5 keeps 99 % of a Gaussian
+    #: error in.
+    attitude_sigmas: float = 2.5
+    #: The first run's tolerances widen by this many of what the vertical
+    #: lines left (the pitch: nearly all of the file's standard deviation).
+    #: It needs only one hypothesis near the truth to fit the attitude on;
+    #: 2.5 widens a 1.5 degree pitch by 60 px and the search drowns (at PEQ
+    #: 3 a second per frame and half of them without a finite score), 1
+    #: found one in 18 of 20 frames at 0.2 s.
+    attitude_first_sigmas: float = 1.0
+    #: The fit on a hypothesis's matches counts when their mean squared
+    #: residual, in the lines' noise, is at most this: right ones gave 0.1
+    #: to 2.3 (PEQ 3, 20 frames), wrong ones mostly 5 to thousands.
+    attitude_fit_cost: float = 3.0
+    #: Two fitted attitudes closer than this, degrees, in pitch and roll
+    #: are one (one second run): a tenth of a degree moves the picture by
+    #: 1.6 px at f = 900, what the second run's widening covers.
+    attitude_same_deg: float = 0.1
+    #: Most second runs (attitudes tried), most matches first, then the
+    #: least residual: on 20 frames at PEQ 3 the right one was among the
+    #: first two.
+    attitude_second_runs: int = 3
+    #: The first runs cover the pitch the vertical lines leave in bands this
+    #: wide, degrees, one run each widened by half a band (0.5 degree: 8 px
+    #: at f = 900).
+    attitude_band_deg: float = 1.0
+    #: Each band's run is the interpretation tree alone (no second search,
+    #: no resection) with this node budget: it needs one set near the
+    #: truth among its best few, not the answer. 500 nodes and 10
+    #: hypotheses lost the true set at PEQ 3 to 5 in some frames (92 to
+    #: 94 % correct first on the benchmark).
+    attitude_band_nodes: int = 1000
+    #: ...and at most this many hypotheses for stage 2 (of which the best
+    #: ``attitude_fit_keep`` are fitted).
+    attitude_band_hypotheses: int = 25
+    #: A line's plane noise is a bound (``line_px``, ``line_deg``); as a
+    #: standard deviation it counts this share of it (a uniform error's is
+    #: 0.58 of its bound).
+    attitude_line_sigma: float = 0.6
+    #: Scale of the Cauchy weights of the vertical lines' residuals, in their
+    #: standard deviations: a horizontal line that nearly passes for a
+    #: vertical edge weighs little.
+    attitude_robust_c: float = 2.0
+    #: Iterations of the estimate from vertical lines (it converges in 3 to 5).
+    attitude_iterations: int = 10
+    #: The first run's best hypotheses that get the pose, pitch and roll
+    #: fitted on their matches (the one with most matches, then the least
+    #: residual, sets the attitude of the second run).
+    attitude_fit_keep: int = 5
+    #: Gauss-Newton iterations of that fit, and its step for the numerical
+    #: derivatives (radians and metres; far below the pose's noise).
+    attitude_fit_iterations: int = 8
+    attitude_fit_step: float = 1e-6
+    #: In lost mode the second run is a prior this narrow around the first
+    #: answer, metres and degrees: the first run's pose is off by what its
+    #: attitude was, a few centimetres and tenths of a degree.
+    attitude_again_m: float = 0.3
+    attitude_again_deg: float = 5.0
+
     # ---- time and work sizes -----------------------------------------------
     #: Share of the time budget the searches may use: the final tests of a
     #: few hundred sets found take up to about a third of the search's time.

@@ -115,3 +115,53 @@ def test_the_command_line_says_what_is_missing(tmp_path, capsys, extra, msg):
                           "--prior", ",".join(map(str, fr.prior)), "--dt", fr.dt, "--dyaw", fr.dyaw,
                           "--camera", DATA / "ros_camera_info.yaml")
     assert code == 2 and "pass --height-m" in out.err
+
+
+def test_camera_json_takes_roll_and_attitude_stds(tmp_path):
+    base = dict(width=640, height=480, fx=500.0, fy=500.0, cx=320.0, cy=240.0, height_m=1.0, pitch_deg=2.0)
+    p = tmp_path / "camera.json"
+    p.write_text(json.dumps(base))
+    cam = Camera.load(p)
+    assert (cam.roll_deg, cam.pitch_std_deg, cam.roll_std_deg) == (0.0, 0.0, 0.0) and not cam.attitude_free
+    assert cam.to_dict() == base  # a file without them writes back as it was
+    p.write_text(json.dumps({**base, "roll_deg": 1.5, "pitch_std_deg": 1.0, "roll_std_deg": 2.0}))
+    cam = Camera.load(p)
+    assert (cam.roll_deg, cam.pitch_std_deg, cam.roll_std_deg) == (1.5, 1.0, 2.0) and cam.attitude_free
+    assert Camera.from_dict(cam.to_dict()) == cam
+    assert Camera.load(p, roll_deg=-2.0).roll_deg == -2.0
+    # The roll turns the camera about its optical axis: a point right of the
+    # axis at the camera's height goes down in the picture (right side down).
+    level = Camera.from_dict(base | {"pitch_deg": 0.0})
+    rolled = Camera.from_dict(base | {"pitch_deg": 0.0, "roll_deg": 5.0})
+    uv0, _ = level.project(np.array([5.0, -1.0, 1.0]), 0.0, 0.0, 0.0)
+    uv1, _ = rolled.project(np.array([5.0, -1.0, 1.0]), 0.0, 0.0, 0.0)
+    assert uv0[1] == pytest.approx(240.0) and uv1[0] > 320.0 and uv1[1] < uv0[1]
+
+
+@pytest.mark.parametrize("field, value, msg", [
+    ("roll_deg", 60.0, r"camera roll_deg must be in \[-45, 45\]"),
+    ("roll_deg", "3", "camera roll_deg must be a number"),
+    ("pitch_std_deg", -1.0, r"camera pitch_std_deg must be in \[0, 10\]"),
+    ("roll_std_deg", 20.0, r"camera roll_std_deg must be in \[0, 10\]"),
+    ("roll_std_deg", float("nan"), "camera roll_std_deg must be finite"),
+])
+def test_bad_attitude_fields_are_one_line_errors(field, value, msg):
+    d = dict(width=640, height=480, fx=500.0, fy=500.0, cx=320.0, cy=240.0, height_m=1.0, pitch_deg=0.0)
+    with pytest.raises(CameraError, match=msg) as e:
+        Camera.from_dict({**d, field: value})
+    assert "\n" not in str(e.value)
+
+
+def test_calibration_files_carry_the_attitude_and_the_command_line_the_roll(tmp_path, capsys):
+    text = (DATA / "ros_camera_info.yaml").read_text() + "\nroll_deg: 1.5\npitch_std_deg: 1.0\nroll_std_deg: 2.0\n"
+    p = tmp_path / "ros.yaml"
+    p.write_text(text)
+    cam = Camera.load(p, height_m=1.2)
+    assert (cam.roll_deg, cam.pitch_std_deg, cam.roll_std_deg) == (1.5, 1.0, 2.0)
+    assert Camera.load(p, height_m=1.2, roll_deg=0.5).roll_deg == 0.5
+    from matcher.cli import _camera, build_parser
+
+    args = build_parser().parse_args(["localize", "--map", "m.lmap", "--camera-k", "457,457,320,240",
+                                      "--image-size", "640x480", "--height-m", "1.2", "--roll-deg", "2.5",
+                                      "--lines", "l.json", "--lost"])
+    assert _camera(args, Camera).roll_deg == 2.5

@@ -53,6 +53,21 @@ def is_correct(matches, truth_pairs, min_matches: int = 3, equivalent=None) -> b
     return len(s) >= min_matches and s <= ok
 
 
+def level_view(camera, frame):
+    """``(camera, frame)`` as the matcher sees them once the frame's own
+    pitch and roll are known: the nominal camera (the file's pitch, no
+    roll) and the frame's lines moved to it (:mod:`matcher.attitude`); the
+    camera and frame themselves for a level frame of an exact camera."""
+    from dataclasses import replace
+
+    from matcher import attitude
+
+    if frame.pitch_deg == camera.pitch_deg and frame.roll_deg == camera.roll_deg and not camera.attitude_free:
+        return camera, frame
+    att = attitude.Attitude(math.radians(frame.pitch_deg), math.radians(frame.roll_deg), 0.0, 0.0)
+    return attitude.nominal(camera), replace(frame, lines=attitude.rectify(camera, frame.lines, att))
+
+
 def indistinguishable(linemap, camera, frame) -> set:
     """Pairs (segment, line) that the image cannot tell from a true pair: the
     line lies on the segment's projection at the true pose (within the
@@ -89,7 +104,8 @@ def simulate_peq(linemap, camera, peq, args):
     frames = []
     for seed in args.seed:
         rng = np.random.default_rng([seed, peq])
-        frames += [make_frame(linemap, camera, rng, peq, args.noise_px, args.noise_deg, clutter=args.clutter)
+        frames += [make_frame(linemap, camera, rng, peq, args.noise_px, args.noise_deg, clutter=args.clutter,
+                              roll_deg=args.roll_deg, pitch_error_deg=args.pitch_error_deg)
                    for _ in range(args.poses)]
     return frames
 
@@ -120,7 +136,7 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
     for i, fr in enumerate(frames):
         res = results[i]
         truth = {tuple(m) for m in fr.true_matches()}
-        equiv = indistinguishable(linemap, camera, fr)
+        equiv = indistinguishable(linemap, *level_view(camera, fr))
         ranked = [(E, mm, p) for E, mm, p in res.ranked]
         first_ok = bool(ranked) and is_correct(ranked[0][1], truth, equivalent=equiv)
         first_strict = bool(ranked) and is_correct(ranked[0][1], truth)
@@ -151,6 +167,9 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
             "resection_ms": res.time_ms.get("resection"),
             "reason": res.reason,
         }
+        if res.pitch_deg is not None:  # the frame's attitude, estimated
+            row["pitch_err"] = abs(res.pitch_deg - fr.pitch_deg)
+            row["roll_err"] = abs(res.roll_deg - fr.roll_deg)
         if res:
             row["pos_err"], row["yaw_err"] = pose_error(res.pose, fr.pose)
             if row["correct_strict"] and res.pose_std is not None:
@@ -161,7 +180,8 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
                 row["err_over_std"] = [e / s for e, s in zip(err, res.pose_std)]
         if i < args.baseline_poses:
             t0 = time.perf_counter()
-            pose, bm, nodes, timed_out = baseline_localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw,
+            base_cam, base_fr = level_view(camera, fr)  # the baseline is given the frame's attitude
+            pose, bm, nodes, timed_out = baseline_localize(linemap, base_cam, base_fr.lines, fr.prior, fr.dt, fr.dyaw,
                                                            time_limit_s=args.baseline_limit)
             row["base_ms"] = (time.perf_counter() - t0) * 1e3
             row["base_timeout"] = timed_out
@@ -189,6 +209,8 @@ def summarise(rows):
         "tree_nodes_med": float(np.median(a("tree_nodes"))) if len(a("tree_nodes")) else None,
         "pos_err_med_cm": 100.0 * float(np.median(a("pos_err"))) if len(a("pos_err")) else None,
         "yaw_err_med_deg": float(np.median(a("yaw_err"))) if len(a("yaw_err")) else None,
+        "pitch_err_med_deg": float(np.median(a("pitch_err"))) if len(a("pitch_err")) else None,
+        "roll_err_med_deg": float(np.median(a("roll_err"))) if len(a("roll_err")) else None,
         "ms_med": float(np.median(a("ms"))),
         "ms_p95": float(np.percentile(a("ms"), 95)),
         # Frames that searched again for smaller sets, or resected poses
@@ -225,9 +247,11 @@ def _pct(v: float) -> str:
 def table(summary: dict) -> str:
     # "sets found": consistent sets stage 1 found before handing at most
     # max_hypotheses of them on ("hyp."): the count the paper's figure 5 shows.
+    attitude = any(s.get("pitch_err_med_deg") is not None for s in summary.values())
     head = ("| PEQ | sets found med / max | hyp. med / max | correct first (strict) | accepted | E correct / best false / best wrong pose (med) | "
-            "pose err (med) | ours ms med / p95 | baseline ms med / p95 (n, timeouts) | speed-up |")
-    lines = [head, "|" + "---|" * 10]
+            "pose err (med) | " + ("pitch / roll err (med) | " if attitude else "")
+            + "ours ms med / p95 | baseline ms med / p95 (n, timeouts) | speed-up |")
+    lines = [head, "|" + "---|" * (11 if attitude else 10)]
     for peq, s in summary.items():
         et = "-" if s["e_true_med"] is None else f"{s['e_true_med']:.2g}"
         ef = "-" if s["e_false_med"] is None else f"{s['e_false_med']:.2g}"
@@ -241,7 +265,9 @@ def table(summary: dict) -> str:
         sets = "-" if s["sets_found_max"] is None else f"{s['sets_found_med']:.0f} / {s['sets_found_max']}"
         lines.append(
             f"| {peq} | {sets} | {s['hyp_med']:.0f} / {s['hyp_max']} | {_pct(s['first_correct_pct'])} ({_pct(s['first_correct_strict_pct'])})"
-            f" | {_pct(s['accepted_pct'])} | {et} / {ef} / {ew} | {pe} | {s['ms_med']:.1f} / {s['ms_p95']:.1f} | {base} | {sp} |"
+            f" | {_pct(s['accepted_pct'])} | {et} / {ef} / {ew} | {pe} | "
+            + (f"{s['pitch_err_med_deg']:.2f} / {s['roll_err_med_deg']:.2f} deg | " if attitude else "")
+            + f"{s['ms_med']:.1f} / {s['ms_p95']:.1f} | {base} | {sp} |"
         )
     return "\n".join(lines)
 
@@ -316,6 +342,14 @@ def main(argv=None) -> int:
     ap.add_argument("--clutter", type=int, default=3, help="random lines added per frame")
     ap.add_argument("--height", type=float, default=1.2, help="camera height, metres")
     ap.add_argument("--pitch", type=float, default=0.0, help="camera pitch, degrees (down positive)")
+    ap.add_argument("--roll-deg", type=float, default=0.0,
+                    help="frames rolled by up to this, degrees (drawn uniformly within +-; default 0: level)")
+    ap.add_argument("--pitch-error-deg", type=float, default=0.0,
+                    help="frames' pitch off the camera file's by up to this, degrees (uniform within +-)")
+    ap.add_argument("--pitch-std-deg", type=float, help="the camera file's pitch_std_deg (default: 0 for level "
+                    "frames, else 0.75 times --pitch-error-deg)")
+    ap.add_argument("--roll-std-deg", type=float, help="the camera file's roll_std_deg (default: 0 for level "
+                    "frames, else 0.67 times --roll-deg)")
     ap.add_argument("--repeat", type=int, default=5, help="timing: best of this many runs per frame")
     ap.add_argument("--baseline-poses", type=int, default=20, help="frames per PEQ also run by the baseline")
     ap.add_argument("--baseline-limit", type=float, default=2.0, help="baseline time limit per frame, seconds")
@@ -344,6 +378,13 @@ def main(argv=None) -> int:
     if args.seed != [0]:  # the documented figures are seed 0's
         tag += "_seed" + "-".join(str(s) for s in args.seed)
     camera = paper_camera(args.height, args.pitch)
+    stds = {}
+    if args.roll_deg or args.pitch_error_deg or args.pitch_std_deg or args.roll_std_deg:
+        from dataclasses import replace
+
+        stds = dict(pitch_std_deg=args.pitch_std_deg if args.pitch_std_deg is not None else 0.75 * args.pitch_error_deg,
+                    roll_std_deg=args.roll_std_deg if args.roll_std_deg is not None else 0.67 * args.roll_deg)
+        camera = replace(camera, **stds)
     matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
     # Our latency first, every PEQ, before any check or baseline run: the
     # baseline's seconds per frame would otherwise run between timed frames.
@@ -360,7 +401,10 @@ def main(argv=None) -> int:
     figures = plot(all_rows, summary, out, matcher.Tolerances().e_accept, tag)
     print(f"map {map_name}: {linemap.n_segments} segments, {linemap.n_regions} regions")
     print(f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
-          f"{args.noise_deg} deg; {args.clutter} clutter lines; {args.poses * len(args.seed)} poses per PEQ; "
+          f"{args.noise_deg} deg; {args.clutter} clutter lines; "
+          + (f"roll within +-{args.roll_deg:g} deg, pitch error within +-{args.pitch_error_deg:g} deg, camera file "
+             f"pitch_std_deg {stds['pitch_std_deg']:g}, roll_std_deg {stds['roll_std_deg']:g}; " if stds else "")
+          + f"{args.poses * len(args.seed)} poses per PEQ; "
           f"seed{'s' if len(args.seed) > 1 else ''} {seeds}; "
           f"{platform.python_version()} on {platform.machine()}")
     print(table(summary))

@@ -17,7 +17,7 @@ import argparse
 import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +50,10 @@ class Frame:
     dyaw: float
     lines: np.ndarray
     truth: np.ndarray
+    #: The frame's own pitch and roll, degrees (the camera file's unless
+    #: :func:`make_frame` drew them).
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
 
     def true_matches(self) -> list[list[int]]:
         return sorted([int(s), j] for j, s in enumerate(self.truth) if s >= 0)
@@ -205,13 +209,24 @@ def random_free_pose(linemap, rng, margin: float = 0.0):
 
 
 def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, noise_deg: float = 1.0,
-               end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int = 9) -> Frame:
+               end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int = 9,
+               roll_deg: float = 0.0, pitch_error_deg: float = 0.0) -> Frame:
     """A frame of the paper's protocol: a pose seeing ``min_seen`` to ``max_seen``
-    segments (redrawn otherwise), noisy lines, clutter, a prior within PEQ bounds."""
+    segments (redrawn otherwise), noisy lines, clutter, a prior within PEQ bounds.
+
+    ``roll_deg``, ``pitch_error_deg``: the frame's camera is rolled and its
+    pitch off the camera file's by amounts drawn uniformly within these
+    bounds, degrees (a camera not mounted exactly, a robot that rocks); with
+    both 0 nothing is drawn (the frames are those of a level camera)."""
     dt, dyaw = PEQ[peq]
+    real = camera
+    if roll_deg or pitch_error_deg:
+        roll = camera.roll_deg + float(rng.uniform(-roll_deg, roll_deg))
+        pitch = camera.pitch_deg + float(rng.uniform(-pitch_error_deg, pitch_error_deg))
+        real = replace(camera, roll_deg=roll, pitch_deg=pitch)
     while True:
         pose = random_free_pose(linemap, rng)
-        ideal, ids = visible_lines(linemap, camera, pose)
+        ideal, ids = visible_lines(linemap, real, pose)
         if min_seen <= len(ids) <= max_seen:
             break
     noisy = add_noise(ideal, rng, noise_px, noise_deg, end_px, camera)
@@ -223,7 +238,7 @@ def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, no
     phi = rng.uniform(0, 2 * math.pi)
     prior = (pose[0] + r * math.cos(phi), pose[1] + r * math.sin(phi),
              float(math.degrees(wrap(math.radians(pose[2] + rng.uniform(-dyaw, dyaw))))))
-    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm])
+    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm], real.pitch_deg, real.roll_deg)
 
 
 def pose_error(a, b) -> tuple[float, float]:
@@ -330,6 +345,11 @@ def main(argv=None) -> int:
     ap.add_argument("--noise-px", type=float, default=1.0)
     ap.add_argument("--noise-deg", type=float, default=1.0)
     ap.add_argument("--clutter", type=int, default=3)
+    ap.add_argument("--roll-deg", type=float, default=0.0,
+                    help="the frame's camera rolled by up to this, degrees (drawn uniformly within +-)")
+    ap.add_argument("--pitch-error-deg", type=float, default=0.0,
+                    help="the frame's pitch off the camera file's by up to this, degrees (uniform within +-); "
+                         "with either, camera.json says pitch_std_deg and roll_std_deg of those bounds")
     ap.add_argument("--out", metavar="DIR",
                     help="write camera.json, lines.json, truth.json and frame.png (the view rendered by "
                          "tools/render.py) there, for 'matcher localize'")
@@ -339,7 +359,10 @@ def main(argv=None) -> int:
     m = matcher.load_map(args.map)
     cam = paper_camera()
     fr = make_frame(m, cam, np.random.default_rng(args.seed), args.peq, args.noise_px, args.noise_deg,
-                    clutter=args.clutter)
+                    clutter=args.clutter, roll_deg=args.roll_deg, pitch_error_deg=args.pitch_error_deg)
+    if args.roll_deg or args.pitch_error_deg:  # the camera file knows the bounds, not the frame's attitude
+        cam = replace(cam, pitch_std_deg=0.75 * args.pitch_error_deg, roll_std_deg=0.67 * args.roll_deg)
+        print(f"frame's pitch {fr.pitch_deg:.2f} deg, roll {fr.roll_deg:.2f} deg")
     x, y, yaw = fr.prior
     print(f"true pose {tuple(round(v, 3) for v in fr.pose)}; prior ({x:.2f}, {y:.2f}, {yaw:.1f}), "
           f"dt {fr.dt} m, dyaw {fr.dyaw} deg; {len(fr.lines)} lines")
@@ -351,13 +374,15 @@ def main(argv=None) -> int:
         (out / "camera.json").write_text(json.dumps(cam.to_dict()))
         (out / "lines.json").write_text(json.dumps({"lines": fr.lines.reshape(-1, 4).round(2).tolist()}))
         truth = {"pose": {"x": fr.pose[0], "y": fr.pose[1], "yaw_deg": fr.pose[2]},
+                 "pitch_deg": fr.pitch_deg, "roll_deg": fr.roll_deg,
                  "prior": list(fr.prior), "dt": fr.dt, "dyaw": fr.dyaw, "matches": fr.true_matches()}
         (out / "truth.json").write_text(json.dumps(truth))
         # The same view as an image (walls, floor and ceiling shaded), for --image.
         import cv2
         from render import render_view
 
-        cv2.imwrite(str(out / "frame.png"), render_view(m, cam, fr.pose, rng=np.random.default_rng(args.seed)))
+        real = replace(cam, pitch_deg=fr.pitch_deg, roll_deg=fr.roll_deg, pitch_std_deg=0.0, roll_std_deg=0.0)
+        cv2.imwrite(str(out / "frame.png"), render_view(m, real, fr.pose, rng=np.random.default_rng(args.seed)))
         print(f"wrote {out}/camera.json, lines.json, truth.json, frame.png; try:")
         import os
 

@@ -125,9 +125,10 @@ class BagFrames:
         rows.sort(key=lambda r: r[0])
         return [r[0] for r in rows], [r[1] for r in rows]
 
-    def camera(self, height_m: float | None, pitch_deg: float | None):
+    def camera(self, height_m: float | None, pitch_deg: float | None, roll_deg: float | None = None):
         """The camera of the intrinsics topic with the mounting the bag
-        cannot hold: ``height_m`` above the floor, ``pitch_deg`` down."""
+        cannot hold: ``height_m`` above the floor, ``pitch_deg`` down,
+        ``roll_deg`` the right side down."""
         from linemap.camera_files import camera_from_k
 
         if self.camera_info is None:
@@ -135,7 +136,7 @@ class BagFrames:
         if height_m is None:
             raise BagError("a camera from the bag's camera_info needs --height-m (metres above the floor)")
         i = self.camera_info
-        return camera_from_k(i["k"], i["size"], height_m, pitch_deg or 0.0, i["distortion"])
+        return camera_from_k(i["k"], i["size"], height_m, pitch_deg or 0.0, i["distortion"], roll_deg=roll_deg)
 
     def _read_info(self) -> dict:
         for _, _, msg, _ in self._messages(self._info):
