@@ -229,6 +229,13 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
     t0 = time.perf_counter()
     arr = check_lines(lines, camera, tol)
     nom = nominal(camera)
+
+    def left(t: Tolerances) -> Tolerances | None:
+        """``t`` with the time the call's budget has left (every run counts
+        against the one ``time_budget_ms``), or None when none is left."""
+        ms = tol.time_budget_ms - (time.perf_counter() - t0) * 1e3
+        return replace(t, time_budget_ms=ms) if ms > 0 else None
+
     est = from_verticals(camera, arr, tol)
     if not camera.attitude_free:
         return _carrying(run(nom, rectify(camera, arr, est), tol, None), est, t0)
@@ -244,6 +251,11 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
         att = replace(est, pitch=est.pitch + k * band, pitch_std=0.5 * band)
         wide = replace(widened(tol, camera, att, 1.0), max_nodes=min(tol.max_nodes, work.attitude_band_nodes),
                        max_hypotheses=min(tol.max_hypotheses, work.attitude_band_hypotheses))
+        if left(wide) is None and first is not None:  # the budget is spent: the bands run so far stand
+            break
+        # (The first band runs whatever is left, as the strategy's first
+        # source does: with none, it ends not localised, saying so.)
+        wide = left(wide) or replace(wide, time_budget_ms=0.0)
         res = run(nom, rectify(camera, arr, att), wide, None, True)
         first = res if first is None else first
         fits += _fits(camera, arr, segments, res, att, est, tol)
@@ -260,14 +272,19 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
         # Widened by what the fit left, at most half a band (matches that
         # leave the pitch loose, vertical edges alone, came from a band).
         cap = 0.5 * band / work.attitude_sigmas
-        left = replace(att, pitch_std=min(att.pitch_std, cap), roll_std=min(att.roll_std, cap))
-        res = run(nom, rectify(camera, arr, att), widened(tol, camera, left, work.attitude_sigmas), near)
+        loose = replace(att, pitch_std=min(att.pitch_std, cap), roll_std=min(att.roll_std, cap))
+        budgeted = left(widened(tol, camera, loose, work.attitude_sigmas))
+        if budgeted is None:  # the budget is spent: the runs so far stand
+            break
+        res = run(nom, rectify(camera, arr, att), budgeted, near)
         if res:
             pose = (res.pose[0], res.pose[1], math.radians(res.pose[2]))
             att = fit_on_matches(camera, arr, segments, res.matches, pose, att, est, tol)[1]
         rank = (bool(res), len(res.matches), -(res.score if res.score is not None else math.inf))
         if best is None or rank > best[0]:
             best = (rank, res, att)
+    if best is None:  # the budget was spent before any second run
+        return _carrying(first, est, t0)
     return _carrying(best[1], best[2], t0)
 
 

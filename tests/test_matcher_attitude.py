@@ -94,3 +94,28 @@ def test_a_camera_without_the_new_fields_takes_the_old_path(flat, monkeypatch):
     fr = _frames(flat, 1, 1, 0, roll=0.0, pitch_error=0.0)[0]
     res = matcher.localize(flat, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
     assert res and res.pitch_deg is None and "pitch_deg" not in res.to_dict() and "roll_deg" not in res.to_dict()
+
+
+def test_one_time_budget_bounds_the_whole_call(flat, monkeypatch):
+    """The bands and second runs of an uncertain attitude share the call's
+    one budget: with none left after the first band, no other run starts,
+    and the first ends not localised, saying why."""
+    cam = replace(paper_camera(), pitch_std_deg=1.5, roll_std_deg=2.0)
+    fr = _frames(flat, 1, 1, 5)[0]
+    runs = []
+    real_run = matcher.from_prior.localize_lines
+
+    def counted(*args, **kwargs):
+        runs.append(args[6].time_budget_ms)
+        return real_run(*args, **kwargs)
+
+    monkeypatch.setattr(matcher.from_prior, "localize_lines", counted)
+    tol = replace(matcher.Tolerances(), time_budget_ms=0.0)
+    res = matcher.localize(flat, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, tolerances=tol)
+    assert not res and "time budget" in res.reason
+    assert runs == [0.0]
+    # With a budget, every run gets what the call has left.
+    runs.clear()
+    matcher.localize(flat, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
+    assert len(runs) >= 2 and all(b <= DEFAULT.time_budget_ms for b in runs)
+    assert all(later < earlier for earlier, later in zip(runs, runs[1:]))
