@@ -59,7 +59,9 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
             f"{path}: nothing of the model stands at camera height {z:.3g} m; check --up, --units or --camera-height"
         )
     low = [sections.cut(h)[0] for h in MESH_OBSTACLE_HEIGHTS if h < top]
-    obstacles = as_multipolygon(shapely.difference(shapely.union_all(low), walls)) if low else MultiPolygon()
+    obstacles = (_outline(path, "the plan of the obstacles below camera height",
+                          lambda: as_multipolygon(shapely.difference(shapely.union_all(low), walls)))
+                 if low else MultiPolygon())
 
     if info["floor_faces"]:
         area = floor_area(mesh)
@@ -69,12 +71,7 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
             raise MapkitError(
                 f"{path}: the mesh has no floor and its walls enclose no room; add a floor surface or close the walls"
             )
-    try:
-        free = shapely.difference(area, shapely.union_all([walls, obstacles]))
-    except shapely.errors.GEOSException as exc:  # as in MeshSections.section: faces crossing each other
-        reason = str(exc).split(". ")[0][:100]
-        raise MapkitError(f"{path}: the floor less the walls is not a valid outline ({reason}): the mesh's faces "
-                          "cross each other; repair the model or export it again") from None
+    free = _outline(path, "the floor less the walls", lambda: shapely.difference(area, shapely.union_all([walls, obstacles])))
     if options.robot_radius > 0:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in as_multipolygon(free).geoms if p.area >= MIN_FREE_AREA])
@@ -127,3 +124,15 @@ def enclosed_rooms(sections: MeshSections, mesh, top: float, z_camera: float) ->
     if rooms.is_empty:
         return MultiPolygon()
     return as_multipolygon(shapely.union_all([rooms] + [w for w, _ in cuts]))
+
+
+def _outline(path, what: str, make):
+    """``make()``, GEOS work on the mesh's sections; as in
+    MeshSections.section, faces crossing each other can make GEOS fail
+    (a TopologyException), which becomes one line naming ``what``."""
+    try:
+        return make()
+    except shapely.errors.GEOSException as exc:
+        reason = str(exc).split(". ")[0][:100]
+        raise MapkitError(f"{path}: {what} is not a valid outline ({reason}): the mesh's faces cross each other; "
+                          "repair the model or export it again") from None
