@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Crafted maps against the loader: the error, the time and the peak memory
+of each refusal (tracemalloc, which sees numpy's buffers), against the
+file's size. The promise: a one-line LmapError, peak memory under 10 times
+the file's size (tests/test_lmap_hostile.py asserts it, plus 16 MB for the
+interpreter's own allocations).
+
+    python tools/bench_lmap_hostile.py
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from crafted_maps import CASES, example_chunks  # noqa: E402
+
+from linemap.lmap import LmapError, decode  # noqa: E402
+
+
+def main() -> int:
+    chunks = example_chunks()
+    print("| crafted map | file KiB | refused | ms | peak KiB | peak / file |")
+    print("|---|---|---|---|---|---|")
+    bad = 0
+    for name, make, match in CASES:
+        blob = make(chunks)
+        tracemalloc.start()
+        t = time.perf_counter()
+        try:
+            decode(blob, "crafted.lmap")
+            refused = "NOT REFUSED"
+        except LmapError as exc:
+            refused = "yes" if re.search(match, str(exc)) and "\n" not in str(exc) else f"other: {exc}"
+        ms = (time.perf_counter() - t) * 1e3
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        bad += refused != "yes"
+        print(f"| {name} | {len(blob) / 1024:.1f} | {refused} | {ms:.1f} | {peak / 1024:.0f} | {peak / len(blob):.2f} |")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
