@@ -29,11 +29,13 @@ is one homography (or none: the lines are the caller's, unchanged).
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from linemap.camera import Camera, world2cam_rotation
+from matcher.checks import check_lines
 from matcher.stage1.constraints import plane_noises
 from matcher.tolerances import Tolerances
 
@@ -114,7 +116,7 @@ def from_verticals(camera: Camera, lines: np.ndarray, tol: Tolerances) -> Attitu
     cand = long_ & (np.abs(n @ v0) <= eps + reach)
     x = np.array([prior.pitch, prior.roll])
     A = np.diag([1.0 / sp_**2, 1.0 / sr_**2])
-    for it in range(work.attitude_iterations):
+    for _ in range(work.attitude_iterations):
         v, dp, dr = _vertical_in_camera(*x)
         r = (n[cand] @ v) / sigma[cand]
         J = np.stack([n[cand] @ dp, n[cand] @ dr], axis=1) / sigma[cand, None]
@@ -211,21 +213,18 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
     ``(x, y, yaw_deg, dt, dyaw)``, a narrow prior around a first answer);
     ``run(..., quick=True)`` with the interpretation tree alone.
 
-    Exact attitude: one homography, one run. Otherwise a first run on the
-    lines moved with :func:`from_verticals`'s attitude and the tolerances
-    :func:`widened` by ``attitude_first_sigmas`` of what it left (again a
-    band of pitch higher, then lower, while no hypothesis fits); the pose,
-    pitch and roll fitted on the matches of its best few hypotheses, one
-    per attitude among those whose residuals fit; for each, the lines moved
-    with it and run again with the tolerances widened by
-    ``attitude_sigmas`` of what its fit left (``lost``: around its pose);
-    the run accepted with most matches, then the least E, stands. The
-    result carries the attitude (``pitch_deg``, ``roll_deg``), refitted on
-    its own matches when it has a pose."""
-    import time
-
-    from matcher.checks import check_lines
-
+    Exact attitude: one homography, one run. Otherwise quick runs over
+    bands of pitch ``attitude_band_deg`` wide around
+    :func:`from_verticals`' estimate (nearest first), each on the lines
+    moved with its band's middle and the tolerances :func:`widened` by half
+    a band; the pose, pitch and roll fitted on the matches of each run's
+    best few hypotheses, one per attitude among those whose residuals fit;
+    for at most ``attitude_second_runs`` of them, the lines moved with it
+    and run again with the tolerances widened by ``attitude_sigmas`` of what
+    its fit left (``lost``: around its pose); the run accepted with most
+    matches, then the least E, stands. Every run counts against the call's
+    one ``time_budget_ms``. The result carries the attitude (``pitch_deg``,
+    ``roll_deg``), refitted on its own matches when it has a pose."""
     t0 = time.perf_counter()
     arr = check_lines(lines, camera, tol)
     nom = nominal(camera)
@@ -251,15 +250,17 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
         att = replace(est, pitch=est.pitch + k * band, pitch_std=0.5 * band)
         wide = replace(widened(tol, camera, att, 1.0), max_nodes=min(tol.max_nodes, work.attitude_band_nodes),
                        max_hypotheses=min(tol.max_hypotheses, work.attitude_band_hypotheses))
-        if left(wide) is None and first is not None:  # the budget is spent: the bands run so far stand
-            break
-        # (The first band runs whatever is left, as the strategy's first
-        # source does: with none, it ends not localised, saying so.)
-        wide = left(wide) or replace(wide, time_budget_ms=0.0)
-        res = run(nom, rectify(camera, arr, att), wide, None, True)
+        budgeted = left(wide)
+        if budgeted is None:
+            if first is not None:  # the budget is spent: the bands run so far stand
+                break
+            # The first band runs whatever is left, as the strategy's first
+            # source does: with none, it ends not localised, saying so.
+            budgeted = replace(wide, time_budget_ms=0.0)
+        res = run(nom, rectify(camera, arr, att), budgeted, None, True)
         first = res if first is None else first
         fits += _fits(camera, arr, segments, res, att, est, tol)
-    fits = _distinct(sorted(fits, key=lambda f: f[:3]), work.attitude_same_deg)[: work.attitude_second_runs]
+    fits = _distinct(sorted(fits, key=lambda f: f[:2]), work.attitude_same_deg)[: work.attitude_second_runs]
     if not fits:
         return _carrying(first, est, t0)
     # Then each attitude the fits give (a wrong set can fit too, with an
@@ -301,7 +302,7 @@ def _fits(camera: Camera, arr: np.ndarray, segments: np.ndarray, res, att: Attit
         p, fit, cost = fit_on_matches(camera, arr, segments, matches, (pose[0], pose[1], math.radians(pose[2])),
                                       att, prior, tol)
         if cost <= work.attitude_fit_cost:
-            fits.append((-len(matches), cost, 0, fit, p))
+            fits.append((-len(matches), cost, fit, p))
     return fits
 
 
@@ -309,15 +310,13 @@ def _distinct(fits: list, same_deg: float) -> list:
     """``fits`` less those within ``same_deg`` in pitch and roll of one before."""
     out, same = [], math.radians(same_deg)
     for f in fits:
-        if all(abs(f[3].pitch - g[3].pitch) > same or abs(f[3].roll - g[3].roll) > same for g in out):
+        if all(abs(f[2].pitch - g[2].pitch) > same or abs(f[2].roll - g[2].roll) > same for g in out):
             out.append(f)
     return out
 
 
 def _carrying(res, att: Attitude, t0: float):
     """``res`` with the frame's attitude, degrees, and the whole call's time."""
-    import time
-
     res.pitch_deg, res.roll_deg = math.degrees(att.pitch), math.degrees(att.roll)
     res.time_ms["total"] = (time.perf_counter() - t0) * 1e3
     return res

@@ -27,7 +27,8 @@ class ImageLines:
     offset noise); ``mid_rays`` (M, 3) unit rays of the midpoints; ``vertical`` (M,) bool vertical
     candidates; ``alpha`` (M,) bearings of vertical candidates, radians, to
     the right; ``alpha_eps`` (M,) their noise bound; ``usable`` (M,) bool long
-    enough to use; ``pieces`` (M, M) bool, couples that may be pieces of one
+    enough to use; ``searched`` (M,) bool the longest usable ones, those
+    stage 1 searches with (:func:`searched_lines`); ``pieces`` (M, M) bool, couples that may be pieces of one
     broken line (:func:`~matcher.stage1.constraints.line_pieces`), or None: none."""
 
     lines: np.ndarray
@@ -40,12 +41,8 @@ class ImageLines:
     eps_rot: np.ndarray
     eps_off: np.ndarray
     mid_rays: np.ndarray
+    searched: np.ndarray
     pieces: np.ndarray | None = None
-    searched: np.ndarray | None = None
-
-    def __post_init__(self) -> None:
-        if self.searched is None:
-            self.searched = self.usable
 
 
 def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLines:
@@ -62,27 +59,30 @@ def prepare_lines(camera: Camera, lines: np.ndarray, tol: Tolerances) -> ImageLi
     mid = camera.pixel_rays(0.5 * (und[:, 0] + und[:, 1]))
     mid /= np.linalg.norm(mid, axis=1, keepdims=True)
     pieces = line_pieces(und, normals, eps, 2.0 * tol.line_end_px)
-    return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid, pieces,
-                      searched=searched_lines(und, usable, vert, tol))
+    return ImageLines(und, normals, eps, vert, alpha, alpha_eps, usable, eps_rot, eps_off, mid,
+                      searched_lines(und, usable, vert, tol), pieces)
 
 
 def searched_lines(lines: np.ndarray, usable: np.ndarray, vertical: np.ndarray, tol: Tolerances) -> np.ndarray:
     """(M,) bool: the lines stage 1 searches with: the longest
     ``search_lines`` of the ``usable`` ones, at most ``search_vertical_lines``
     of them vertical candidates (``vertical`` (M,) bool)."""
-    vert = longest(lines, usable & vertical, tol.search_vertical_lines)
-    return longest(lines, (usable & ~vertical) | vert, tol.search_lines)
-
-
-def longest(lines: np.ndarray, usable: np.ndarray, k: int) -> np.ndarray:
-    """(M,) bool: the ``k`` longest of the ``usable`` (M,) lines (M, 2, 2)
-    (all of them when there are no more)."""
-    if usable.sum() <= k:
-        return usable.copy()
-    length = np.where(usable, np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1), -1.0)
+    pool = usable & ~vertical
+    pool[longest(lines, usable & vertical, tol.search_vertical_lines)] = True
     out = np.zeros(len(lines), dtype=bool)
-    out[np.argsort(-length, kind="stable")[:k]] = True
+    out[longest(lines, pool, tol.search_lines)] = True
     return out
+
+
+def longest(lines: np.ndarray, mask: np.ndarray, count: int) -> np.ndarray:
+    """Indices, ascending, of the ``count`` longest lines (M, 2, 2) among
+    ``mask`` (M,) bool (all of them when there are no more): long lines
+    are the surest."""
+    idx = np.flatnonzero(mask)
+    if len(idx) <= count:
+        return idx
+    length = np.linalg.norm(lines[idx, 1] - lines[idx, 0], axis=1)
+    return np.sort(idx[np.argsort(-length, kind="stable")[:count]])
 
 
 def lines_needed(img: ImageLines, tol: Tolerances) -> int:

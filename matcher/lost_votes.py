@@ -25,7 +25,7 @@ import numpy as np
 
 from linemap.camera import Camera
 from linemap.geometry import segment_is_vertical, world_normals
-from matcher.frame import ImageLines
+from matcher.frame import ImageLines, longest
 from matcher.map_index import MapIndex
 from matcher.tolerances import Internals
 
@@ -68,7 +68,7 @@ def sightings(linemap, camera: Camera, img: ImageLines, work: Internals) -> Sigh
     horiz = ~segment_is_vertical(segs, work.vertical_axis_deg)
     flat = np.abs(segs[:, 1, 2] - segs[:, 0, 2]) <= work.vote_flat_m
     sid = np.flatnonzero(horiz & flat)
-    lid = _longest(img, img.usable & ~img.vertical, work.vote_lines)
+    lid = longest(img.lines, img.usable & ~img.vertical, work.vote_lines)
     if len(sid) == 0 or len(lid) == 0:
         return _no_sightings()
     # End points of each line on the plane z = segment height, camera frame
@@ -153,7 +153,7 @@ def edge_meetings(linemap, img: ImageLines, s: Sightings, work: Internals) -> np
     the sighting's heading (in front of the edge, within the stretch)."""
     segs = linemap.segments
     vid = np.flatnonzero(segment_is_vertical(segs, work.vertical_axis_deg))
-    lid = _longest(img, img.usable & img.vertical, work.vote_lines)
+    lid = longest(img.lines, img.usable & img.vertical, work.vote_lines)
     if len(vid) == 0 or len(lid) == 0 or len(s.yaw) == 0:
         return np.zeros((0, 5))
     edge = segs[vid, 0, :2]  # (E, 2)
@@ -172,16 +172,6 @@ def edge_meetings(linemap, img: ImageLines, s: Sightings, work: Internals) -> np
         c = s.base[k[kk]] + a[kk, ee, None] * s.u[k[kk]]
         out.append(np.column_stack([c, s.yaw[k[kk]], s.line[k[kk]], np.full(len(kk), li)]))
     return np.concatenate(out) if out else np.zeros((0, 5))
-
-
-def _longest(img: ImageLines, mask: np.ndarray, count: int) -> np.ndarray:
-    """Indices of the ``count`` longest lines of ``mask`` (M,): long lines
-    are the surest, and the votes' cost grows with the lines' product."""
-    idx = np.flatnonzero(mask)
-    if len(idx) <= count:
-        return idx
-    length = np.linalg.norm(img.lines[idx, 1] - img.lines[idx, 0], axis=1)
-    return np.sort(idx[np.argsort(-length, kind="stable")[:count]])
 
 
 def _peaks(votes: np.ndarray, work: Internals, count: int) -> np.ndarray:

@@ -288,13 +288,6 @@ class Internals:
     #: left the second run's tolerances widen: 2.5 keeps 99 % of a Gaussian
     #: error in.
     attitude_sigmas: float = 2.5
-    #: The first run's tolerances widen by this many of what the vertical
-    #: lines left (the pitch: nearly all of the file's standard deviation).
-    #: It needs only one hypothesis near the truth to fit the attitude on;
-    #: 2.5 widens a 1.5 degree pitch by 60 px and the search drowns (at PEQ
-    #: 3 a second per frame and half of them without a finite score), 1
-    #: found one in 18 of 20 frames at 0.2 s.
-    attitude_first_sigmas: float = 1.0
     #: The fit on a hypothesis's matches counts when their mean squared
     #: residual, in the lines' noise, is at most this: right ones gave 0.1
     #: to 2.3 (PEQ 3, 20 frames), wrong ones mostly 5 to thousands.
