@@ -1,18 +1,15 @@
-"""tools/bench_paper.py, tools/bench_images.py and tools/bench_budget.py
-end to end on a few frames: the tables, the JSON rows and the figures (the
-full runs are the README's and docs/matcher.md's benchmarks)."""
+"""tools/bench_paper.py, tools/bench_images.py, tools/bench_budget.py and
+tools/bench_build.py end to end on a few frames: the tables, the JSON rows,
+the figures and the --report files (the full runs are the README's and
+docs/matcher.md's benchmarks)."""
 
 from __future__ import annotations
 
 import json
-import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-import bench_budget  # noqa: E402
-import bench_images  # noqa: E402
-import bench_paper  # noqa: E402
+import bench_budget
+import bench_images
+import bench_paper
 
 
 def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
@@ -79,8 +76,8 @@ def test_bench_build_prints_a_row_with_peak_memory(capsys):
 
     assert bench_build.main(["simple_room", "--load-repeats", "1"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0].split(" | ")[0].strip() == "input" and "peak MB" in lines[0]
-    row = [c.strip() for c in lines[2].split("|")]
+    assert lines[0].startswith("| input | ") and "peak MB" in lines[0]
+    row = [c.strip() for c in lines[2].strip("|").split("|")]
     assert row[0] == "simple_room.glb" and float(row[8]) > 10  # a child's peak memory, MB
     assert row[9] == "40" and row[10] == "3"  # segments, regions
 
@@ -91,3 +88,19 @@ def test_bench_build_writes_the_generated_offices(tmp_path):
     path = bench_build.case_path("office_grid:2", tmp_path)
     assert path.exists() and path.suffix == ".dxf"
     assert bench_build.case_path("open_office", tmp_path).exists()
+
+
+def test_report_writes_the_table_under_command_commit_and_machine(tmp_path, capsys):
+    report = tmp_path / "budget.md"
+    assert bench_budget.main(["--poses", "1", "--peq", "2", "--budgets", "0", "--report", str(report)]) == 0
+    printed = capsys.readouterr().out
+    text = report.read_text()
+    assert text.startswith("Command: `python tools/bench_budget.py --poses 1 --peq 2 --budgets 0 --report ")
+    assert "\nCommit: " in text and "CPUs (" in text and "load average" in text
+    assert text.endswith(printed)  # the table as printed, below the header
+
+
+def test_report_to_a_missing_folder_is_one_line_before_the_run(tmp_path, capsys):
+    assert bench_budget.main(["--poses", "1", "--report", str(tmp_path / "no" / "t.md")]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and err.startswith("error: --report ")

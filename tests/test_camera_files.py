@@ -4,7 +4,6 @@ cv::FileStorage writes them), ROS camera_info YAML, a K on the command line."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -62,8 +61,7 @@ def test_what_is_missing_or_wrong_is_one_clear_error(tmp_path):
 
 
 def _frame_files(tmp_path):
-    sys.path.insert(0, str(ROOT / "tools"))
-    from simulate import make_frame
+    from mapkit_harness.simulate import make_frame
 
     linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
     cam = Camera.from_dict(dict(width=640, height=480, fx=457.0, fy=457.0, cx=320.0, cy=240.0, height_m=1.2,

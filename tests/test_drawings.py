@@ -1,5 +1,5 @@
 """Plans drawn as architects draw them (issue 27), written here with ezdxf by
-tools/synthetic_plans.py: each builds with defaults, its doors are found,
+mapkit_harness/plans/drawings.py: each builds with defaults, its doors are found,
 and its free space is the known answer, inside the building only.
 
 Classes: an open-plan office with AIA numbered layer names, facade pieces
@@ -23,7 +23,7 @@ from mapkit.importers import load_scene
 from mapkit.importers.dxf.layer_roles import explain_role
 from mapkit.options import BuildOptions
 from mapkit.pipeline import build_map
-from synthetic_plans import (
+from mapkit_harness.plans.drawings import (
     DOORS,
     FURNITURE,
     PARTITIONS,

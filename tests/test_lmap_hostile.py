@@ -1,4 +1,4 @@
-"""Crafted maps: valid checksums, hostile contents (tools/crafted_maps.py).
+"""Crafted maps: valid checksums, hostile contents (mapkit_harness/crafted_maps.py).
 A robot loads maps it is sent, and the CRCs catch accidents, not intent:
 each case ends in a one-line LmapError, quickly and without allocating far
 beyond the file's size (peak memory measured with tracemalloc, which sees
@@ -6,19 +6,15 @@ numpy's buffers; tools/bench_lmap_hostile.py prints it)."""
 
 from __future__ import annotations
 
-import sys
 import tracemalloc
-from pathlib import Path
 
 import pytest
 
 from linemap.lmap import LmapError, decode
 from linemap.lmap import write_chunks as _write_chunks
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tools"))
 
-from crafted_maps import CASES, example_chunks  # noqa: E402
+from mapkit_harness.crafted_maps import CASES, example_chunks
 
 
 @pytest.fixture(scope="module")

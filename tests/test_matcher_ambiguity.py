@@ -9,8 +9,8 @@ import math
 import pytest
 
 import matcher
-from simulate import visible_lines
-from synthetic_building import make_box_map
+from mapkit_harness.simulate import visible_lines
+from mapkit_harness.plans import make_box_map
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,6 @@ ones, and cameras without the new fields untouched."""
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,10 +17,8 @@ from matcher import attitude
 from matcher.checks import check_lines
 from matcher.tolerances import DEFAULT
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-from bench_paper import is_correct, indistinguishable, level_view  # noqa: E402
-from simulate import make_frame, paper_camera  # noqa: E402
+from mapkit_harness.scoring import indistinguishable, is_correct, level_view
+from mapkit_harness.simulate import make_frame, paper_camera
 
 MAP = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
 

@@ -4,22 +4,20 @@ answer says so, and a budget that is never reached changes nothing."""
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
+from matcher.budget import NO_LIMIT, Deadlines
+from matcher.tolerances import DEFAULT
+from mapkit_harness.simulate import make_frame
 
-import matcher  # noqa: E402
-from matcher.budget import NO_LIMIT, Deadlines  # noqa: E402
-from matcher.tolerances import DEFAULT  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 SEARCH_SHARE = DEFAULT.internals.search_share
-from simulate import make_frame  # noqa: E402
 
 #: A budget spent before the search starts.
 SPENT = replace(matcher.Tolerances(), time_budget_ms=1e-9)

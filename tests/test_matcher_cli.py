@@ -11,16 +11,14 @@ import cv2
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-from matcher.cli import main  # noqa: E402
+from matcher.cli import main
 
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    from synthetic_building import make_small_flat
+    from mapkit_harness.plans import make_small_flat
     from linemap.lmap import save_map
-    from simulate import make_frame, paper_camera
+    from mapkit_harness.simulate import make_frame, paper_camera
 
     d = tmp_path_factory.mktemp("cli")
     m = make_small_flat()
@@ -68,7 +66,7 @@ def test_not_localised_exits_1_with_reason(files, capsys):
 
 def test_image_input(files, capsys, tmp_path):
     """--image: the frame rendered (tools/render.py), lines found by LSD."""
-    from render import render_view
+    from mapkit_harness.render import render_view
 
     fr = files["frame"]
     p = tmp_path / "frame.png"
@@ -189,7 +187,7 @@ def test_lost_mode_from_the_command_line(files, capsys, tmp_path):
     tried (human and JSON forms). The
     frame is one lost mode places in the right room (with few lines it may
     pick another: README, lost mode)."""
-    from simulate import make_frame
+    from mapkit_harness.simulate import make_frame
 
     fr = make_frame(files["map"], files["camera"], np.random.default_rng(3), 1)
     (tmp_path / "lines.json").write_text(json.dumps({"lines": fr.lines.reshape(-1, 4).tolist()}))

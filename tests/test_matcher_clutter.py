@@ -5,7 +5,6 @@ frame has (clutter fits a few lines anywhere)."""
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,11 +12,9 @@ import numpy as np
 
 import matcher
 from matcher.frame import lines_needed, prepare_lines
+from mapkit_harness.simulate import make_frame, paper_camera, pose_error
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tools"))
-
-from simulate import make_frame, paper_camera, pose_error  # noqa: E402
 
 
 def _short_clutter(rng, n, camera, length_px=(16.0, 30.0)):

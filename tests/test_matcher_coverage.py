@@ -34,10 +34,7 @@ def test_stripes_are_not_a_room_that_shows_its_floor_and_ceiling():
 def test_a_true_view_shows_its_map():
     """The simulated frames of the paper's protocol pass (their lines are the
     map's segments in view)."""
-    import sys
-
-    sys.path.insert(0, str(ROOT / "tools"))
-    from simulate import make_frame, paper_camera
+    from mapkit_harness.simulate import make_frame, paper_camera
 
     linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
     cam = paper_camera(1.2, 0.0)

@@ -1,21 +1,16 @@
-"""The image path end to end: rendered views of a map (tools/render.py), LSD
+"""The image path end to end: rendered views of a map (mapkit_harness/render.py), LSD
 (matcher.detect_lines), localisation; and lines broken into pieces."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-import matcher  # noqa: E402
-from synthetic_building import make_small_flat  # noqa: E402
-from render import main as render_main  # noqa: E402
-from render import render_view  # noqa: E402
-from simulate import make_frame, paper_camera, pose_error, visible_lines  # noqa: E402
+import matcher
+from mapkit_harness.plans import make_small_flat
+from mapkit_harness.render import render_view
+from render import main as render_main  # tools/render.py, the script
+from mapkit_harness.simulate import make_frame, paper_camera, pose_error, visible_lines
 
 
 @pytest.fixture(scope="module")

@@ -4,19 +4,15 @@ its reason (a failed estimate), never a crash."""
 from __future__ import annotations
 
 import json
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-import matcher  # noqa: E402
-from synthetic_building import make_box_map  # noqa: E402
-from linemap.camera import Camera, CameraError  # noqa: E402
-from simulate import make_frame, paper_camera  # noqa: E402
+import matcher
+from mapkit_harness.plans import make_box_map
+from linemap.camera import Camera, CameraError
+from mapkit_harness.simulate import make_frame, paper_camera
 
 
 @pytest.fixture(scope="module")

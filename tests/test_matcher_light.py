@@ -6,19 +6,16 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 AUTHORING = ("ezdxf", "trimesh", "shapely", "viser")
 
 
 def test_no_authoring_module_after_a_localisation(tmp_path):
-    from synthetic_building import make_small_flat
+    from mapkit_harness.plans import make_small_flat
     from linemap.lmap import save_map
-    from simulate import make_frame, paper_camera
+    from mapkit_harness.simulate import make_frame, paper_camera
 
     m = make_small_flat()
     save_map(tmp_path / "flat.lmap", m)

@@ -1,23 +1,20 @@
 """Recovery of the pose from simulated frames, at every PEQ of the paper.
 
-Frames from tools/simulate.py on the two-room test map of
-tools/synthetic_building.py: 640x480 camera, f = 900, 1.2 m high; 1 px / 1 deg
+Frames from mapkit_harness/simulate.py on the two-room test map of
+mapkit_harness/plans/buildings.py: 640x480 camera, f = 900, 1.2 m high; 1 px / 1 deg
 uniform noise on the lines, 3 clutter lines, priors drawn within each PEQ.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-import matcher  # noqa: E402
-from simulate import PEQ, make_frame, paper_camera, pose_error  # noqa: E402
+import matcher
+from mapkit_harness.simulate import PEQ, make_frame, paper_camera, pose_error
 
 
 def _correct(res, frame) -> bool:
@@ -127,7 +124,7 @@ def test_global_localisation_sweeps_the_regions_without_votes(small_map, cam, mo
 
 def test_clutter_only_is_not_accepted(small_map, cam):
     """Random lines and no model: a falsy result with a reason, never a pose."""
-    from simulate import clutter_lines
+    from mapkit_harness.simulate import clutter_lines
 
     rng = np.random.default_rng(8)
     for _ in range(5):

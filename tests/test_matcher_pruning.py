@@ -4,20 +4,17 @@ heights against the horizon, free space, and a frame that needs both."""
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
+from mapkit_harness.simulate import make_frame, paper_camera
 
-from simulate import make_frame, paper_camera  # noqa: E402
-
-import matcher  # noqa: E402
-from matcher.scene.freespace import FreeSpace, free_space  # noqa: E402
-from matcher.stage1.correspondences import horizon_side_ok  # noqa: E402
-from matcher.tolerances import DEFAULT  # noqa: E402
+import matcher
+from matcher.scene.freespace import FreeSpace, free_space
+from matcher.stage1.correspondences import horizon_side_ok
+from matcher.tolerances import DEFAULT
 
 FLAT = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
 

@@ -3,19 +3,16 @@ plans the README builds), not only on the example flat: frames simulated
 from each map at PEQ 3 and 5, within the range its lists were built for."""
 
 from __future__ import annotations
-
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
+from mapkit.cli import main as mapkit_main
+from mapkit_harness.simulate import make_frame, pose_error
 
-import matcher  # noqa: E402
-from mapkit.cli import main as mapkit_main  # noqa: E402
-from simulate import make_frame, pose_error  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 PLANS = {
     "thehouse": (ROOT / "tests" / "data" / "thehouse.dxf", ["--walls", "s001-*", "--units", "m"]),

@@ -5,26 +5,23 @@ door jambs that the interpretation tree alone did not settle."""
 from __future__ import annotations
 
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-import matcher  # noqa: E402
-from linemap.geometry import wrap  # noqa: E402
-from matcher.tolerances import DEFAULT  # noqa: E402
-from matcher.stage1.resection import resect as _resect  # noqa: E402
-from matcher.stage1.resection import triples, vertical_hypotheses  # noqa: E402
+import matcher
+from linemap.geometry import wrap
+from matcher.tolerances import DEFAULT
+from matcher.stage1.resection import resect as _resect
+from matcher.stage1.resection import triples, vertical_hypotheses
+from mapkit_harness.simulate import make_frame, paper_camera, pose_error
 
 WORK = DEFAULT.internals
 
 
 def resect(points, alpha):
     return _resect(points, alpha, WORK.resection_min_range_m)
-from simulate import make_frame, paper_camera, pose_error  # noqa: E402
 
 
 def _bearings(points, pose):

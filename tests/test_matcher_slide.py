@@ -3,20 +3,17 @@
 one column's corners on the Barcelona pavilion that it was made for."""
 
 from __future__ import annotations
-
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
+from mapkit.cli import main as mapkit_main
+from matcher.stage2 import slide
+from mapkit_harness.simulate import make_frame, pose_error
 
-import matcher  # noqa: E402
-from mapkit.cli import main as mapkit_main  # noqa: E402
-from matcher.stage2 import slide  # noqa: E402
-from simulate import make_frame, pose_error  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _count_where(fits_at):

@@ -3,18 +3,15 @@
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-from matcher.stage2 import refine as verify  # noqa: E402
-from linemap.camera import world2cam_rotation  # noqa: E402
-from linemap.geometry import project_segments as _project  # noqa: E402
-from matcher.tolerances import DEFAULT as _TOL  # noqa: E402
+from matcher.stage2 import refine as verify
+from linemap.camera import world2cam_rotation
+from linemap.geometry import project_segments as _project
+from matcher.tolerances import DEFAULT as _TOL
+from mapkit_harness.simulate import paper_camera
 
 _NEAR_M = _TOL.internals.near_plane_m
 
@@ -22,7 +19,7 @@ _NEAR_M = _TOL.internals.near_plane_m
 def project_segments(cam, poses, segments):
     """The projection with the matcher's near plane."""
     return _project(cam, poses, segments, _NEAR_M)
-from simulate import paper_camera  # noqa: E402
+
 
 PITCH, HEIGHT = math.radians(12.0), 1.2
 
@@ -202,7 +199,7 @@ def test_three_vertical_edges_alone_are_not_accepted():
     whichever edges they are, so nothing verifies the match. A wide camera
     sees three corners of an empty room and no other line."""
     import matcher
-    from synthetic_building import make_box_map
+    from mapkit_harness.plans import make_box_map
     from linemap.camera import Camera
     from linemap.geometry import segment_is_vertical
 
@@ -233,7 +230,7 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
     from dataclasses import replace
     from types import SimpleNamespace
 
-    from simulate import add_noise, visible_lines
+    from mapkit_harness.simulate import add_noise, visible_lines
 
     from matcher.stage2.covariance import pose_covariance, pose_spread
     from matcher.stage2.fit import unit_rays

@@ -12,7 +12,7 @@ import matcher
 from matcher.from_prior import checked_inputs
 from matcher.lost_votes import sightings, vote_places
 from matcher.tolerances import DEFAULT
-from simulate import make_frame, pose_error, visible_lines
+from mapkit_harness.simulate import make_frame, pose_error, visible_lines
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -62,7 +62,7 @@ def test_the_true_place_is_among_the_voted_ones(cam):
 
 def test_clutter_votes_for_no_trusted_place(cam):
     """Random lines alone: lost mode returns no pose."""
-    from simulate import clutter_lines
+    from mapkit_harness.simulate import clutter_lines
 
     linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
     rng = np.random.default_rng(5)

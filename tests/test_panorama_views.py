@@ -1,4 +1,4 @@
-"""tools/panorama_views.py: views cut from an equirectangular panorama land where the camera model says.
+"""mapkit_harness/panorama.py: views cut from an equirectangular panorama land where the camera model says.
 
 A box room is drawn into an equirectangular image with ZInD's convention
 (each face its own grey), as a panorama taken at a known place and plan
@@ -10,17 +10,13 @@ with the right face on each side.
 from __future__ import annotations
 
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tools"))
-
-from linemap.camera import Camera  # noqa: E402
-from mapkit.importers.zind.annotations import ZindPano  # noqa: E402
-from panorama_views import cut_view, view_pose  # noqa: E402
+from linemap.camera import Camera
+from mapkit.importers.zind.annotations import ZindPano
+from mapkit_harness.panorama import cut_view, view_pose
 
 BOX = (0.0, 6.0, 0.0, 4.0, 2.6)  # x0, x1, y0, y1, ceiling
 #: Grey of each face: walls x0, x1, y0, y1, floor, ceiling.

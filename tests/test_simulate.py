@@ -1,17 +1,12 @@
-"""The simulator (tools/simulate.py) shows only what the map can hold."""
+"""The simulator (mapkit_harness/simulate.py) shows only what the map can hold."""
 
 from __future__ import annotations
-
-import sys
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
-
-from synthetic_building import make_box_map  # noqa: E402
-from simulate import map_range, paper_camera, visible_lines  # noqa: E402
+from mapkit_harness.plans import make_box_map
+from mapkit_harness.simulate import map_range, paper_camera, visible_lines
 
 
 def test_segments_beyond_the_maps_range_are_not_shown():

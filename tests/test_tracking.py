@@ -5,22 +5,20 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
+from matcher.cli import main as matcher_main
+from matcher.tolerances import TRACKING
+from matcher.tracking.odometry import Spread, compose, increment
+from mapkit_harness.simulate import pose_error
+from mapkit_harness.runs import run_camera, simulate_run, write_run
 
-import matcher  # noqa: E402
-from matcher.cli import main as matcher_main  # noqa: E402
-from matcher.tolerances import TRACKING  # noqa: E402
-from matcher.tracking.odometry import Spread, compose, increment  # noqa: E402
-from simulate import pose_error  # noqa: E402
-from simulate_run import run_camera, simulate_run, write_run  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -191,8 +189,8 @@ def test_track_human_output_and_usage_errors(tmp_path, capsys, run, camera):
 @pytest.fixture(scope="module")
 def bag_run():
     """Eight frames of a small flat, rendered at 320x240, for bags."""
-    from render import render_view
-    from synthetic_building import make_small_flat
+    from mapkit_harness.render import render_view
+    from mapkit_harness.plans import make_small_flat
 
     m = make_small_flat()
     cam = matcher.Camera.from_fov(70.0, 320, 240, 1.2, 0.0)

@@ -13,7 +13,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 import urllib.request
 
 import numpy as np
@@ -24,7 +23,6 @@ from mapkit.assemble import assemble_map
 from mapkit.errors import MapkitError
 from linemap.lmap import SegmentKind, save_map
 from mapkit.view import geometry, palette
-from synthetic_building import DEMO_CAMERA, grid_flat
 from mapkit.view.result import load_result, parse_result
 from mapkit.view.pose_tool import camera_wxyz
 from mapkit.view.result_overlay import image_line_rays
@@ -33,6 +31,8 @@ from mapkit.view.stats import map_camera, map_statistics, statistics_markdown
 from mapkit.view.synthetic_image import clip_to_image, project_segments, render_segments
 from linemap.camera import Camera
 from linemap.geometry import in_field_of_view, wrap
+from mapkit_harness.inspector import scene_names
+from mapkit_harness.plans import DEMO_CAMERA, grid_flat
 
 
 # --------------------------------------------------------------------------
@@ -336,39 +336,13 @@ def test_inspector_shows_a_result(flat):
 # The server over a real websocket
 
 
-def _scene_names(port: int, timeout: float = 10.0) -> set[str]:
-    """Connect like viser's web client and collect the names of scene nodes received."""
-    import msgspec
-    import viser
-    import zstandard
-    from websockets.sync.client import connect
-
-    names: set[str] = set()
-    with connect(f"ws://127.0.0.1:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None) as ws:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            try:
-                frame = ws.recv(timeout=0.5)
-            except TimeoutError:
-                if names:
-                    break
-                continue
-            raw_size = int.from_bytes(frame[:8], "little")
-            comp_size = int.from_bytes(frame[8:16], "little")
-            inner = zstandard.ZstdDecompressor().decompress(frame[16 : 16 + comp_size], max_output_size=raw_size)
-            for msg in msgspec.msgpack.decode(inner)["messages"]:
-                if isinstance(msg, dict) and isinstance(msg.get("name"), str):
-                    names.add(msg["name"])
-    return names
-
-
 def test_unique_edges_draw_shared_edges_once():
     e = np.array([[[0, 0], [1, 0]], [[1, 0], [0, 0]], [[1, 0], [1, 1]], [[0, 0], [1, 0.00001]]], dtype=float)
     assert geometry.unique_edges(e).tolist() == [[[0, 0], [1, 0]], [[1, 0], [1, 1]]]
 
 
 def test_server_sends_the_scene_nodes_to_a_websocket_client(inspector):
-    names = _scene_names(inspector.port)
+    names = scene_names(inspector.port)
     for expected in ("/segments/floor", "/segments/ceiling", "/segments/vertical", "/segments/jamb",
                      "/segments/lintel", "/walls", "/regions/fill", "/regions/outlines", "/pose/frustum"):
         assert expected in names, f"{expected} not among {sorted(names)}"
@@ -500,7 +474,7 @@ def test_a_large_map_opens_and_stays_interactive():
     assert big.n_regions > 4000 and big.n_segments > 1000
     ins = Inspector(big, port=0)
     try:
-        names = _scene_names(ins.port, timeout=10)
+        names = scene_names(ins.port, timeout=10)
         assert {"/regions/fill", "/regions/outlines", "/walls", "/segments/floor"} <= names
         # Thousands of outlines start hidden (first-frame cost); their toggle shows them.
         outlines = ins.server.scene.get_handle_by_name("/regions/outlines")

@@ -4,29 +4,23 @@ the scene is drawn (software WebGL), a click on a region highlights it.
 Needs the ``chromium`` Debian package (``apt-get install -y chromium``);
 without it these tests FAIL and say so: a skipped browser test would hide a
 broken inspector. chromium is driven over the DevTools protocol by
-:mod:`mapkit.view.headless` (only the ``websockets`` package, a viser
+:mod:`mapkit_harness.browser` (only the ``websockets`` package, a viser
 dependency, is needed on the Python side).
 """
 
 from __future__ import annotations
 
-import time
 
 import cv2
 import numpy as np
 import pytest
 
-from synthetic_building import grid_flat
-from mapkit.view.headless import BrowserMissing, Chromium, find_chromium, wait_for
 from mapkit.view.server import Inspector
+from mapkit_harness.browser import BrowserMissing, Chromium, find_chromium, wait_for
+from mapkit_harness.inspector import HEIGHT, VIEW, WIDTH, hue_histogram, open_and_wait, scene_drawn
+from mapkit_harness.plans import grid_flat
 
 pytestmark = pytest.mark.browser
-
-#: The page is 1280 x 800; viser's panel covers x > 870, its software-WebGL
-#: notice the top-left corner. The 3D view is judged in the rest.
-WIDTH, HEIGHT = 1280, 800
-VIEW = (slice(160, HEIGHT), slice(0, 860))
-
 
 @pytest.fixture(scope="module")
 def browser():
@@ -36,27 +30,6 @@ def browser():
         pytest.fail(str(exc), pytrace=False)
     with Chromium(WIDTH, HEIGHT) as b:
         yield b
-
-
-def hue_histogram(img: np.ndarray) -> np.ndarray:
-    """Pixels per 15-degree hue bin (OpenCV hue 0-180 in bins of 15), coloured pixels only."""
-    hsv = cv2.cvtColor(np.ascontiguousarray(img), cv2.COLOR_RGB2HSV)
-    coloured = (hsv[..., 1] > 40) & (hsv[..., 2] > 60)
-    return np.bincount(hsv[..., 0][coloured] // 15, minlength=12)
-
-
-def scene_drawn(img: np.ndarray) -> bool:
-    """The map is on screen: region fills of at least five different hues."""
-    return int((hue_histogram(img[VIEW]) > 300).sum()) >= 5
-
-
-def open_and_wait(browser: Chromium, ins: Inspector, timeout: float = 60.0) -> tuple[np.ndarray, float]:
-    """Navigate to the inspector; return the first screenshot showing the scene and the seconds it took."""
-    t0 = time.perf_counter()
-    browser.navigate(ins.url)
-    img = wait_for(lambda: (lambda s: s if scene_drawn(s) else None)(browser.screenshot()), timeout,
-                   interval=0.1, what="the map to be drawn in chromium")
-    return img, time.perf_counter() - t0
 
 
 def settled_view(browser: Chromium, timeout: float = 20.0) -> np.ndarray:

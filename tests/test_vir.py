@@ -9,12 +9,12 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import Point, box
-from visibility_oracle import VisibilityOracle, random_points
+from mapkit_harness.visibility_oracle import VisibilityOracle, random_points
 
 from mapkit.assemble import assemble_map
 from linemap.lmap import load_map, save_map
 from mapkit.vir import build_regions
-from synthetic_building import apartment, scene_from_walls, single_room, two_rooms
+from mapkit_harness.plans import apartment, scene_from_walls, single_room, two_rooms
 from linemap.camera import Camera
 
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)

@@ -10,11 +10,11 @@ import pytest
 import shapely
 import shapely.affinity
 from shapely.geometry import Point, box
-from visibility_oracle import VisibilityOracle, random_points
+from mapkit_harness.visibility_oracle import VisibilityOracle, random_points
 
 from linemap.lmap import SegmentKind
 from mapkit.tolerances import OCCLUSION_SHRINK
-from synthetic_building import apartment, l_room, single_room, two_rooms
+from mapkit_harness.plans import apartment, l_room, single_room, two_rooms
 from mapkit.visibility import (
     Occluders,
     annuli,

@@ -23,15 +23,23 @@ from pathlib import Path
 
 import numpy as np
 
+from mapkit_harness.tables import Table, add_report_option, reported
+
 ROOT = Path(__file__).resolve().parent.parent
 
 #: The worker: reads "peq index" lines, prints the best-of-N milliseconds.
 _WORKER = r"""
-import sys, time
+import os, sys, time
 root, poses, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-sys.path[:0] = [root, root + "/tools"]
+# The one path edit the harness keeps: this worker must load the matcher of
+# ROOT (an archived revision or the working tree), not the installed one.
+sys.path[:0] = [root]
 import numpy as np, matcher
-from simulate import make_frame, paper_camera
+if os.path.isdir(os.path.join(root, "mapkit_harness")):
+    from mapkit_harness.simulate import make_frame, paper_camera
+else:  # a revision from before the harness was a package: its simulator sat in tools/
+    sys.path.insert(1, os.path.join(root, "tools"))
+    from simulate import make_frame, paper_camera
 linemap = matcher.load_map(root + "/maps/flat.lmap")
 camera = paper_camera(1.2, 0.0)
 frames = {}
@@ -57,7 +65,13 @@ def main(argv=None) -> int:
     ap.add_argument("--peq", type=int, nargs="+", default=[3, 4, 5], choices=[1, 2, 3, 4, 5])
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ (seed 0, as tools/bench_paper.py)")
     ap.add_argument("--repeat", type=int, default=3, help="runs per frame; the best counts")
+    add_report_option(ap)
     args = ap.parse_args(argv)
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     with tempfile.TemporaryDirectory() as tmp:
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.ref], capture_output=True)
         if archive.returncode:
@@ -69,8 +83,7 @@ def main(argv=None) -> int:
         procs = {name: subprocess.Popen([sys.executable, str(worker), root, str(args.poses), str(args.repeat)],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
                  for name, root in (("ref", tmp), ("tree", str(ROOT)))}
-        print(f"| PEQ | {args.ref} ms (median) | working tree ms (median) | per-frame ratio (median) |")
-        print("|---|---|---|---|")
+        table = Table("PEQ", f"{args.ref} ms (median)", "working tree ms (median)", "per-frame ratio (median)")
         for peq in args.peq:
             ms = {"ref": [], "tree": []}
             for i in range(args.poses):
@@ -79,7 +92,7 @@ def main(argv=None) -> int:
                     procs[name].stdin.flush()
                     ms[name].append(float(procs[name].stdout.readline()))
             a, b = np.array(ms["ref"]), np.array(ms["tree"])
-            print(f"| {peq} | {np.median(a):.2f} | {np.median(b):.2f} | {np.median(b / a):.3f} |", flush=True)
+            table.row(peq, f"{np.median(a):.2f}", f"{np.median(b):.2f}", f"{np.median(b / a):.3f}")
         for p in procs.values():
             p.stdin.close()
             p.wait()

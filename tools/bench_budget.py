@@ -26,13 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
 
-import matcher  # noqa: E402
-from bench_paper import indistinguishable, is_correct  # noqa: E402
-from simulate import make_frame, paper_camera  # noqa: E402
+from mapkit_harness.scoring import indistinguishable, is_correct
+from mapkit_harness.simulate import make_frame, paper_camera
+from mapkit_harness.tables import Table, add_report_option, reported
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(argv=None) -> int:
@@ -42,18 +42,24 @@ def main(argv=None) -> int:
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ (seed 0, as tools/bench_paper.py)")
     ap.add_argument("--budgets", type=float, nargs="+", default=[0, 200, 100, 50],
                     help="budgets in milliseconds; 0 for none")
+    add_report_option(ap)
     args = ap.parse_args(argv)
     if args.poses < 1 or min(args.budgets) < 0:
         print("error: --poses must be at least 1 and --budgets at least 0", file=sys.stderr)
         return 2
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     linemap = matcher.load_map(args.map)
     camera = paper_camera(1.2, 0.0)
     budgets = [b if b > 0 else math.inf for b in args.budgets]
     tols = [replace(matcher.Tolerances(), time_budget_ms=b) for b in budgets]
     matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
     print(f"map {args.map}; {args.poses} frames per PEQ, seed 0; one run per frame and budget")
-    print("| PEQ | budget ms | correct first | accepted | wrong accepted | cut by the budget | ms med / p95 / max |")
-    print("|---|---|---|---|---|---|---|")
+    table = Table("PEQ", "budget ms", "correct first", "accepted", "wrong accepted", "cut by the budget",
+                  "ms med / p95 / max")
     for peq in args.peq:
         rng = np.random.default_rng([0, peq])
         frames = [make_frame(linemap, camera, rng, peq, 1.0, 1.0, clutter=3) for _ in range(args.poses)]
@@ -76,9 +82,9 @@ def main(argv=None) -> int:
                 wrong += bool(res) and not is_correct(res.matches, truth, equivalent=equiv)
             ms = np.array([t for _, t in rows])
             n = len(frames)
-            print(f"| {peq} | {'none' if math.isinf(budget) else f'{budget:g}'} | {100 * first / n:.0f}% | "
-                  f"{100 * accepted / n:.0f}% | {wrong} | {cut} | "
-                  f"{np.median(ms):.1f} / {np.percentile(ms, 95):.1f} / {ms.max():.1f} |", flush=True)
+            table.row(peq, "none" if math.isinf(budget) else f"{budget:g}", f"{100 * first / n:.0f}%",
+                      f"{100 * accepted / n:.0f}%", wrong, cut,
+                      f"{np.median(ms):.1f} / {np.percentile(ms, 95):.1f} / {ms.max():.1f}")
     return 0
 
 

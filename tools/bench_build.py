@@ -6,7 +6,7 @@ Prints one row per input: its floor (free space, m2), seconds per pipeline
 stage, segments, regions, mean visible-list length, file size, peak memory
 (the ``ru_maxrss`` of a child process that does only that build) and
 ``load_map`` time (best of ``--load-repeats``). The generated cases
-(``tools/synthetic_plans.py``) show time and memory against floor area:
+(``mapkit_harness/plans/drawings.py``) show time and memory against floor area:
 offices of 4 x 4, 7 x 7 and 10 x 10 rooms of 5 m, and an open-plan office
 of about 600 m2 with the traits of a real one (AIA layer names, facade
 pieces and piers, door blocks, no closed outline). Targets (2-core machine):
@@ -29,8 +29,9 @@ import tempfile
 import time
 from pathlib import Path
 
+from mapkit_harness.tables import Table, add_report_option, reported
+
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tools"))
 
 #: name, input path, extra `mapkit build` options (as a user types them).
 CASES = [
@@ -39,7 +40,7 @@ CASES = [
     ("thehouse.dxf", "tests/data/thehouse.dxf", ["--walls", "s001-*", "--units", "m"]),
     ("simple_room.glb", "tests/data/simple_room.glb", []),  # stored z-up despite glTF's convention
     ("hospital.stl", "tests/data/hospital.stl", []),
-    # Generated (tools/synthetic_plans.py), written to a temporary folder first.
+    # Generated (mapkit_harness/plans/drawings.py), written to a temporary folder first.
     ("office 4x4 rooms", "office_grid:4", []),
     ("office 7x7 rooms", "office_grid:7", []),
     ("office 10x10 rooms", "office_grid:10", []),
@@ -50,14 +51,14 @@ CASES = [
 def case_path(rel: str, tmp: Path) -> Path:
     """The input file of a case: a path under the project, or a generated plan written into ``tmp``."""
     if rel.startswith("office_grid:"):
-        from synthetic_plans import office_grid
+        from mapkit_harness.plans import office_grid
 
         n = int(rel.split(":")[1])
         path = tmp / f"office_{n}x{n}.dxf"
         office_grid(path, n=n)
         return path
     if rel == "open_office":
-        from synthetic_plans import open_office
+        from mapkit_harness.plans import open_office
 
         path = tmp / "open_office.dxf"
         open_office(path)
@@ -117,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--load-repeats", type=int, default=20)
     ap.add_argument("--jobs", type=int, help="mapkit build --jobs (default: build's own)")
     ap.add_argument("--child", help=argparse.SUPPRESS)
+    add_report_option(ap)
     args, extra = ap.parse_known_args(argv)
     if args.child:  # one build, its figures as JSON on the last line
         import logging
@@ -126,13 +128,17 @@ def main(argv: list[str] | None = None) -> int:
         opts = [e for e in [*args.only, *extra] if e != "--"]
         print(json.dumps(run_case(Path(args.child), opts, args.load_repeats)))
         return 0
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     cols = [
-        ("input", 22, "s"), ("floor m2", 8, ".0f"), ("import", 6, ".2f"), ("edges", 5, ".2f"), ("regions", 7, ".2f"),
-        ("assemble", 8, ".2f"), ("write", 5, ".2f"), ("total s", 7, ".2f"), ("peak MB", 7, ".0f"), ("segs", 5, "d"),
-        ("regions", 7, "d"), ("mean list", 9, ".1f"), ("KiB", 6, ".1f"), ("load ms", 7, ".2f"),
+        ("input", "s"), ("floor m2", ".0f"), ("import", ".2f"), ("edges", ".2f"), ("regions", ".2f"),
+        ("assemble", ".2f"), ("write", ".2f"), ("total s", ".2f"), ("peak MB", ".0f"), ("segs", "d"),
+        ("regions", "d"), ("mean list", ".1f"), ("KiB", ".1f"), ("load ms", ".2f"),
     ]
-    print(" | ".join(f"{name:>{w}}" if i else f"{name:<{w}}" for i, (name, w, _) in enumerate(cols)))
-    print("-|-".join("-" * w for _, w, _ in cols))
+    table = Table(*(name for name, _ in cols))
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:
         for name, rel, extra_opts in CASES:
@@ -142,15 +148,13 @@ def main(argv: list[str] | None = None) -> int:
                 jobs = ["--jobs", str(args.jobs)] if args.jobs else []
                 r = run_in_child(case_path(rel, Path(tmp)), [*extra_opts, *jobs], args.load_repeats)
             except Exception as exc:  # a benchmark reports every case, even a failing one
-                print(f"{name:<22} | failed: {exc}")
+                table.row(name, f"failed: {exc}", *["-"] * (len(cols) - 2))
                 failed += 1
                 continue
             vals = [name, r["floor_m2"], r.get("t_import", 0), r.get("t_edges", 0), r.get("t_regions", 0),
                     r.get("t_assemble", 0), r["t_write"], r["t_total"], r["peak_mb"], r["segments"], r["regions"],
                     r["mean_list"], r["kib"], r["load_ms"]]
-            print(" | ".join(f"{v:<{w}{f}}" if i == 0 else f"{'-':>{w}}" if v != v else f"{v:>{w}{f}}"
-                             for i, (v, (_, w, f)) in enumerate(zip(vals, cols))))
-            sys.stdout.flush()
+            table.row(*("-" if v != v else f"{v:{f}}" for v, (_, f) in zip(vals, cols)))
     return 1 if failed else 0
 
 

@@ -2,8 +2,8 @@
 """The image path on rendered views: LSD (matcher.detect_lines), then
 matcher.localize, per PEQ.
 
-Each frame is a pose and prior drawn as in tools/simulate.py; instead of
-its simulated lines, the view is rendered (tools/render.py: shaded walls,
+Each frame is a pose and prior drawn as in mapkit_harness/simulate.py; instead of
+its simulated lines, the view is rendered (mapkit_harness/render.py: shaded walls,
 floor, ceiling, door and window openings, anti-aliased, with grey-level
 noise) and the lines are found by LSD. Per PEQ: the lines LSD found against
 the model segments in view (median), how often the pose comes out right
@@ -25,13 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
 
-import matcher  # noqa: E402
-from render import render_view  # noqa: E402
-from simulate import PEQ, make_frame, paper_camera, pose_error  # noqa: E402
+from mapkit_harness.render import render_view
+from mapkit_harness.simulate import PEQ, make_frame, paper_camera, pose_error
+from mapkit_harness.tables import Table, add_report_option, reported
+
+ROOT = Path(__file__).resolve().parent.parent
 
 #: A pose within this much of the truth counts as right (metres, degrees).
 RIGHT_M, RIGHT_DEG = 0.05, 0.5
@@ -69,10 +69,16 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--supersample", type=int, default=2, help="rays per pixel along each axis when rendering")
     ap.add_argument("--repeat", type=int, default=3, help="timing: best of this many runs per frame")
+    add_report_option(ap)
     args = ap.parse_args(argv)
     if min(args.frames, args.supersample, args.repeat) < 1:
         print("error: --frames, --supersample and --repeat must be at least 1", file=sys.stderr)
         return 2
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     try:
         linemap = matcher.load_map(args.map)
     except (OSError, ValueError) as exc:
@@ -81,16 +87,15 @@ def main(argv=None) -> int:
     camera = paper_camera(1.2, 0.0)
     print(f"map {os.path.relpath(args.map)}; {args.frames} rendered frames per PEQ, seed {args.seed}; "
           f"right = within {RIGHT_M * 100:.0f} cm and {RIGHT_DEG} deg")
-    print("| PEQ | segments in view / lines found (med) | right | pose error med (cm / deg) "
-          "| detect ms (med) | localize ms (med) |")
-    print("|---|---|---|---|---|---|")
+    table = Table("PEQ", "segments in view / lines found (med)", "right", "pose error med (cm / deg)",
+                  "detect ms (med)", "localize ms (med)")
     for peq in args.peq:
         rows = run_peq(linemap, camera, peq, args.frames, args.seed, args.supersample, args.repeat)
         col = {k: np.array([r[k] for r in rows], dtype=float) for k in rows[0]}
-        print(f"| {peq} | {np.median(col['in_view']):.0f} / {np.median(col['found']):.0f} "
-              f"| {100 * col['right'].mean():.0f}% | {100 * np.median(col['err_m']):.1f} / "
-              f"{np.median(col['err_deg']):.2f} | {np.median(col['detect_ms']):.1f} "
-              f"| {np.median(col['localize_ms']):.1f} |", flush=True)
+        table.row(peq, f"{np.median(col['in_view']):.0f} / {np.median(col['found']):.0f}",
+                  f"{100 * col['right'].mean():.0f}%",
+                  f"{100 * np.median(col['err_m']):.1f} / {np.median(col['err_deg']):.2f}",
+                  f"{np.median(col['detect_ms']):.1f}", f"{np.median(col['localize_ms']):.1f}")
     return 0
 
 

@@ -21,10 +21,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+import matcher
 
-import matcher  # noqa: E402
+from mapkit_harness.tables import Table, add_report_option, reported
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def _times(fn, repeat: int) -> tuple[float, float, object]:
@@ -40,10 +41,15 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("photos", nargs="*", help="more photos (any format OpenCV reads)")
     ap.add_argument("--repeat", type=int, default=10, help="runs per case (median and p95 of them)")
+    add_report_option(ap)
     args = ap.parse_args(argv)
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     paths = [ROOT / "tests" / "data" / "rocket.jpg"] + [Path(p) for p in args.photos]
-    print("| photo | size | LSD segments | lines out | LSD ms (median) | detect_lines ms (median / p95) |")
-    print("|---|---|---|---|---|---|")
+    table = Table("photo", "size", "LSD segments", "lines out", "LSD ms (median)", "detect_lines ms (median / p95)")
     lsd = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD)
     for path in paths:
         img = cv2.imread(str(path))
@@ -57,8 +63,8 @@ def main(argv=None) -> int:
             med, p95, lines = _times(lambda: matcher.detect_lines(im), args.repeat)
             n_raw = 0 if raw is None else len(raw)
             label = "as it is" if size is None else "resized"
-            print(f"| {path.name} ({label}) | {im.shape[1]}x{im.shape[0]} | {n_raw} | {len(lines)} | {lsd_med:.1f} | "
-                  f"{med:.1f} / {p95:.1f} |", flush=True)
+            table.row(f"{path.name} ({label})", f"{im.shape[1]}x{im.shape[0]}", n_raw, len(lines), f"{lsd_med:.1f}",
+                      f"{med:.1f} / {p95:.1f}")
     return 0
 
 

@@ -10,24 +10,29 @@ interpreter's own allocations).
 
 from __future__ import annotations
 
+import argparse
 import re
 import sys
 import time
 import tracemalloc
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from linemap.lmap import LmapError, decode
 
-from crafted_maps import CASES, example_chunks  # noqa: E402
-
-from linemap.lmap import LmapError, decode  # noqa: E402
+from mapkit_harness.crafted_maps import CASES, example_chunks
+from mapkit_harness.tables import Table, add_report_option, reported
 
 
-def main() -> int:
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description="Time and memory of refusing each crafted map (exit 1 if one is not).")
+    add_report_option(ap)
+    args = ap.parse_args(argv)
+    return reported(args.report, run, __file__, argv)
+
+
+def run() -> int:
+    """Refuse each crafted map; prints the table."""
     chunks = example_chunks()
-    print("| crafted map | file KiB | refused | ms | peak KiB | peak / file |")
-    print("|---|---|---|---|---|---|")
+    table = Table("crafted map", "file KiB", "refused", "ms", "peak KiB", "peak / file")
     bad = 0
     for name, make, match in CASES:
         blob = make(chunks)
@@ -42,7 +47,7 @@ def main() -> int:
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
         bad += refused != "yes"
-        print(f"| {name} | {len(blob) / 1024:.1f} | {refused} | {ms:.1f} | {peak / 1024:.0f} | {peak / len(blob):.2f} |")
+        table.row(name, f"{len(blob) / 1024:.1f}", refused, f"{ms:.1f}", f"{peak / 1024:.0f}", f"{peak / len(blob):.2f}")
     return 1 if bad else 0
 
 

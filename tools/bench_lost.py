@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Time lost mode (matcher.localize_global) on simulated frames.
 
-Each frame is drawn as in tools/simulate.py (PEQ 1 poses; the prior is not
+Each frame is drawn as in mapkit_harness/simulate.py (PEQ 1 poses; the prior is not
 used), then localised with no prior: one search per region of the map. The
 table gives per frame the seconds, the regions tried, the pose error and
 whether the answer is right (within 10 cm and 1 degree), then the median.
@@ -15,19 +15,18 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
 
-import matcher  # noqa: E402
-from simulate import make_frame, paper_camera, pose_error  # noqa: E402
+from mapkit_harness.simulate import make_frame, paper_camera, pose_error
+from mapkit_harness.tables import Table, add_report_option, reported
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(argv=None) -> int:
@@ -38,7 +37,13 @@ def main(argv=None) -> int:
     ap.add_argument("--first-accepted", action="store_true", help="stop at the first accepted region (the paper's loop)")
     ap.add_argument("--budget-ms", type=float, default=math.inf,
                     help="time budget of each call, milliseconds (Tolerances.time_budget_ms; default none)")
+    add_report_option(ap)
     args = ap.parse_args(argv)
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
     linemap = matcher.load_map(args.map)
     camera = paper_camera(1.2, 0.0)
@@ -46,8 +51,7 @@ def main(argv=None) -> int:
     budget = "" if math.isinf(args.budget_ms) else f"; budget {args.budget_ms:g} ms per call"
     print(f"map {args.map}: {linemap.n_segments} segments, {linemap.n_regions} regions; "
           f"{'first accepted region' if args.first_accepted else 'every region'}{budget}")
-    print("| frame | s | regions tried | position err m | yaw err deg | right |")
-    print("|---|---|---|---|---|---|")
+    table = Table("frame", "s", "regions tried", "position err m", "yaw err deg", "right")
     seconds, right = [], 0
     for i in range(args.frames):
         frame = make_frame(linemap, camera, rng, 1, 1.0, 1.0, clutter=3)
@@ -57,8 +61,8 @@ def main(argv=None) -> int:
         err = pose_error(res.pose, frame.pose) if res else (float("nan"), float("nan"))
         ok = bool(res) and err[0] < 0.1 and err[1] < 1.0
         right += ok
-        print(f"| {i} | {seconds[-1]:.1f} | {res.time_ms.get('regions_tried')} | {err[0]:.3f} | {err[1]:.2f} | "
-              f"{'yes' if ok else 'no: ' + (res.reason or 'wrong pose')} |", flush=True)
+        table.row(i, f"{seconds[-1]:.1f}", res.time_ms.get("regions_tried"), f"{err[0]:.3f}", f"{err[1]:.2f}",
+                  "yes" if ok else "no: " + (res.reason or "wrong pose"))
     print(f"median {np.median(seconds):.1f} s (min {min(seconds):.1f}, max {max(seconds):.1f}); right {right} of {args.frames}")
     return 0
 

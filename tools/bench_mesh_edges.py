@@ -14,51 +14,16 @@ segments; the expected count is printed beside what was found.
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
+from mapkit_harness.plans import expected_grid_edges, room_grid
+from mapkit_harness.tables import Table, add_report_option, reported
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-
-def room_grid(n: int, subdivide: int, height: float = 2.5, thick: float = 0.2):
-    """An n x n grid of 4 x 3 m rooms; walls are separate subdivided boxes.
-
-    Walls along x span the whole grid width, walls along y sit between them,
-    so every wall/wall junction is a T or an L of touching boxes.
-    """
-    import trimesh
-
-    def box(lo, hi):
-        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-        m = trimesh.creation.box(extents=hi - lo, transform=trimesh.transformations.translation_matrix((lo + hi) / 2))
-        for _ in range(subdivide):
-            m = m.subdivide()
-        return m
-
-    w, d = 4.0, 3.0
-    span_x = n * w + thick
-    parts = [box([0, j * d, 0], [span_x, j * d + thick, height]) for j in range(n + 1)]
-    for j in range(n):
-        for i in range(n + 1):
-            parts.append(box([i * w, j * d + thick, 0], [i * w + thick, (j + 1) * d, height]))
-    return trimesh.util.concatenate(parts)
-
-
-def expected_grid_edges(n: int) -> int:
-    """Edges of the grid's union seen from inside and outside, worked out by hand.
-
-    Per room: 4 floor, 4 ceiling junctions, 4 vertical corners (16 n^2 in all
-    over 4 kinds... 12 n^2). Outside: 4 floor, 4 top and 4 vertical corners of
-    the outline. The tops of the walls between rooms: each x-wall top is one
-    strip with long edges on both sides (the rooms' ceiling junctions, already
-    counted) and its 0.2 m ends (too short). So 12 n^2 + 12.
-    """
-    return 12 * n * n + 12
 
 
 def best_of(fn, repeat: int) -> tuple[float, object]:
@@ -75,8 +40,13 @@ def main(argv=None) -> int:
     ap.add_argument("--rooms", type=int, default=8, help="rooms per side of the generated grid (default 8)")
     ap.add_argument("--subdivide", type=int, default=4, help="subdivisions per wall box (default 4: x256 faces, 249k faces in all)")
     ap.add_argument("--repeat", type=int, default=3, help="timing repeats, best kept (default 3)")
+    add_report_option(ap)
     args = ap.parse_args(argv)
+    return reported(args.report, lambda: run(args), __file__, argv)
 
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     from mapkit.importers import load_scene
     from mapkit.importers.mesh.load import load_mesh
     from linemap.lmap import KIND_NAMES
@@ -103,9 +73,10 @@ def main(argv=None) -> int:
             per_kind = " ".join(f"{KIND_NAMES[k]}={c}" for k, c in zip(*np.unique(scene.kinds, return_counts=True)))
             rows.append((path.name, len(mesh.faces), len(seg), t_edges, len(scene.segments), t_import, per_kind, note))
 
-    print(f"{'mesh':<22} {'faces':>8} {'edges':>6} {'edges s':>8} {'kept':>6} {'import s':>9}  kinds / note")
+    table = Table("mesh", "faces", "edges", "edges s", "kept", "import s", "kinds / note")
     for name, faces, n_edges, t_e, kept, t_i, per_kind, note in rows:
-        print(f"{name:<22} {faces:>8} {n_edges:>6} {t_e:>8.3f} {kept:>6} {t_i:>9.2f}  {per_kind} {note}")
+        table.row(name, faces, n_edges, f"{t_e:.3f}", kept, f"{t_i:.2f}", f"{per_kind} {note}".strip())
+    print()
     print("edges: feature_edges alone; kept: after the hidden-edge test and overlap merge (the map's segments)")
     return 0
 

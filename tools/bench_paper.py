@@ -9,7 +9,7 @@
 For each PEQ (method.md section 9): ``--poses`` simulated frames (seeded),
 each localised by our matcher and, on the first ``--baseline-poses`` of
 them, by the classic interpretation tree with a pose at every node
-(tools/simulate.py). Reported per PEQ: hypotheses after stage 1 (median,
+(mapkit_harness/baseline.py). Reported per PEQ: hypotheses after stage 1 (median,
 max; and the number of consistent sets found before the cap), correct match
 ranked first (%), accepted (%), E of the correct hypothesis against the
 best false one (medians), pose error (median), latency (median, p95) of
@@ -39,63 +39,12 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+import matcher
 
-import matcher  # noqa: E402
-from simulate import PEQ, baseline_localize, make_frame, paper_camera, pose_error  # noqa: E402
-
-
-def is_correct(matches, truth_pairs, min_matches: int = 3, equivalent=None) -> bool:
-    """Every match is a true pair; with ``equivalent`` (a set of pairs), a
-    pair in it counts as true too (see :func:`indistinguishable`)."""
-    s = {tuple(m) for m in matches}
-    ok = truth_pairs if equivalent is None else truth_pairs | equivalent
-    return len(s) >= min_matches and s <= ok
-
-
-def level_view(camera, frame):
-    """``(camera, frame)`` as the matcher sees them once the frame's own
-    pitch and roll are known: the nominal camera (the file's pitch, no
-    roll) and the frame's lines moved to it (:mod:`matcher.attitude`); the
-    camera and frame themselves for a level frame of an exact camera."""
-    from dataclasses import replace
-
-    from matcher import attitude
-
-    if frame.pitch_deg == camera.pitch_deg and frame.roll_deg == camera.roll_deg and not camera.attitude_free:
-        return camera, frame
-    att = attitude.Attitude(math.radians(frame.pitch_deg), math.radians(frame.roll_deg), 0.0, 0.0)
-    return attitude.nominal(camera), replace(frame, lines=attitude.rectify(camera, frame.lines, att))
-
-
-def indistinguishable(linemap, camera, frame) -> set:
-    """Pairs (segment, line) that the image cannot tell from a true pair: the
-    line lies on the segment's projection at the true pose (within the
-    matcher's fit bound, inside its extent) and the segment is in plain sight.
-    Two door jambs or corners one behind the other on the same image column
-    are the usual case: swapping them changes nothing in the image."""
-    from matcher.stage2.fit import fits, visible
-    from matcher.tolerances import DEFAULT
-
-    x, y, yaw = frame.pose
-    ids = linemap.candidate_segments(x, y, 0.01)
-    if len(ids) == 0:
-        return set()
-    j = np.arange(len(frame.lines))
-    si, li = np.repeat(ids, len(j)), np.tile(j, len(ids))
-    poses = np.repeat([[x, y, math.radians(yaw)]], len(si), axis=0)
-
-    class _Img:
-        lines = frame.lines
-
-    ok = fits(camera, _Img, poses, linemap.segments[si], li, DEFAULT)[0]
-    sel = np.nonzero(ok)[0]
-    walls = None
-    from matcher.scene.occlusion import wall_edges
-
-    walls = wall_edges(linemap)
-    ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls, DEFAULT.internals)
-    return {(int(a), int(b)) for a, b in zip(si[ok], li[ok])}
+from mapkit_harness.baseline import baseline_localize
+from mapkit_harness.scoring import indistinguishable, is_correct, level_view
+from mapkit_harness.simulate import PEQ, make_frame, paper_camera, pose_error
+from mapkit_harness.tables import add_report_option, markdown_table, reported
 
 
 def simulate_peq(linemap, camera, peq, args):
@@ -248,10 +197,11 @@ def table(summary: dict) -> str:
     # "sets found": consistent sets stage 1 found before handing at most
     # max_hypotheses of them on ("hyp."): the count the paper's figure 5 shows.
     attitude = any(s.get("pitch_err_med_deg") is not None for s in summary.values())
-    head = ("| PEQ | sets found med / max | hyp. med / max | correct first (strict) | accepted | E correct / best false / best wrong pose (med) | "
-            "pose err (med) | " + ("pitch / roll err (med) | " if attitude else "")
-            + "ours ms med / p95 | baseline ms med / p95 (n, timeouts) | speed-up |")
-    lines = [head, "|" + "---|" * (11 if attitude else 10)]
+    columns = ["PEQ", "sets found med / max", "hyp. med / max", "correct first (strict)", "accepted",
+               "E correct / best false / best wrong pose (med)", "pose err (med)",
+               *(["pitch / roll err (med)"] if attitude else []),
+               "ours ms med / p95", "baseline ms med / p95 (n, timeouts)", "speed-up"]
+    rows = []
     for peq, s in summary.items():
         et = "-" if s["e_true_med"] is None else f"{s['e_true_med']:.2g}"
         ef = "-" if s["e_false_med"] is None else f"{s['e_false_med']:.2g}"
@@ -263,13 +213,12 @@ def table(summary: dict) -> str:
             base = f"{s['base_ms_med']:.0f} / {s['base_ms_p95']:.0f} ({s['base_n']}, {s['base_timeouts']})"
             sp = f"{s['speedup_med']:.0f}x"
         sets = "-" if s["sets_found_max"] is None else f"{s['sets_found_med']:.0f} / {s['sets_found_max']}"
-        lines.append(
-            f"| {peq} | {sets} | {s['hyp_med']:.0f} / {s['hyp_max']} | {_pct(s['first_correct_pct'])} ({_pct(s['first_correct_strict_pct'])})"
-            f" | {_pct(s['accepted_pct'])} | {et} / {ef} / {ew} | {pe} | "
-            + (f"{s['pitch_err_med_deg']:.2f} / {s['roll_err_med_deg']:.2f} deg | " if attitude else "")
-            + f"{s['ms_med']:.1f} / {s['ms_p95']:.1f} | {base} | {sp} |"
-        )
-    return "\n".join(lines)
+        rows.append([peq, sets, f"{s['hyp_med']:.0f} / {s['hyp_max']}",
+                     f"{_pct(s['first_correct_pct'])} ({_pct(s['first_correct_strict_pct'])})",
+                     _pct(s['accepted_pct']), f"{et} / {ef} / {ew}", pe,
+                     *([f"{s['pitch_err_med_deg']:.2f} / {s['roll_err_med_deg']:.2f} deg"] if attitude else []),
+                     f"{s['ms_med']:.1f} / {s['ms_p95']:.1f}", base, sp])
+    return markdown_table(columns, rows)
 
 
 def plot(all_rows, summary, out_dir: Path, e_accept: float, tag: str = "") -> list[Path]:
@@ -332,7 +281,7 @@ def plot(all_rows, summary, out_dir: Path, e_accept: float, tag: str = "") -> li
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Reproduce the paper's figures 5 and 6 (see module docstring).")
     ap.add_argument("--map", help=".lmap map (default: maps/flat.lmap if present, else the synthetic flat)")
-    ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of tools/synthetic_building.py")
+    ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of mapkit_harness.plans")
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ")
     ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ))
     ap.add_argument("--seed", type=int, nargs="+", default=[0],
@@ -358,23 +307,29 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="also write all per-frame rows and the summary to this file")
     ap.add_argument("--max-hypotheses", type=int, default=matcher.Tolerances().max_hypotheses,
                     help="stage 1's cap on hypotheses (a large value shows how many pass stage 1 uncapped)")
+    add_report_option(ap)
     args = ap.parse_args(argv)
     args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses)
     if args.quick:
         args.poses, args.baseline_poses = 20, 5
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     seeds = ", ".join(str(s) for s in args.seed)
-    from synthetic_building import cached_flat_map
+    from mapkit_harness.plans import cached_flat_map
 
     default_map = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
     tag = ""  # figure names: plain for maps/flat.lmap and seed 0, tagged with the map and seeds otherwise
     if args.synthetic:
-        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/synthetic_building.py)", "_synthetic"
+        linemap, map_name, tag = cached_flat_map(), "synthetic flat (mapkit_harness.plans)", "_synthetic"
     elif args.map and Path(args.map).resolve() != default_map:
         linemap, map_name, tag = matcher.load_map(args.map), args.map, "_" + Path(args.map).stem
     elif default_map.exists():
         linemap, map_name = matcher.load_map(default_map), "maps/flat.lmap"
     else:
-        linemap, map_name, tag = cached_flat_map(), "synthetic flat (tools/synthetic_building.py)", "_synthetic"
+        linemap, map_name, tag = cached_flat_map(), "synthetic flat (mapkit_harness.plans)", "_synthetic"
     if args.seed != [0]:  # the documented figures are seed 0's
         tag += "_seed" + "-".join(str(s) for s in args.seed)
     camera = paper_camera(args.height, args.pitch)

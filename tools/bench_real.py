@@ -17,8 +17,8 @@ random offset each) with a horizontal field of view in ``--hfov``, a pitch in
 A view's true pose is the panorama's place and the heading it was cut at.
 
 Per view: lines by :func:`matcher.detect_lines`; the map segments in sight
-at the true pose (``tools/simulate.visible_lines``); :func:`matcher.localize`
-from a prior drawn within each PEQ's bounds (``tools/simulate.PEQ``, as in
+at the true pose (``mapkit_harness.simulate.visible_lines``); :func:`matcher.localize`
+from a prior drawn within each PEQ's bounds (``mapkit_harness.simulate.PEQ``, as in
 ``tools/bench_paper.py``: dt 0.2 to 1.0 m, dyaw 10 to 50 deg); and
 :func:`matcher.localize_global` (lost mode) on every ``--lost-every``-th view;
 each call within ``--budget-ms`` (default 1 s: unbounded, a real view can
@@ -45,13 +45,12 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
 
-import matcher  # noqa: E402
-from panorama_views import cut_view, view_pose  # noqa: E402
-from simulate import PEQ, pose_error, visible_lines  # noqa: E402
+from mapkit_harness.panorama import cut_view, view_pose
+from mapkit_harness.simulate import PEQ, pose_error, visible_lines
+from mapkit_harness.tables import add_report_option, markdown_table, reported
+
 
 #: Right, tight: within these (metres, degrees) of the true pose.
 RIGHT = (0.20, 5.0)
@@ -82,8 +81,13 @@ def main(argv=None) -> int:
     ap.add_argument("--rows", metavar="FILE.json", help="save every view's results here (for analysis)")
     ap.add_argument("--check", type=int, default=0, metavar="N",
                     help="only save N views with the map at the true pose to --overlays (ground-truth check)")
+    add_report_option(ap)
     args = ap.parse_args(argv)
+    return reported(args.report, lambda: run(args), __file__, argv)
 
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the tables."""
     from mapkit.errors import MapkitError
     try:
         views, floor, lmap_path, camera_height = prepare(args)
@@ -274,9 +278,10 @@ def classify(o) -> str:
 
 def table(rows, args) -> str:
     modes = [p for p in args.peq] + (["lost"] if args.lost_every else [])
-    out = ["| mode | views | views showing >= 6 map lines | within 20 cm / 5 deg (of those showing) | within 5 cm / 1 deg "
-           "| accepted and wrong | not localised | time ms median / p95 | lines per view (median) |",
-           "|---|---|---|---|---|---|---|---|---|"]
+    columns = ["mode", "views", "views showing >= 6 map lines", "within 20 cm / 5 deg (of those showing)",
+               "within 5 cm / 1 deg", "accepted and wrong", "not localised", "time ms median / p95",
+               "lines per view (median)"]
+    out = []
     for mode in modes:
         rs = [r for r in rows if mode in r["results"]]
         if not rs:
@@ -288,11 +293,10 @@ def table(rows, args) -> str:
         right_shown = sum(c in ("tight", "right") for c, s in zip(cls, shown) if s)
         ms = np.array([r["results"][mode]["seconds"] * 1000 for r in rs])
         name = f"PEQ {mode}" if mode != "lost" else "lost"
-        out.append(
-            f"| {name} | {n} | {ns} | {_pct(right, n)} ({_pct(right_shown, ns)}) | {_pct(cls.count('tight'), n)} "
-            f"| {_pct(cls.count('wrong'), n)} | {_pct(cls.count('none'), n)} "
-            f"| {np.median(ms):.0f} / {np.percentile(ms, 95):.0f} | {np.median([r['lines'] for r in rs]):.0f} |")
-    return "\n".join(out)
+        out.append([name, n, ns, f"{_pct(right, n)} ({_pct(right_shown, ns)})", _pct(cls.count("tight"), n),
+                    _pct(cls.count("wrong"), n), _pct(cls.count("none"), n),
+                    f"{np.median(ms):.0f} / {np.percentile(ms, 95):.0f}", f"{np.median([r['lines'] for r in rs]):.0f}"])
+    return markdown_table(columns, out)
 
 
 def _pct(k, n) -> str:

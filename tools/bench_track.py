@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Benchmark the tracker (matcher.Tracker) on simulated runs.
 
-Each run is drawn by tools/simulate_run.py (route through the map's free
+Each run is drawn by mapkit_harness/runs.py (route through the map's free
 space, 1 px line noise, 2 clutter lines a frame, odometry with 3 % distance
 noise and 1.5 degrees per metre drift) on the example map and on the real
 drawings in tests/data (built here with mapkit), with and without a kidnap
@@ -31,21 +31,20 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tools"))
+import matcher
+from matcher.tracking.route_plot import odometry_route
 
-import matcher  # noqa: E402
-from matcher.tracking.route_plot import odometry_route  # noqa: E402
-from simulate import pose_error  # noqa: E402
-from simulate_run import run_camera, simulate_run  # noqa: E402
+from mapkit_harness.runs import run_camera, simulate_run
+from mapkit_harness.simulate import pose_error
+from mapkit_harness.tables import Table, add_report_option, reported
+
+ROOT = Path(__file__).resolve().parent.parent
 
 #: The maps: name, source, mapkit build options (None: a committed .lmap).
 MAPS = {
@@ -130,10 +129,15 @@ def main(argv=None) -> int:
     ap.add_argument("--runs", type=int, default=3, help="runs per map and kind")
     ap.add_argument("--frames", type=int, default=150)
     ap.add_argument("--seed", type=int, default=0)
+    add_report_option(ap)
     args = ap.parse_args(argv)
-    print("| map | run | frames | localised | within 5 cm/1 deg | seeing | within, seeing | ATE m | odometry ATE m | "
-          "wrong | reloc frames | ms/frame | localize PEQ 1 ms | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    return reported(args.report, lambda: run_benchmark(args), __file__, argv)
+
+
+def run_benchmark(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
+    table = Table("map", "run", "frames", "localised", "within 5 cm/1 deg", "seeing", "within, seeing", "ATE m",
+                  "odometry ATE m", "wrong", "reloc frames", "ms/frame", "localize PEQ 1 ms", "ratio")
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.maps:
             linemap = load(name, Path(tmp))
@@ -152,11 +156,11 @@ def main(argv=None) -> int:
                 ate = math.sqrt(statistics.fmean(s for r in rows for s in r["se"]))
                 odo = math.sqrt(statistics.fmean(s for r in rows for s in r["odo_se"]))
                 seeing = sum(r["seeing"] for r in rows)
-                print(f"| {name} | {kind} | {n} | {100 * sum(r['ok'] for r in rows) / n:.1f} % | "
-                      f"{100 * sum(r['close'] for r in rows) / n:.1f} % | {seeing} | "
-                      f"{100 * sum(r['close_seeing'] for r in rows) / max(seeing, 1):.1f} % | {ate:.3f} | {odo:.3f} | "
-                      f"{sum(r['wrong'] for r in rows)} | {_reloc(relocs)} | {ms:.1f} | "
-                      f"{statistics.median(peq):.1f} | {ms / statistics.median(peq):.2f} |", flush=True)
+                table.row(name, kind, n, f"{100 * sum(r['ok'] for r in rows) / n:.1f} %",
+                          f"{100 * sum(r['close'] for r in rows) / n:.1f} %", seeing,
+                          f"{100 * sum(r['close_seeing'] for r in rows) / max(seeing, 1):.1f} %", f"{ate:.3f}",
+                          f"{odo:.3f}", sum(r["wrong"] for r in rows), _reloc(relocs), f"{ms:.1f}",
+                          f"{statistics.median(peq):.1f}", f"{ms / statistics.median(peq):.2f}")
     return 0
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Time the inspector (``mapkit view``) on grid flats of growing size.
 
-For each map (tools/synthetic_building.py's grid_flat, or .lmap files given
+For each map (mapkit_harness.plans.grid_flat, or .lmap files given
 on the command line) it prints a table row: the seconds to build the scene
 (Inspector start), until a websocket client holds every static node
 (from the start; this includes the 0.5 s of quiet that ends the client's
@@ -18,11 +18,12 @@ they happen on a given machine is this script's job.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from mapkit_harness.tables import Table, add_report_option, reported
 
 #: The built-in cases: (name, grid_flat arguments).
 CASES = [
@@ -33,10 +34,8 @@ CASES = [
 
 def time_map(m, repeat: int, browser) -> dict[str, float]:
     """Best-of-``repeat`` seconds of each step for one map."""
-    from test_view import _scene_names  # the websocket client of the tests
-    from test_view_browser import open_and_wait
-
     from mapkit.view.server import Inspector
+    from mapkit_harness.inspector import open_and_wait, scene_names
 
     best: dict[str, float] = {}
 
@@ -48,7 +47,7 @@ def time_map(m, repeat: int, browser) -> dict[str, float]:
         ins = Inspector(m, port=0)
         try:
             keep("build", ins.build_seconds)
-            _scene_names(ins.port, timeout=30)
+            scene_names(ins.port, timeout=30)
             keep("client", time.perf_counter() - t0)
             x, y = m.region_centres()[m.n_regions // 2]
             t1 = time.perf_counter()
@@ -61,44 +60,48 @@ def time_map(m, repeat: int, browser) -> dict[str, float]:
                 keep("browser", seconds)
                 browser.navigate("about:blank")
         finally:
-            ins.stop()  # viser says so on stderr; the table is on stdout
+            ins.stop()
     return best
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("maps", nargs="*", help=".lmap files (default: the grid flats of tools/synthetic_building.py)")
+    ap.add_argument("maps", nargs="*", help=".lmap files (default: the grid flats of mapkit_harness.plans)")
     ap.add_argument("--repeat", type=int, default=2, help="runs per map; the best is shown (default 2)")
     ap.add_argument("--no-browser", action="store_true", help="skip the chromium first-frame timing")
+    add_report_option(ap)
     args = ap.parse_args(argv)
-    sys.path.insert(0, str(ROOT / "tests"))
+    return reported(args.report, lambda: run(args), __file__, argv)
 
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
     from linemap.lmap import load_map
-    from synthetic_building import grid_flat
+    from mapkit_harness.plans import grid_flat
 
     cases = [(Path(p).name, load_map(p)) for p in args.maps] or [(name, grid_flat(**kw)) for name, kw in CASES]
-    browser_cm = None
-    browser = None
-    if not args.no_browser:
-        from test_view_browser import HEIGHT, WIDTH
+    # viser's server thread says "Server stopped" on stdout when it gets to
+    # it, which under load is after Inspector.stop() has returned: the table
+    # goes to the stdout this run was given, anything else printed meanwhile
+    # to stderr.
+    out = sys.stdout
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(contextlib.redirect_stdout(sys.stderr))
+        browser = None
+        if not args.no_browser:
+            from mapkit_harness.browser import Chromium
+            from mapkit_harness.inspector import HEIGHT, WIDTH
 
-        from mapkit.view.headless import Chromium
-
-        browser_cm = Chromium(WIDTH, HEIGHT)
-        browser = browser_cm.__enter__()
-    try:
-        print(f"best of {args.repeat}; seconds")
-        print()
-        print("| map | segments | regions | scene built | all nodes at a client | click + pose | first frame in chromium |")
-        print("|---|---|---|---|---|---|---|")
+            browser = stack.enter_context(Chromium(WIDTH, HEIGHT))
+        print(f"best of {args.repeat}; seconds", file=out)
+        print(file=out)
+        table = Table("map", "segments", "regions", "scene built", "all nodes at a client", "click + pose",
+                      "first frame in chromium", file=out)
         for name, m in cases:
             t = time_map(m, args.repeat, browser)
             shown = f"{t['browser']:.2f}" if "browser" in t else "-"
-            print(f"| {name} | {m.n_segments} | {m.n_regions} | {t['build']:.2f} | {t['client']:.2f} | "
-                  f"{t['interact']:.3f} | {shown} |", flush=True)
-    finally:
-        if browser_cm is not None:
-            browser_cm.__exit__(None, None, None)
+            table.row(name, m.n_segments, m.n_regions, f"{t['build']:.2f}", f"{t['client']:.2f}",
+                      f"{t['interact']:.3f}", shown)
     return 0
 
 

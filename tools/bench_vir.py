@@ -6,7 +6,7 @@ Cases: the synthetic apartment, and any plan given on the command line
 best-of-``--repeat`` seconds per step, regions, quadtree leaves, mean list
 length, map size (assemble_map + save_map); with ``--check N``, the superset
 property and the list/seen ratio at N seeded random points against the
-brute-force reference in tests/visibility_oracle.py.
+brute-force reference in mapkit_harness/visibility_oracle.py.
 
     python tools/bench_vir.py
     python tools/bench_vir.py maps/flat.dxf --check 200
@@ -17,13 +17,13 @@ brute-force reference in tests/visibility_oracle.py.
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
+from mapkit_harness.tables import Table, add_report_option, reported
+
 STEPS = ["time_visibility_polygons_s", "time_segment_regions_s", "time_grow_s", "time_quadtree_s", "time_merge_s", "time_geometry_s", "time_total_s"]
 
 
@@ -31,7 +31,7 @@ def load_case(path: str | None, opts):
     """(name, segments, kinds, walls, free_space, camera dict); ``path`` None
     is the synthetic apartment, "hall" the synthetic open hall."""
     if path in (None, "hall"):
-        from synthetic_building import apartment, open_hall
+        from mapkit_harness.plans import apartment, open_hall
 
         sc = apartment() if path is None else open_hall()
         name = "synthetic apartment" if path is None else "synthetic open hall"
@@ -51,8 +51,7 @@ def check(part, segs, walls, free, camera, n: int) -> tuple[int, float, float]:
     """(misses, mean list length at the points, mean seen count) at n points."""
     import shapely
 
-    sys.path.insert(0, str(ROOT / "tests"))
-    from visibility_oracle import VisibilityOracle, random_points
+    from mapkit_harness.visibility_oracle import VisibilityOracle, random_points
 
     oracle = VisibilityOracle(segs, walls, camera.height_m, camera.elevation_range(), 10.0, 0.3)
     polys = np.array(part.polygons + [None])[:-1]
@@ -69,12 +68,6 @@ def check(part, segs, walls, free, camera, n: int) -> tuple[int, float, float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from mapkit.assemble import assemble_map
-    from linemap.lmap import save_map
-    from mapkit.options import BuildOptions
-    from mapkit.vir import build_regions
-    from linemap.camera import Camera
-
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("plans", nargs="*", help="DXF plans or meshes, or 'hall' for the synthetic open hall (the synthetic apartment always runs)")
     ap.add_argument("--walls", action="append", default=[], help="wall layer globs, as for mapkit build")
@@ -83,10 +76,25 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--check", type=int, default=0, metavar="N", help="check the property at N random points")
     ap.add_argument("--min-cell", type=float, default=None)
     ap.add_argument("--merge-growth", type=float, default=None)
+    add_report_option(ap)
     args = ap.parse_args(argv)
+    return reported(args.report, lambda: run(args), __file__, argv)
+
+
+def run(args) -> int:
+    """The benchmark as ``main``'s arguments say; prints the table."""
+    from mapkit.assemble import assemble_map
+    from linemap.lmap import save_map
+    from mapkit.options import BuildOptions
+    from mapkit.vir import build_regions
+    from linemap.camera import Camera
+
     opts = BuildOptions(walls=args.walls, windows=args.windows)
     camera = Camera.from_dict(opts.camera)
     extra = {k: v for k, v in (("min_cell", args.min_cell), ("merge_growth", args.merge_growth)) if v is not None}
+    checked = [f"misses at {args.check} points", "list / seen"] if args.check else []
+    table = Table("plan", "segments", "regions", "leaves", "mean list", "map KiB", *(f"{k[5:-2]} s" for k in STEPS),
+                  *checked)
     for path in [None, *args.plans]:
         name, segs, kinds, walls, free, _ = load_case(path, opts)
         best = None
@@ -98,13 +106,12 @@ def main(argv: list[str] | None = None) -> int:
         m = assemble_map(segs, kinds, best.polygons, best.lists, walls, {"wall_height": 2.5})
         with tempfile.TemporaryDirectory() as tmp:
             size = save_map(Path(tmp) / "bench.lmap", m)
-        print(f"{name}: {len(segs)} segments, {st['regions']} regions, {st['quadtree_leaves']} leaves, "
-              f"mean list {st['mean_list_length']:.1f}, map {size / 1024:.1f} KiB")
-        print("  " + "  ".join(f"{k[5:-2]} {st[k]:.2f}" for k in STEPS))
+        row = [name, len(segs), st["regions"], st["quadtree_leaves"], f"{st['mean_list_length']:.1f}",
+               f"{size / 1024:.1f}", *(f"{st[k]:.2f}" for k in STEPS)]
         if args.check:
             misses, listed, seen = check(best, segs, walls, free, camera, args.check)
-            print(f"  check at {args.check} points: {misses} misses, list {listed:.1f} / seen {seen:.1f} = {listed / seen:.2f}")
-        sys.stdout.flush()
+            row += [misses, f"{listed:.1f} / {seen:.1f} = {listed / seen:.2f}"]
+        table.row(*row)
     return 0
 
 

@@ -667,9 +667,8 @@ def base_frame() -> dict:
     """A frame simulated on maps/flat.lmap that localises (seeded)."""
     import numpy as np
 
-    sys.path.insert(0, str(ROOT / "tools"))
     import matcher
-    import simulate
+    from mapkit_harness import simulate
 
     m = matcher.load_map(ROOT / "maps" / "flat.lmap")
     f = simulate.make_frame(m, matcher.Camera.from_dict(base_camera()), np.random.default_rng(4), 2)
@@ -682,12 +681,11 @@ def base_run() -> bytes:
     """Five frames of a simulated run on maps/flat.lmap as JSON Lines, and its start."""
     import numpy as np
 
-    sys.path.insert(0, str(ROOT / "tools"))
     import matcher
-    import simulate_run
+    from mapkit_harness.runs import simulate_run
 
     m = matcher.load_map(ROOT / "maps" / "flat.lmap")
-    run = simulate_run.simulate_run(m, matcher.Camera.from_dict(base_camera()), np.random.default_rng(3), frames=5)
+    run = simulate_run(m, matcher.Camera.from_dict(base_camera()), np.random.default_rng(3), frames=5)
     rows = [json.dumps({"t": t, "odom": [round(v, 6) for v in o], "lines": np.round(ls.reshape(-1, 4), 3).tolist()})
             for t, o, ls in zip(run.times, run.odom, run.lines)]
     return ("\n".join(rows) + "\n").encode(), [round(v, 4) for v in run.truth[0]]

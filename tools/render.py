@@ -1,18 +1,6 @@
-"""Grey images of a map seen from a pose, for testing the image path end to end.
-
-The scene: the map's wall outlines extruded from the floor (z = 0) to
-``meta["wall_height"]`` (the simulator's occluders, :mod:`simulate`), a flat
-floor and a flat ceiling, and across the door and window openings the walls
-above their heads and below their sills, with the slabs between the wall's
-two faces (from the map's LINTEL and WINDOW segments). Each pixel's ray is
-cast against all of them; the nearest surface gives its grey level. Wall
-faces are shaded by their orientation (a light from one side), so two walls
-meeting at a corner differ and the corner shows as an edge, as do the
-wall/floor and wall/ceiling junctions; a ray that leaves the building
-through an opening meets a plain grey background. Rendered ``supersample``
-times larger and averaged down (anti-aliased edges), lightly blurred, with
-seeded Gaussian noise: the edges LSD meets in a real frame, at known
-geometry.
+#!/usr/bin/env python3
+"""Render a grey image of a map seen from a pose (:mod:`mapkit_harness.render`:
+walls, floor, ceiling and openings shaded, anti-aliased, with seeded noise).
 
     python tools/render.py --pose 2.0,1.5,30 -o view.png
 """
@@ -27,243 +15,15 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from linemap.argv import join_negative_values  # noqa: E402
-from linemap.lmap import SegmentKind  # noqa: E402
-from linemap.camera import Camera  # noqa: E402
-from matcher.scene.freespace import free_space  # noqa: E402
-from linemap.geometry import in_field_of_view  # noqa: E402
-from matcher.scene.occlusion import inside_walls, wall_edges  # noqa: E402
-
-LINTEL, WINDOW = SegmentKind.LINTEL, SegmentKind.WINDOW
-
-#: Grey levels: floor, ceiling, and the range of wall shades.
-FLOOR_GREY = 45.0
-CEILING_GREY = 225.0
-WALL_GREY = (95.0, 175.0)
-#: Grey levels of a window sill's top and of the underside of a door or
-#: window head.
-SILL_GREY = 205.0
-HEAD_GREY = 70.0
-#: The two faces of a wall across an opening are at most this far apart, metres.
-_OPENING_DEPTH_M = 0.6
-#: What a ray that leaves the building through an opening sees.
-OUTSIDE_GREY = 135.0
-#: Floor and ceiling end this far, metres, from the map's regions (the floor
-#: the robot's centre reaches) where no wall bounds them: an open doorway.
-_FLOOR_REACH_M = 0.3
-#: Direction of the light that shades the walls, degrees from the x axis: off
-#: the axes, so that walls at right angles get different shades.
-LIGHT_DEG = 20.0
-#: Pixels cast per batch (bounds the (pixels, walls) arrays).
-_CHUNK = 65536
-
-
-def render_view(linemap, camera: Camera, pose, supersample: int = 3, blur_px: float = 0.6, noise: float = 2.0,
-                rng=None) -> np.ndarray:
-    """(height, width) uint8 image of ``linemap`` from ``pose`` ``(x, y,
-    yaw_deg)`` through the ideal pinhole ``camera`` (no distortion).
-
-    ``supersample``: rays per pixel along each axis; ``blur_px``: sigma of
-    the Gaussian blur, pixels (0: none); ``noise``: sigma of the Gaussian
-    noise, grey levels, drawn from ``rng`` (a numpy Generator; seeded 0 if
-    None)."""
-    if supersample < 1:
-        raise ValueError(f"supersample must be >= 1, got {supersample}")
-    s = int(supersample)
-    W, H = camera.width * s, camera.height * s
-    # Pixel (i, j) of the large image has its centre at ((j + 0.5) / s - 0.5,
-    # (i + 0.5) / s - 0.5) in the camera's pixels: averaging s x s blocks
-    # brings each back to the centre of its camera pixel.
-    u = (np.arange(W) + 0.5) / s - 0.5
-    v = (np.arange(H) + 0.5) / s - 0.5
-    uv = np.stack(np.meshgrid(u, v), axis=-1).reshape(-1, 2)
-    grey = shade_rays(linemap, camera, pose, uv).reshape(H, W)
-    if s > 1:
-        grey = cv2.resize(grey, (camera.width, camera.height), interpolation=cv2.INTER_AREA)
-    if blur_px > 0:
-        grey = cv2.GaussianBlur(grey, (0, 0), blur_px)
-    rng = np.random.default_rng(0) if rng is None else rng
-    grey = grey + rng.normal(0.0, noise, grey.shape)
-    return np.clip(np.rint(grey), 0, 255).astype(np.uint8)
-
-
-def shade_rays(linemap, camera: Camera, pose, uv: np.ndarray) -> np.ndarray:
-    """(P,) float32 grey level seen through pixels ``uv`` (P, 2) from ``pose``."""
-    x, y, yaw_deg = pose
-    R = camera.world2cam(math.radians(yaw_deg))
-    rays = camera.pixel_rays(uv) @ R  # (P, 3) world directions (R^T ray)
-    h = camera.height_m
-    top = float(linemap.meta.get("wall_height", 2.5))
-    scene = Scene(linemap, camera, pose)
-    free = free_space(linemap)
-    origin = np.array([x, y])
-    out = np.empty(len(uv), dtype=np.float32)
-    for i0 in range(0, len(uv), _CHUNK):
-        d = rays[i0:i0 + _CHUNK]
-        # Floor or ceiling, whichever the ray meets (rays along the horizon
-        # meet neither).
-        with np.errstate(divide="ignore"):
-            s_plane = np.where(d[:, 2] < 0, -h / d[:, 2], np.where(d[:, 2] > 0, (top - h) / d[:, 2], np.inf))
-        grey = np.where(d[:, 2] < 0, FLOOR_GREY, CEILING_GREY).astype(np.float32)
-        s_panel, panel = scene.first_panel(origin, h, d)
-        s_slab, slab = scene.first_slab(origin, h, d)
-        hit = (s_panel < s_plane) & (s_panel <= s_slab)
-        grey[hit] = scene.panel_grey[panel[hit]]
-        on_slab = (s_slab < s_plane) & (s_slab < s_panel)
-        grey[on_slab] = scene.slab_grey[slab[on_slab]]
-        # Nothing ahead but the floor or ceiling planes: the point seen is
-        # past an opening unless it lies by the map's regions.
-        out_of = np.isinf(s_panel) & np.isinf(s_slab)
-        if out_of.any():
-            reach = np.full(int(out_of.sum()), np.inf)
-            finite = np.isfinite(s_plane[out_of])
-            at = origin + s_plane[out_of][finite, None] * d[out_of][finite, :2]
-            reach[finite] = free.distance(at)
-            grey[out_of] = np.where(reach <= _FLOOR_REACH_M, grey[out_of], OUTSIDE_GREY)
-        out[i0:i0 + _CHUNK] = grey
-    return out
-
-
-class Scene:
-    """The surfaces a camera at ``pose`` can see, in the floor plane.
-
-    ``panels``: vertical faces along 2D edges ``a, b`` (E, 2) between
-    heights ``zlo, zhi`` (E,): the walls (all heights) and, across each door
-    or window opening, the wall above its head and below its sill (the
-    map's LINTEL and WINDOW segments on the wall faces). ``slabs``:
-    horizontal faces, convex quads (Q, 4, 2) at heights ``slab_z`` (Q,):
-    the sills' tops and the heads' undersides, between the two faces of the
-    wall. Only surfaces some pixel's ray can meet are kept."""
-
-    def __init__(self, linemap, camera: Camera, pose) -> None:
-        yaw = math.radians(pose[2])
-        top = float(linemap.meta.get("wall_height", 2.5))
-        walls = wall_edges(linemap)
-        a, b = (np.zeros((0, 2)), np.zeros((0, 2))) if walls is None else walls
-        grey = _panel_shades(a, b, _room_normals(a, b, walls))
-        zlo, zhi = np.full(len(a), -np.inf), np.full(len(a), np.inf)
-        pa, pb, plo, phi, pgrey, quads, qz, qgrey = _openings(linemap, top)
-        self.a, self.b = np.concatenate([a, pa]), np.concatenate([b, pb])
-        self.zlo, self.zhi = np.concatenate([zlo, plo]), np.concatenate([zhi, phi])
-        self.panel_grey = np.concatenate([grey, pgrey]).astype(np.float32)
-        z0 = np.zeros((len(self.a), 1))
-        as_segments = np.stack([np.hstack([self.a, z0]), np.hstack([self.b, z0])], axis=1)
-        keep = in_field_of_view(as_segments, camera, (pose[0], pose[1], yaw), 0.0, 0.0)
-        self.a, self.b, self.zlo, self.zhi = self.a[keep], self.b[keep], self.zlo[keep], self.zhi[keep]
-        self.panel_grey = self.panel_grey[keep]
-        self.quads, self.slab_z, self.slab_grey = quads, qz, qgrey.astype(np.float32)
-
-    def first_panel(self, origin: np.ndarray, h: float, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For rays ``(origin, h) + s d`` (d (P, 3)): the smallest s > 0 at
-        which each meets a panel within its heights (inf if none), and that
-        panel's index."""
-        if not len(self.a):
-            return np.full(len(d), np.inf), np.zeros(len(d), dtype=np.int64)
-        e = self.b - self.a  # (E, 2)
-        w = self.a - origin
-        den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]  # (P, E)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = (w[None, :, 0] * e[None, :, 1] - w[None, :, 1] * e[None, :, 0]) / den
-            t = (w[None, :, 0] * d[:, None, 1] - w[None, :, 1] * d[:, None, 0]) / den
-        z = h + s * d[:, None, 2]
-        s = np.where((den != 0) & (s > 1e-9) & (t >= 0) & (t <= 1) & (z >= self.zlo) & (z <= self.zhi), s, np.inf)
-        i = s.argmin(axis=1)
-        return s[np.arange(len(s)), i], i
-
-    def first_slab(self, origin: np.ndarray, h: float, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`first_panel` for the slabs."""
-        if not len(self.quads):
-            return np.full(len(d), np.inf), np.zeros(len(d), dtype=np.int64)
-        # (A ray level with a slab never meets it: inf and nan, dropped below.)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = (self.slab_z[None, :] - h) / d[:, None, 2]  # (P, Q)
-            p = origin + s[..., None] * d[:, None, :2]  # (P, Q, 2)
-            q = self.quads  # (Q, 4, 2), convex, either turning sense
-            edge = np.roll(q, -1, axis=1) - q
-            cross = edge[None, :, :, 0] * (p[:, :, None, 1] - q[None, :, :, 1]) \
-                - edge[None, :, :, 1] * (p[:, :, None, 0] - q[None, :, :, 0])  # (P, Q, 4)
-            inside = (cross >= 0).all(axis=2) | (cross <= 0).all(axis=2)
-        s = np.where(np.isfinite(s) & (s > 1e-9) & inside, s, np.inf)
-        i = s.argmin(axis=1)
-        return s[np.arange(len(s)), i], i
-
-
-def _room_normals(a: np.ndarray, b: np.ndarray, walls) -> np.ndarray:
-    """(E, 2) unit normal of each wall edge pointing out of the wall, into
-    the room (probed a centimetre to one side)."""
-    e = b - a
-    n = np.stack([e[:, 1], -e[:, 0]], axis=1) / np.maximum(np.linalg.norm(e, axis=1, keepdims=True), 1e-12)
-    if walls is None or not len(a):
-        return n
-    into_wall = inside_walls(0.5 * (a + b) + 0.01 * n, walls)
-    return np.where(into_wall[:, None], -n, n)
-
-
-def _panel_shades(a: np.ndarray, b: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """(E,) grey level of faces with room-side ``normals`` (E, 2): lit from
-    ``LIGHT_DEG``, so that walls at a corner and the two faces of one wall
-    differ."""
-    lo, hi = WALL_GREY
-    light = np.array([math.cos(math.radians(LIGHT_DEG)), math.sin(math.radians(LIGHT_DEG))])
-    return lo + (hi - lo) * (0.5 + 0.5 * normals @ light)
-
-
-def _openings(linemap, top: float):
-    """Panels and slabs of the door and window openings, from the map's
-    LINTEL and WINDOW segments. Two such segments at one height, parallel
-    and at most _OPENING_DEPTH_M apart, are the two faces of the wall over
-    (or under) one opening: each gets a panel (above a head, below a sill:
-    a WINDOW segment lower than half the wall height is a sill) facing away
-    from the other, and the quad between them is a slab.
-
-    Returns ``(a, b, zlo, zhi, grey)`` of the panels and ``(quads, z,
-    grey)`` of the slabs."""
-    segs = linemap.segments[np.isin(linemap.kinds, (LINTEL, WINDOW))]
-    kinds = linemap.kinds[np.isin(linemap.kinds, (LINTEL, WINDOW))]
-    horizontal = np.abs(segs[:, 0, 2] - segs[:, 1, 2]) < 1e-6
-    segs, kinds = segs[horizontal], kinds[horizontal]
-    pa, pb, plo, phi, pn, quads, qz, qgrey = [], [], [], [], [], [], [], []
-    for i in range(len(segs)):
-        a, b, z = segs[i, 0, :2], segs[i, 1, :2], segs[i, 0, 2]
-        e = b - a
-        length = float(np.hypot(*e))
-        if length < 1e-6:
-            continue
-        u = e / length
-        n = np.array([-u[1], u[0]])
-        sill = kinds[i] == WINDOW and z < 0.5 * top
-        for j in range(len(segs)):
-            c, f = segs[j, 0, :2], segs[j, 1, :2]
-            if j == i or abs(segs[j, 0, 2] - z) > 1e-6:
-                continue
-            off = float(np.dot(0.5 * (c + f) - a, n))
-            along = np.sort([np.dot(c - a, u), np.dot(f - a, u)])
-            if (abs(abs(np.dot((f - c) / max(np.hypot(*(f - c)), 1e-12), u)) - 1.0) > 1e-4
-                    or not 0.01 < abs(off) <= _OPENING_DEPTH_M or along[1] < 1e-3 or along[0] > length - 1e-3):
-                continue
-            # j is the other face: i's panel faces away from it.
-            pa.append(a)
-            pb.append(b)
-            plo.append(-np.inf if sill else z)
-            phi.append(z if sill else np.inf)
-            pn.append(-n if off > 0 else n)
-            if i < j:
-                quads.append(np.array([a, b, b + off * n, a + off * n]))
-                qz.append(z)
-                qgrey.append(SILL_GREY if sill else HEAD_GREY)
-            break
-    panels = (np.array(pa).reshape(-1, 2), np.array(pb).reshape(-1, 2), np.array(plo), np.array(phi))
-    grey = _panel_shades(panels[0], panels[1], np.array(pn).reshape(-1, 2))
-    return (*panels, grey, np.array(quads).reshape(-1, 4, 2), np.array(qz), np.array(qgrey))
+from linemap.argv import join_negative_values
+from mapkit_harness.render import render_view
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(description="Grey images of a map seen from a pose, for testing the image path end to end.")
     ap.add_argument("--map", default=str(Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"),
                     help=".lmap map (default: maps/flat.lmap)")
-    ap.add_argument("--camera", help="camera.json (default: the paper's camera of tools/simulate.py)")
+    ap.add_argument("--camera", help="camera.json (default: the paper's camera of the simulator)")
     ap.add_argument("--pose", required=True, help="X,Y,YAW_DEG of the camera")
     ap.add_argument("-o", "--out", required=True, help="output image (PNG)")
     ap.add_argument("--supersample", type=int, default=3)
@@ -271,7 +31,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(join_negative_values(sys.argv[1:] if argv is None else list(argv), ("--pose",)))
     import matcher
-    from simulate import paper_camera
+
+    from mapkit_harness.simulate import paper_camera
 
     try:
         pose = tuple(float(v) for v in args.pose.split(","))

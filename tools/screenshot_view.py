@@ -3,7 +3,7 @@
     python tools/screenshot_view.py [MAP] [-o docs/images/inspector.png]
 
 Opens the inspector on MAP (default: maps/flat.lmap if it has been built,
-else the grid flat of tools/synthetic_building.py) in Debian's headless chromium,
+else the grid flat of mapkit_harness.plans) in Debian's headless chromium,
 clicks a region, sets the pose tool, overlays a simulated matcher result
 (the model's own lines at a nearby pose, so no camera image is needed) and
 saves the page as PNG. Needs ``apt-get install -y chromium``.
@@ -50,8 +50,8 @@ def main(argv: list[str] | None = None) -> int:
     import cv2
 
     from linemap.lmap import load_map
-    from synthetic_building import grid_flat
-    from mapkit.view.headless import Chromium, wait_for
+    from mapkit_harness.browser import Chromium, wait_for
+    from mapkit_harness.plans import grid_flat
     from mapkit.view.result import parse_result
     from mapkit.view.server import Inspector
     from mapkit.view.stats import map_camera

@@ -20,9 +20,8 @@ numpy/shapely and testable alone):
 - :mod:`~mapkit.view.server`: :class:`~mapkit.view.server.Inspector`, which
   ties them together and reacts to clicks and pose changes.
 - :mod:`~mapkit.view.snapshot`: a standalone HTML file of the scene.
-- :mod:`~mapkit.view.headless`: a minimal headless-chromium driver (Chrome
-  DevTools Protocol) for the browser test and the README screenshot.
 
-The synthetic flat the inspector's tests and screenshot use is not here:
-it is :func:`grid_flat` in ``tools/synthetic_building.py``.
+The headless-chromium driver of the browser test and the README screenshot
+and the synthetic flat they use are not here: they are the harness's
+(:mod:`mapkit_harness.browser`, :func:`mapkit_harness.plans.grid_flat`).
 """

@@ -1,9 +1,25 @@
-"""Brute-force reference for segment visibility, independent of mapkit.visibility.
+"""Brute-force visibility, independent of mapkit.visibility: the ground truth
+the harness makes frames and synthetic maps from and checks the builder
+against.
 
-Straight from the definition in docs/visibility.md, point by point: every
-segment is sampled every ``step`` metres; a sample is seen from the floor
-point q if its distance and elevation suit the camera and the open 2D sight
-line from q to it crosses no occluder edge; a segment is visible if a run of
+Three questions, one sight test each, kept as they were written because
+the frames and maps made from them are pinned by tests and benchmarks (a
+change of the test's edge cases would change them):
+
+- :func:`sight_blocked`: do sight lines from one floor point to points on
+  wall faces cross a wall edge? (the simulator's frames,
+  :func:`mapkit_harness.simulate.visible_lines`);
+- :func:`visible_lists`: per region, the segments seen from some sample
+  point of it (the synthetic buildings' lists, shapely);
+- :class:`VisibilityOracle`: the segments visible from a floor point under
+  the builder's own definition, below (the region builder's tests and
+  ``tools/bench_vir.py``).
+
+:class:`VisibilityOracle`, straight from the definition in
+docs/visibility.md, point by point: every segment is sampled every ``step``
+metres; a sample is seen from the floor point q if its distance and
+elevation suit the camera and the open 2D sight line from q to it crosses
+no occluder edge; a segment is visible if a run of
 consecutive seen samples spans at least ``min_visible_length`` (a segment
 shorter than that: every sample). Occluders are shrunk by twice the
 builder's ``OCCLUSION_SHRINK``, so the reference sees slightly more than the
@@ -17,7 +33,63 @@ import math
 import numpy as np
 import shapely
 
+from mapkit.shapes import rings_of
 from mapkit.tolerances import OCCLUSION_SHRINK
+
+
+def sight_blocked(c: np.ndarray, q: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """(S,) bool: sight lines from c (2,) to points q (S, 2) cross a wall edge.
+
+    Sight lines are shortened by 2 mm at q, which lies on a wall face."""
+    d = q - c
+    ln = np.linalg.norm(d, axis=1, keepdims=True)
+    q2 = c + d * np.maximum(ln - 2e-3, 0) / np.maximum(ln, 1e-12)
+    r = q2 - c  # (S, 2)
+    s = eb - ea  # (E, 2)
+    denom = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
+    w = ea[None] - c[None, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / denom
+        u = (w[..., 0] * r[:, None, 1] - w[..., 1] * r[:, None, 0]) / denom
+    hit = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
+    return hit.any(axis=1)
+
+
+def _sample_points(reg, spacing: float) -> np.ndarray:
+    """Points of a region: a grid inside plus points along its outline."""
+    x0, y0, x1, y1 = reg.bounds
+    gx, gy = np.meshgrid(np.arange(x0 + spacing / 2, x1, spacing), np.arange(y0 + spacing / 2, y1, spacing))
+    pts = np.stack([gx.ravel(), gy.ravel()], 1)
+    pts = pts[shapely.contains_xy(reg, pts[:, 0], pts[:, 1])]
+    outline = []
+    for ring, _ in rings_of(reg):
+        closed = np.vstack([ring, ring[:1]])
+        for a, b in zip(closed[:-1], closed[1:]):
+            n = max(1, int(np.ceil(np.hypot(*(b - a)) / spacing)))
+            outline.append(a + np.linspace(0, 1, n, endpoint=False)[:, None] * (b - a))
+    return np.concatenate([pts] + outline)
+
+
+def visible_lists(regions, segments, walls, spacing: float = 0.25, samples: int = 10,
+                  min_seen: float = 0.1) -> list[np.ndarray]:
+    """Per region, the segments with ``min_seen`` metres unoccluded from some
+    sample point of the region (a grid plus its outline; brute force, shapely)."""
+    occ = walls.buffer(-2e-3)
+    shapely.prepare(occ)
+    t = (np.arange(samples) + 0.5) / samples
+    seg_pts = segments[:, 0, None, :2] + t[None, :, None] * (segments[:, 1, None, :2] - segments[:, 0, None, :2])
+    seg_len = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
+    flat = seg_pts.reshape(-1, 2)
+    lists = []
+    for reg in regions:
+        pts = _sample_points(reg, spacing)
+        starts = np.repeat(pts, len(flat), axis=0)
+        ends = np.tile(flat, (len(pts), 1))
+        lines = shapely.linestrings(np.stack([starts, ends], axis=1))
+        blocked = shapely.intersects(lines, occ).reshape(len(pts), len(segments), samples)
+        seen = ((~blocked).sum(axis=2) * seg_len / samples >= min_seen).any(axis=0)
+        lists.append(np.nonzero(seen)[0])
+    return lists
 
 
 def occluder_edges(occluders, shrink: float) -> np.ndarray:

@@ -1,7 +1,7 @@
 """Synthetic DXF floor plans drawn the way architects draw them, with known answers.
 
-The companion of :mod:`synthetic_building` (which makes shapely scenes and
-maps): these functions write DXF drawings through ezdxf, for the importer's
+The companion of :mod:`mapkit_harness.plans.buildings` (which makes shapely
+scenes and maps): these functions write DXF drawings through ezdxf, for the importer's
 tests and for ``tools/bench_build.py``. Each returns a :class:`PlanFacts`
 holding what the drawing is known to contain (free floor area before the
 robot radius, door count), so tests assert against it rather than against

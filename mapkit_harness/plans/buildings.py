@@ -1,10 +1,8 @@
-"""Synthetic buildings with known geometry: the one generator the tests,
-the simulator, the benchmarks and the inspector's screenshot share.
+"""Synthetic buildings with known geometry, made in code: the buildings the
+tests, the simulator, the benchmarks and the inspector's screenshot share.
 
-Not part of the installed packages: real maps come from ``mapkit build``;
-these exist so that tests and benchmarks have ground truth that does not
-hang on the map builder. Tests import it through ``sys.path`` (see
-``tests/conftest.py``), scripts in ``tools/`` import it directly.
+Real maps come from ``mapkit build``; these exist so that tests and
+benchmarks have ground truth that does not hang on the map builder.
 
 One recipe for every building (metres, z up):
 
@@ -14,7 +12,7 @@ One recipe for every building (metres, z up):
   vertical edge at each corner; door gaps add their lintels
   (:func:`lintels`);
 - regions and their lists, when a map is wanted: by brute-force visibility
-  (:func:`visible_lists`, exact but slow) or by room and distance
+  (:func:`mapkit_harness.visibility_oracle.visible_lists`, exact but slow) or by room and distance
   (:func:`room_or_near_lists`, cheap enough for thousands of regions).
 
 Buildings:
@@ -45,8 +43,15 @@ from mapkit.assemble import assemble_map
 from mapkit.shapes import polygon_parts, rings_of
 from mapkit.tolerances import CORNER_DEG
 
+from mapkit_harness.visibility_oracle import visible_lists
+
 WALL_HEIGHT = 2.5
 ROBOT_RADIUS = 0.2
+
+#: The provenance the maps below carry in their META: the generator's name
+#: when these maps were first made, kept so that they stay byte for byte the
+#: maps the tests and the cached benchmark flat were made with.
+SOURCE = "tools/synthetic_building.py"
 
 # --------------------------------------------------------------------------
 # Segments
@@ -109,44 +114,7 @@ def _joined(*parts: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarr
 
 
 # --------------------------------------------------------------------------
-# Region lists
-
-
-def _sample_points(reg, spacing: float) -> np.ndarray:
-    """Points of a region: a grid inside plus points along its outline."""
-    x0, y0, x1, y1 = reg.bounds
-    gx, gy = np.meshgrid(np.arange(x0 + spacing / 2, x1, spacing), np.arange(y0 + spacing / 2, y1, spacing))
-    pts = np.stack([gx.ravel(), gy.ravel()], 1)
-    pts = pts[shapely.contains_xy(reg, pts[:, 0], pts[:, 1])]
-    outline = []
-    for ring, _ in rings_of(reg):
-        closed = np.vstack([ring, ring[:1]])
-        for a, b in zip(closed[:-1], closed[1:]):
-            n = max(1, int(np.ceil(np.hypot(*(b - a)) / spacing)))
-            outline.append(a + np.linspace(0, 1, n, endpoint=False)[:, None] * (b - a))
-    return np.concatenate([pts] + outline)
-
-
-def visible_lists(regions, segments, walls, spacing: float = 0.25, samples: int = 10,
-                  min_seen: float = 0.1) -> list[np.ndarray]:
-    """Per region, the segments with ``min_seen`` metres unoccluded from some
-    sample point of the region (a grid plus its outline; brute force, shapely)."""
-    occ = walls.buffer(-2e-3)
-    shapely.prepare(occ)
-    t = (np.arange(samples) + 0.5) / samples
-    seg_pts = segments[:, 0, None, :2] + t[None, :, None] * (segments[:, 1, None, :2] - segments[:, 0, None, :2])
-    seg_len = np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1)
-    flat = seg_pts.reshape(-1, 2)
-    lists = []
-    for reg in regions:
-        pts = _sample_points(reg, spacing)
-        starts = np.repeat(pts, len(flat), axis=0)
-        ends = np.tile(flat, (len(pts), 1))
-        lines = shapely.linestrings(np.stack([starts, ends], axis=1))
-        blocked = shapely.intersects(lines, occ).reshape(len(pts), len(segments), samples)
-        seen = ((~blocked).sum(axis=2) * seg_len / samples >= min_seen).any(axis=0)
-        lists.append(np.nonzero(seen)[0])
-    return lists
+# Region lists (exact ones: :func:`mapkit_harness.visibility_oracle.visible_lists`)
 
 
 def room_or_near_lists(regions, segments, room_size: tuple[float, float], rooms_y: int,
@@ -337,7 +305,7 @@ def make_flat_map(cell: float | None = 1.0) -> LineMap:
                 if parts:
                     regions.append(unary_union(parts))
     lists = visible_lists(regions, segments, walls)
-    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": "tools/synthetic_building.py",
+    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": SOURCE,
             "robot_radius": ROBOT_RADIUS, "region_cell": cell}
     return assemble_map(segments, kinds, regions, lists, walls, meta)
 
@@ -351,7 +319,7 @@ def make_small_flat() -> LineMap:
     segments, kinds = flat_segments(free)
     regions = [r.difference(box(2.4, 2.2, 2.8, 2.6)).buffer(-ROBOT_RADIUS, join_style="mitre") for r in rooms]
     lists = visible_lists(regions, segments, walls, spacing=0.5, samples=8)
-    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": "tools/synthetic_building.py"}
+    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": SOURCE}
     return assemble_map(segments, kinds, regions, lists, walls, meta)
 
 
@@ -361,7 +329,7 @@ def make_box_map(width: float = 6.0, depth: float = 5.0) -> LineMap:
     walls = box(-0.15, -0.15, width + 0.15, depth + 0.15).difference(free)
     segments, kinds = flat_segments(free)
     region = free.buffer(-ROBOT_RADIUS, join_style="mitre")
-    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": "tools/synthetic_building.py"}
+    meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": SOURCE}
     return assemble_map(segments, kinds, [region], [np.arange(len(segments))], walls, meta)
 
 
@@ -461,5 +429,5 @@ def grid_flat(
 __all__ = [
     "DEMO_CAMERA", "SyntheticScene", "apartment", "cached_flat_map", "flat_geometry", "flat_segments", "grid_flat",
     "l_room", "lintels", "make_box_map", "make_flat_map", "make_small_flat", "open_hall", "outline_segments",
-    "room_or_near_lists", "scene_from_walls", "single_room", "two_rooms", "visible_lists",
+    "room_or_near_lists", "scene_from_walls", "single_room", "two_rooms",
 ]

@@ -1,6 +1,7 @@
 """A minimal headless-chromium driver over the Chrome DevTools Protocol.
 
-Used by the inspector's browser test and by ``tools/screenshot_view.py``.
+Used by the inspector's browser test, ``tools/screenshot_view.py`` and
+``tools/bench_view.py``.
 It needs only Debian's ``chromium`` and the ``websockets`` package (already
 a dependency of viser): chromium is started with ``--remote-debugging-port=0``,
 writes the port it chose into its profile directory, and we speak CDP (JSON

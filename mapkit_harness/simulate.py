@@ -1,0 +1,222 @@
+"""Synthetic frames for the paper's protocol (docs/method.md section 9).
+
+A frame: a random camera pose in free space (inside a region of the map),
+the model segments it sees (occluded by the map's walls, extruded to
+``meta["wall_height"]``, clipped to the image and to the range the map's
+lists were built for), uniform noise on each line's
+orientation, offset and end points, random clutter lines, and a prior drawn
+within the bounds of a PEQ. ``python tools/simulate.py`` prints one frame;
+the baseline the paper sets out to beat is :mod:`mapkit_harness.baseline`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from linemap.camera import Camera
+from matcher.scene.occlusion import wall_edges
+from matcher.stage1.constraints import wrap
+
+from mapkit_harness.visibility_oracle import sight_blocked
+
+PEQ = {1: (0.2, 10.0), 2: (0.4, 20.0), 3: (0.6, 30.0), 4: (0.8, 40.0), 5: (1.0, 50.0)}
+
+#: The paper's camera; height and pitch are ours (the paper gives none).
+PAPER_CAMERA = dict(width=640, height=480, fx=900.0, fy=900.0, cx=320.0, cy=240.0, height_m=1.2, pitch_deg=0.0)
+
+
+def paper_camera(height_m: float = 1.2, pitch_deg: float = 0.0) -> Camera:
+    return Camera.from_dict({**PAPER_CAMERA, "height_m": height_m, "pitch_deg": pitch_deg})
+
+
+@dataclass
+class Frame:
+    """One simulated frame. ``lines`` (M, 2, 2) pixels; ``truth`` (M,) model
+    segment id of each line, -1 for clutter; ``pose`` and ``prior`` are
+    ``(x, y, yaw_deg)``."""
+
+    pose: tuple[float, float, float]
+    prior: tuple[float, float, float]
+    dt: float
+    dyaw: float
+    lines: np.ndarray
+    truth: np.ndarray
+    #: The frame's own pitch and roll, degrees (the camera file's unless
+    #: :func:`make_frame` drew them).
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
+
+    def true_matches(self) -> list[list[int]]:
+        return sorted([int(s), j] for j, s in enumerate(self.truth) if s >= 0)
+
+
+def _clip_to_frustum(seg: np.ndarray, camera: Camera, x, y, yaw) -> np.ndarray | None:
+    """Part of a segment (2, 3) in front of the camera and inside the image pyramid."""
+    R = camera.world2cam(yaw)
+    C = camera.centre(x, y)
+    p = (seg - C) @ R.T  # camera coords
+    w, h = camera.width, camera.height
+    # Half-spaces n . X >= 0 of the view pyramid, and the near plane.
+    planes = [
+        np.array([camera.fx, 0.0, camera.cx]),  # u >= 0
+        np.array([-camera.fx, 0.0, w - camera.cx]),  # u <= w
+        np.array([0.0, camera.fy, camera.cy]),  # v >= 0
+        np.array([0.0, -camera.fy, h - camera.cy]),  # v <= h
+    ]
+    t0, t1 = 0.0, 1.0
+    a, b = p[0], p[1]
+    for n, off in [(pl, 0.0) for pl in planes] + [(np.array([0.0, 0.0, 1.0]), -0.05)]:
+        fa, fb = n @ a + off, n @ b + off
+        if fa < 0 and fb < 0:
+            return None
+        if fa < 0:
+            t0 = max(t0, fa / (fa - fb))
+        elif fb < 0:
+            t1 = min(t1, fa / (fa - fb))
+    if t1 - t0 < 1e-6:
+        return None
+    return np.array([seg[0] + t0 * (seg[1] - seg[0]), seg[0] + t1 * (seg[1] - seg[0])])
+
+
+def map_range(linemap) -> float:
+    """The range, metres, that the map's region lists were built with (its
+    ``build`` record; no limit for a map without one). A segment seen only
+    from farther is in no list: a frame that shows it would test the
+    map's range, not the matcher. (The lists' minimum visible length is not
+    applied: a region's list holds a segment that any of its points sees
+    long enough, so a sliver in a frame is usually listed, and a line the
+    lists lack is one more clutter line.)"""
+    build = linemap.meta.get("build", {}) if isinstance(linemap.meta, dict) else {}
+    return float(build.get("max_range", math.inf))
+
+
+def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: int = 160):
+    """Ideal image lines of the visible model segments at ``pose`` (x, y, yaw_deg).
+
+    Returns ``(lines (n, 2, 2) pixels, segment ids (n,))``: the longest
+    unoccluded run of each segment inside the image and within the map's
+    range (:func:`map_range`, 3D distance from the camera centre), if at
+    least ``min_px`` long."""
+    x, y, yaw_deg = pose
+    yaw = math.radians(yaw_deg)
+    walls = wall_edges(linemap)
+    ea, eb = walls if walls is not None else (np.zeros((0, 2)), np.zeros((0, 2)))
+    c = np.array([x, y])
+    centre = camera.centre(x, y)
+    max_range = map_range(linemap)
+    out, ids = [], []
+    for i, seg in enumerate(linemap.segments):
+        part = _clip_to_frustum(seg, camera, x, y, yaw)
+        if part is None:
+            continue
+        t = np.linspace(0.0, 1.0, samples)
+        pts = part[0] + t[:, None] * (part[1] - part[0])
+        vis = ~sight_blocked(c, pts[:, :2], ea, eb) & (np.linalg.norm(pts - centre, axis=1) <= max_range)
+        if not vis.any():
+            continue
+        # Longest run of visible samples.
+        best, start, best_rng = 0, None, None
+        for k, ok in enumerate(np.append(vis, False)):
+            if ok and start is None:
+                start = k
+            elif not ok and start is not None:
+                if k - start > best:
+                    best, best_rng = k - start, (start, k - 1)
+                start = None
+        p3 = pts[[best_rng[0], best_rng[1]]]
+        uv, z = camera.project(p3, x, y, yaw)
+        if (z <= 0).any() or np.linalg.norm(uv[1] - uv[0]) < min_px:
+            continue
+        out.append(uv)
+        ids.append(i)
+    if not out:
+        return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
+    return np.array(out), np.array(ids, dtype=np.int64)
+
+
+def add_noise(lines: np.ndarray, rng, px: float, deg: float, end_px: float, camera: Camera) -> np.ndarray:
+    """Uniform noise on the line parameters: rotation about the midpoint in
+    [-deg, deg], offset along the normal in [-px, px], each end point moved
+    along the line by [-end_px, end_px]; then clipped to the image."""
+    a, b = lines[:, 0], lines[:, 1]
+    mid = 0.5 * (a + b)
+    d = b - a
+    ln = np.linalg.norm(d, axis=1, keepdims=True)
+    d = d / ln
+    th = np.radians(rng.uniform(-deg, deg, len(lines)))
+    c, s = np.cos(th), np.sin(th)
+    d = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]], axis=1)
+    nrm = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    mid = mid + rng.uniform(-px, px, (len(lines), 1)) * nrm
+    ta = -0.5 * ln[:, 0] + rng.uniform(-end_px, end_px, len(lines))
+    tb = 0.5 * ln[:, 0] + rng.uniform(-end_px, end_px, len(lines))
+    out = np.stack([mid + ta[:, None] * d, mid + tb[:, None] * d], axis=1)
+    out[..., 0] = np.clip(out[..., 0], 0, camera.width)
+    out[..., 1] = np.clip(out[..., 1], 0, camera.height)
+    return out
+
+
+def clutter_lines(rng, n: int, camera: Camera, min_len: float = 30.0, max_len: float = 200.0) -> np.ndarray:
+    """``n`` random lines inside the image (non-modelled objects)."""
+    out = []
+    while len(out) < n:
+        m = rng.uniform([0, 0], [camera.width, camera.height])
+        th = rng.uniform(0, np.pi)
+        half = 0.5 * rng.uniform(min_len, max_len) * np.array([np.cos(th), np.sin(th)])
+        a, b = m - half, m + half
+        a = np.clip(a, 0, [camera.width, camera.height])
+        b = np.clip(b, 0, [camera.width, camera.height])
+        if np.linalg.norm(b - a) >= min_len:
+            out.append([a, b])
+    return np.array(out).reshape(-1, 2, 2)
+
+
+def random_free_pose(linemap, rng, margin: float = 0.0):
+    """(x, y, yaw_deg) uniform over the map's regions, yaw uniform."""
+    pts = linemap.ring_points
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    while True:
+        x, y = rng.uniform(lo, hi)
+        if len(linemap.regions_at(x, y)):
+            return float(x), float(y), float(rng.uniform(-180.0, 180.0))
+
+
+def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, noise_deg: float = 1.0,
+               end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int = 9,
+               roll_deg: float = 0.0, pitch_error_deg: float = 0.0) -> Frame:
+    """A frame of the paper's protocol: a pose seeing ``min_seen`` to ``max_seen``
+    segments (redrawn otherwise), noisy lines, clutter, a prior within PEQ bounds.
+
+    ``roll_deg``, ``pitch_error_deg``: the frame's camera is rolled and its
+    pitch off the camera file's by amounts drawn uniformly within these
+    bounds, degrees (a camera not mounted exactly, a robot that rocks); with
+    both 0 nothing is drawn (the frames are those of a level camera)."""
+    dt, dyaw = PEQ[peq]
+    real = camera
+    if roll_deg or pitch_error_deg:
+        roll = camera.roll_deg + float(rng.uniform(-roll_deg, roll_deg))
+        pitch = camera.pitch_deg + float(rng.uniform(-pitch_error_deg, pitch_error_deg))
+        real = replace(camera, roll_deg=roll, pitch_deg=pitch)
+    while True:
+        pose = random_free_pose(linemap, rng)
+        ideal, ids = visible_lines(linemap, real, pose)
+        if min_seen <= len(ids) <= max_seen:
+            break
+    noisy = add_noise(ideal, rng, noise_px, noise_deg, end_px, camera)
+    extra = clutter_lines(rng, clutter, camera)
+    lines = np.concatenate([noisy, extra])
+    truth = np.concatenate([ids, -np.ones(len(extra), dtype=np.int64)])
+    perm = rng.permutation(len(lines))
+    r = dt * math.sqrt(rng.uniform())
+    phi = rng.uniform(0, 2 * math.pi)
+    prior = (pose[0] + r * math.cos(phi), pose[1] + r * math.sin(phi),
+             float(math.degrees(wrap(math.radians(pose[2] + rng.uniform(-dyaw, dyaw))))))
+    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm], real.pitch_deg, real.roll_deg)
+
+
+def pose_error(a, b) -> tuple[float, float]:
+    """(position error m, |yaw error| deg) between two (x, y, yaw_deg) poses."""
+    return float(math.hypot(a[0] - b[0], a[1] - b[1])), float(abs(math.degrees(wrap(math.radians(a[2] - b[2])))))
