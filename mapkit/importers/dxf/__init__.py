@@ -26,7 +26,7 @@ from ezdxf import bbox
 
 from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
-from mapkit.importers.dxf.read import read_dxf
+from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.units import decide_units
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
@@ -61,14 +61,14 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     doc, warnings = read_dxf(path)
     for w in warnings:
         log.warning(w)
-    check_entity_count(doc.modelspace(), doc.blocks, options.max_entities)
+    check_entity_count(model_space(doc), doc.blocks, options.max_entities)
     counts = layer_counts(doc)
     roles, role_warnings = resolve_roles(counts, options)
     for w in role_warnings:
         log.warning(w)
     warnings += role_warnings
 
-    msp = doc.modelspace()
+    msp = model_space(doc)
     used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
     extent, far = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
