@@ -4,12 +4,20 @@ each reproduced in a small drawing these tests write."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import ezdxf
+import numpy as np
+import pytest
 import shapely
 from cli_helpers import run
 from shapely import wkt
 
+from linemap.lmap import load_map
+from mapkit.importers.dxf.layer_roles import guess_role
 from mapkit.importers.dxf.openings import _clipped
+
+FLAT = Path(__file__).resolve().parent.parent / "maps" / "flat.dxf"
 
 
 def _room(path, layer: str = "A-WALL", version: str = "R2013"):
@@ -49,3 +57,53 @@ def test_a_wall_sliver_that_geos_rectangle_clip_refuses_is_clipped():
     box = (392.84082582051, 716.9203400091477, 417.94156838924243, 750.2255208832047)
     cut = _clipped(sliver, box)
     assert cut.area == shapely.box(*box).intersection(sliver).area
+
+
+#: The example flat's layers named as a Chinese, a Russian, a Japanese and
+#: a Korean drawing name them (the Chinese college floors of the corpus:
+#: 墙线 wall lines, 柱子 columns, 门线 door lines, 窗线 window lines).
+FOREIGN_LAYERS = {
+    "chinese": {"A-WALL": "墙线", "A-COLS": "柱子", "A-DOOR": "门线", "A-GLAZ": "窗线", "A-ANNO": "标注",
+                "A-FURN": "家具", "A-FURN-OVHD": "家具2"},
+    "russian": {"A-WALL": "Стены", "A-COLS": "Колонны", "A-DOOR": "Двери", "A-GLAZ": "Окна", "A-ANNO": "Размеры",
+                "A-FURN": "Мебель", "A-FURN-OVHD": "Мебель-2"},
+    "japanese": {"A-WALL": "壁", "A-COLS": "柱", "A-DOOR": "扉", "A-GLAZ": "窓", "A-ANNO": "寸法",
+                 "A-FURN": "家具", "A-FURN-OVHD": "家具2"},
+    "korean": {"A-WALL": "벽", "A-COLS": "기둥", "A-DOOR": "문", "A-GLAZ": "창", "A-ANNO": "치수",
+               "A-FURN": "가구", "A-FURN-OVHD": "가구2"},
+}
+
+
+@pytest.mark.parametrize("language", sorted(FOREIGN_LAYERS))
+def test_layer_names_in_other_languages_build_as_the_english_ones(tmp_path, capsys, language):
+    """The flat drawn with its layers named in another language builds with
+    defaults into the same segments as with its AIA names (before: refused,
+    'no recognisable walls')."""
+    names = FOREIGN_LAYERS[language]
+    doc = ezdxf.readfile(FLAT)
+    for old, new in names.items():
+        doc.layers.add(new)
+        for e in doc.modelspace():
+            if e.dxf.get("layer") == old:
+                e.dxf.layer = new
+    foreign = tmp_path / f"flat_{language}.dxf"
+    doc.saveas(foreign)
+    code, _, err = run(capsys, "build", foreign, "-o", tmp_path / "foreign.lmap", "-q")
+    assert code == 0, err
+    code, _, err = run(capsys, "build", FLAT, "-o", tmp_path / "english.lmap", "-q")
+    assert code == 0, err
+    a, b = load_map(tmp_path / "foreign.lmap"), load_map(tmp_path / "english.lmap")
+    assert np.array_equal(a.segments, b.segments) and np.array_equal(a.kinds, b.kinds)
+
+
+@pytest.mark.parametrize("layer,role", [
+    ("墙线", "walls"), ("墙体", "walls"), ("柱子", "walls"), ("门线", "doors"), ("窗线", "windows"), ("窗户", "windows"),
+    ("幕墙", "windows"), ("门墙窗标注", "ignore"), ("使用面积线", "ignore"), ("轴线", "ignore"), ("填充", "ignore"),
+    ("Стены", "walls"), ("Перегородки", "walls"), ("Двери", "doors"), ("Окна", "windows"), ("Пол", "floor"),
+    ("Полки", None), ("Оси", "ignore"), ("壁", "walls"), ("窓", "windows"), ("ドア", "doors"), ("寸法", "ignore"),
+    ("벽", "walls"), ("문", "doors"), ("문자", "ignore"), ("창호", "windows"), ("Hatches", "ignore"), ("Luft", "ignore"),
+    ("Muren", "walls"), ("Wanden", "walls"), ("Deuren", "doors"), ("Ramen", "windows"), ("Paredes", "walls"),
+    ("Janelas", "windows"), ("Finestre", "windows"), ("Pareti", "walls"), ("Fenêtres", "windows"), ("Türen", "doors"),
+])
+def test_layer_words_of_many_languages(layer, role):
+    assert guess_role(layer) == role
