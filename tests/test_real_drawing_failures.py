@@ -4,6 +4,7 @@ each reproduced in a small drawing these tests write."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import ezdxf
@@ -107,3 +108,50 @@ def test_layer_names_in_other_languages_build_as_the_english_ones(tmp_path, caps
 ])
 def test_layer_words_of_many_languages(layer, role):
     assert guess_role(layer) == role
+
+
+def _translated(plan, by_m, path):
+    """``plan`` (the flat, drawn in millimetres) moved by ``by_m`` (x, y) metres, written to ``path``."""
+    doc = ezdxf.readfile(plan)
+    assert doc.header["$INSUNITS"] == 4
+    for e in doc.modelspace():
+        try:
+            e.translate(by_m[0] * 1000, by_m[1] * 1000, 0.0)
+        except (NotImplementedError, AttributeError, TypeError):  # dimensions and texts: ignored layers anyway
+            pass
+    doc.saveas(path)
+    return path
+
+
+def test_a_georeferenced_drawing_is_moved_to_a_local_origin(tmp_path, capsys):
+    """A facility-management plan 1758 km from its file's origin (a national
+    grid) was refused ('coordinates exceed the format's range'); it builds
+    in a local frame, the offset kept in the map, shown by 'mapkit info' and
+    added back by 'mapkit export --drawing-coordinates'."""
+    far = np.array([1_758_000.0, 512_000.0])  # metres
+    geo_path = _translated(FLAT, far, tmp_path / "georeferenced.dxf")
+    code, _, err = run(capsys, "build", geo_path, "-o", tmp_path / "geo.lmap", "-q")
+    assert code == 0, err
+    assert "1831 km from its origin (georeferenced)" in err
+    geo = load_map(tmp_path / "geo.lmap")
+    offset = np.array(geo.meta["origin_offset_m"])
+    assert np.array_equal(offset, [1758000.0, 511999.0])  # the building's lower-left corner, whole metres
+    # The same building drawn near the origin in the same local frame gives the same map.
+    local_path = _translated(FLAT, far - offset, tmp_path / "local.dxf")
+    code, _, err = run(capsys, "build", local_path, "-o", tmp_path / "local.lmap", "-q")
+    assert code == 0 and "georeferenced" not in err, err
+    local = load_map(tmp_path / "local.lmap")
+    # The round trip through 1.8e9 mm leaves coordinates a micrometre apart,
+    # which may tip where a wall edge is split or a quadtree cell divides.
+    same = {tuple(np.round(s, 3).ravel()) for s in geo.segments} & {tuple(np.round(s, 3).ravel()) for s in local.segments}
+    assert len(same) >= 0.98 * len(local.segments)
+    assert abs(geo.n_regions - local.n_regions) <= 0.02 * local.n_regions
+
+    code, out, _ = run(capsys, "info", tmp_path / "geo.lmap")
+    assert code == 0 and f"the drawing's ({offset[0]:.3f}, {offset[1]:.3f}) m (georeferenced" in out
+    code, _, err = run(capsys, "export", tmp_path / "geo.lmap", "--geojson", tmp_path / "geo.geojson",
+                       "--drawing-coordinates")
+    assert code == 0, err
+    lines = [f for f in json.loads((tmp_path / "geo.geojson").read_text())["features"]
+             if f["geometry"]["type"] == "LineString"]
+    assert np.allclose(np.array(lines[0]["geometry"]["coordinates"])[:, :2], geo.segments[0, :, :2] + offset)

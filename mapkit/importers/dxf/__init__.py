@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +33,7 @@ from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
-from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES
+from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES, LOCAL_ORIGIN_BEYOND_M
 
 SUFFIXES = (".dxf",)
 
@@ -91,6 +92,15 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         log.warning(message)
         warnings.append(message)
 
+    offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES])
+    if offset is not None:
+        strokes = [replace(s, coords=s.coords - offset) for s in strokes]
+        message = (f"the drawing lies {np.hypot(*offset) / 1000:.0f} km from its origin (georeferenced); moved to a "
+                   f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
+                   f"('mapkit export --drawing-coordinates' puts it back)")
+        log.warning(message)
+        warnings.append(message)
+
     drawing = PlanDrawing()
     for s in strokes:
         role = roles.get(s.layer)
@@ -113,7 +123,25 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         "entities": dict(sum(counts.values(), Counter())),
         "warnings": warnings,
     }
+    if offset is not None:
+        info["origin_offset_m"] = [float(v) for v in offset]
     return drawing, info
+
+
+def local_origin(strokes) -> np.ndarray | None:
+    """The offset ``(x, y)`` (metres, whole) to subtract from a georeferenced
+    plan's coordinates: the lower-left corner of the building geometry's
+    bounding box, when all of it lies farther than ``LOCAL_ORIGIN_BEYOND_M``
+    from the file's origin; None for a plan drawn near its origin."""
+    if not strokes:
+        return None
+    points = np.concatenate([s.coords for s in strokes])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    # The box's point nearest the origin: 0 on an axis the box straddles.
+    nearest = np.where(lo > 0, lo, np.where(hi < 0, hi, 0.0))
+    if not np.isfinite(nearest).all() or np.hypot(*nearest) <= LOCAL_ORIGIN_BEYOND_M:
+        return None
+    return np.floor(lo)
 
 
 def _extent(entities) -> tuple[float, list]:
