@@ -525,7 +525,8 @@ def _json_depth(text: bytes) -> int:
 
 def _check_meta(meta, name: str) -> None:
     """The parts of META that readers use: an object, a positive finite wall
-    height, a camera with its numeric fields."""
+    height, a camera with its numeric fields, the origin offset of a
+    georeferenced plan."""
     def bad(msg: str) -> LmapError:
         return LmapError(f"{name} has an invalid META chunk: {msg}; rebuild it with 'mapkit build'")
 
@@ -535,6 +536,10 @@ def _check_meta(meta, name: str) -> None:
     if wh is not None and not (isinstance(wh, (int, float)) and not isinstance(wh, bool) and math.isfinite(wh)
                                and wh > 0):
         raise bad(f"wall_height must be a positive number of metres, got {wh!r}")
+    offset = meta.get("origin_offset_m")
+    if offset is not None and not (isinstance(offset, list) and len(offset) == 2 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in offset)):
+        raise bad(f"origin_offset_m must be two finite numbers of metres, got {offset!r}")
     build = meta.get("build")
     for where, cam in (("camera", meta.get("camera")), ("build camera", build.get("camera")
                                                         if isinstance(build, dict) else None)):

@@ -117,6 +117,8 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
         "camera": camera.to_dict(),
         "wall_height": float(scene.wall_height),
         "scene": _jsonable(scene.info),
+        # A georeferenced plan moved to a local origin (importers' "origin_offset_m").
+        **({"origin_offset_m": scene.info["origin_offset_m"]} if "origin_offset_m" in scene.info else {}),
         # No timings here: the same plan and options give the same bytes.
         "stats": _rounded({"counts": counts, "regions": {k: v for k, v in part.stats.items() if not k.startswith("time")}}),
     }

@@ -104,6 +104,13 @@ SEGMENTS_WALL_FACE = 0.1
 #: (metres: a double door) are shut to find the rooms they enclose.
 SEGMENTS_CLOSE_GAP = 1.5
 
+#: A plan whose building geometry lies wholly farther than this from the
+#: file's origin, metres, is georeferenced (facility-management drawings in
+#: a national grid, 1758 km out): it is moved to a local origin, the offset
+#: kept in the map (``origin_offset_m``). A building drawn near its origin
+#: reaches within this of it.
+LOCAL_ORIGIN_BEYOND_M = 1000.0
+
 #: Plausible building extent, metres (largest side); outside it the drawing
 #: units are probably wrong.
 PLAUSIBLE_EXTENT = (1.0, 2000.0)

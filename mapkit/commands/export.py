@@ -12,12 +12,20 @@ HELP = "export regions (Polygons) and segments (3D LineStrings) as GeoJSON"
 def add_arguments(p) -> None:
     p.add_argument("map", metavar="MAP", help=".lmap file")
     p.add_argument("--geojson", required=True, metavar="OUT", help="GeoJSON file to write")
+    p.add_argument("--drawing-coordinates", action="store_true",
+                   help="in the source drawing's coordinates: a georeferenced plan's origin offset "
+                        "(mapkit info) added back; default: the map's local frame")
 
 
-def to_geojson(m) -> dict:
+def to_geojson(m, drawing_coordinates: bool = False) -> dict:
     """A FeatureCollection: one Polygon per region (properties id, segments),
-    one 3D LineString per segment (properties id, kind). Metres, local frame."""
+    one 3D LineString per segment (properties id, kind). Metres, the map's
+    local frame, or with ``drawing_coordinates`` the source drawing's (its
+    ``origin_offset_m`` added: a georeferenced plan's national grid)."""
     from linemap.lmap import SegmentKind
+
+    offset = m.meta.get("origin_offset_m") if drawing_coordinates else None
+    ox, oy = offset or (0.0, 0.0)
 
     features = []
     for r in range(m.n_regions):
@@ -25,7 +33,7 @@ def to_geojson(m) -> dict:
         outer = [p for p, hole in rings if not hole]
         holes = [p for p, hole in rings if hole]
         # RFC 7946: the outer ring counter-clockwise, holes clockwise.
-        coords = [_closed(p, ccw=True) for p in outer[:1]] + [_closed(p, ccw=False) for p in holes]
+        coords = [_closed(p + (ox, oy), ccw=True) for p in outer[:1]] + [_closed(p + (ox, oy), ccw=False) for p in holes]
         features.append(
             {
                 "type": "Feature",
@@ -37,7 +45,8 @@ def to_geojson(m) -> dict:
         features.append(
             {
                 "type": "Feature",
-                "geometry": {"type": "LineString", "coordinates": [[float(v) for v in p] for p in seg]},
+                "geometry": {"type": "LineString", "coordinates": [[float(p[0] + ox), float(p[1] + oy), float(p[2])]
+                                                                  for p in seg]},
                 "properties": {"id": i, "kind": SegmentKind(int(kind)).label},
             }
         )
@@ -59,6 +68,6 @@ def run(args) -> int:
 
     out = check_output_path(args.geojson, [args.map])
     m = load_map(args.map)
-    write_atomic(out, json.dumps(to_geojson(m)))
+    write_atomic(out, json.dumps(to_geojson(m, args.drawing_coordinates)))
     print(f"wrote {out}: {m.n_regions} regions, {m.n_segments} segments")
     return 0

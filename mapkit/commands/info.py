@@ -52,6 +52,7 @@ def summary(path) -> dict:
         "source": m.meta.get("source"),
         "generator": m.meta.get("generator"),
         "stats": m.meta.get("stats"),
+        "origin_offset_m": m.meta.get("origin_offset_m"),
     }
 
 
@@ -73,6 +74,10 @@ def run(args) -> int:
         wh = s["wall_height"]
         wh = f"{wh:.3g}" if isinstance(wh, (int, float)) else wh
         lines.append(f"  extent     {size[0]:.2f} x {size[1]:.2f} m, walls {wh} m high")
+    if s["origin_offset_m"]:
+        ox, oy = s["origin_offset_m"]
+        lines.append(f"  origin     the drawing's ({ox:.3f}, {oy:.3f}) m (georeferenced; the map's coordinates are "
+                     f"relative to it: 'mapkit export --drawing-coordinates' adds it back)")
     cam = s["camera"] or {}
     if cam:
         lines.append(

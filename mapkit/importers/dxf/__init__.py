@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -26,13 +27,13 @@ from ezdxf import bbox
 
 from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
-from mapkit.importers.dxf.read import read_dxf
+from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.units import decide_units
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
-from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES
+from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES, LOCAL_ORIGIN_BEYOND_M
 
 SUFFIXES = (".dxf",)
 
@@ -61,14 +62,14 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     doc, warnings = read_dxf(path)
     for w in warnings:
         log.warning(w)
-    check_entity_count(doc.modelspace(), doc.blocks, options.max_entities)
+    check_entity_count(model_space(doc), doc.blocks, options.max_entities)
     counts = layer_counts(doc)
     roles, role_warnings = resolve_roles(counts, options)
     for w in role_warnings:
         log.warning(w)
     warnings += role_warnings
 
-    msp = doc.modelspace()
+    msp = model_space(doc)
     used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
     extent, far = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
@@ -88,6 +89,15 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     if skipped:
         listed = ", ".join(f"{n} {kind}" for kind, n in sorted(skipped.items()))
         message = f"skipped unsupported entities: {listed}"
+        log.warning(message)
+        warnings.append(message)
+
+    offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES])
+    if offset is not None:
+        strokes = [replace(s, coords=s.coords - offset) for s in strokes]
+        message = (f"the drawing lies {np.hypot(*offset) / 1000:.0f} km from its origin (georeferenced); moved to a "
+                   f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
+                   f"('mapkit export --drawing-coordinates' puts it back)")
         log.warning(message)
         warnings.append(message)
 
@@ -113,7 +123,25 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         "entities": dict(sum(counts.values(), Counter())),
         "warnings": warnings,
     }
+    if offset is not None:
+        info["origin_offset_m"] = [float(v) for v in offset]
     return drawing, info
+
+
+def local_origin(strokes) -> np.ndarray | None:
+    """The offset ``(x, y)`` (metres, whole) to subtract from a georeferenced
+    plan's coordinates: the lower-left corner of the building geometry's
+    bounding box, when all of it lies farther than ``LOCAL_ORIGIN_BEYOND_M``
+    from the file's origin; None for a plan drawn near its origin."""
+    if not strokes:
+        return None
+    points = np.concatenate([s.coords for s in strokes])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    # The box's point nearest the origin: 0 on an axis the box straddles.
+    nearest = np.where(lo > 0, lo, np.where(hi < 0, hi, 0.0))
+    if not np.isfinite(nearest).all() or np.hypot(*nearest) <= LOCAL_ORIGIN_BEYOND_M:
+        return None
+    return np.floor(lo)
 
 
 def _extent(entities) -> tuple[float, list]:

@@ -2,7 +2,8 @@
 
 Users name layers with ``--walls/--doors/--windows/--ignore`` globs
 (fnmatch, case-insensitive). Without them, roles are guessed from the names
-architects commonly use, in several languages and in the US National CAD
+architects commonly use, in English, German, French, Spanish, Italian,
+Portuguese, Dutch, Russian, Chinese, Japanese and Korean, and in the US National CAD
 Standard (``A-WALL``, ``A-DOOR``, ``A-GLAZ``, ``A-COLS``, ``A-FURN`` ...)
 and their numbered variants; zone and space polygons (``Zone``, ``Space``,
 ``Room``, ``Pieces``, ``Raum``) give the free space like a floor layer;
@@ -34,6 +35,8 @@ _IGNORE_FIRST = r"""
     |projection|roof|ceiling|clng|plafond|techo|decke|trees?|plants?|landscape|symbols?|iden|tags?
     |names?|labels?|noms?|nummern?|numbers?|numeros?
     |virtual|virtuals|virtuel|virtuelle|virtuell|virtuale|notional|imaginary
+    |hatch|hatches|hatching|schraffur|schraffuren|hachures?|hachurage|tramas?|retini|arcering
+    |luft|lueftung|luftung|ventilation|background|hintergrund|hintergrundbild|underlay|xref|images?
 """
 _DOORS = r"doors?|door|dr|porte|portes|tuer|tur|tueren|turen|puertas?|porta|porte|deur|deuren|portas?"
 _WINDOWS = r"""
@@ -41,7 +44,7 @@ _WINDOWS = r"""
     |fenster|glas|verglasung|ventanas?|vidrio|finestr[ae]|vetro|vetri|ramen|raam|janelas?|vidro|curtain|cwmg
 """
 _WALLS = r"""
-    walls?|wall|wand|waende|wande|mauer|mauern|murs?|muros?|muri|muur|muren|pared|paredes|parete|pareti|parede|paredes
+    walls?|wall|wand|waende|wande|mauer|mauern|murs?|muros?|muri|muur|muren|wanden|pared|paredes|parete|pareti|parede|paredes
     |partitions?|prtn|cloisons?|tabiques?|tramezz[io]|structure|structural|struct|strs|tragwerk
     |columns?|cols?|colonnes?|colonnas?|columnas?|pilier|piliers|pilar|pilares|pilastr[io]|poteaux?|stuetzen?|stutzen?|kolom|kolommen
     |core|beton|concrete|hormigon|masonry|maconnerie|mauerwerk
@@ -67,14 +70,61 @@ _GUESS_ORDER = [
 ]
 
 
+def _latin_base(c: str) -> str:
+    """A Latin letter without its accents ("é" -> "e"); any other character as it is."""
+    base = "".join(x for x in unicodedata.normalize("NFKD", c) if not unicodedata.combining(x))
+    return base if base.isascii() else c
+
+
 def tokens(layer: str) -> list[str]:
-    """Words of a layer name: "A-WALL-Full", "Wände", "outerWalls" -> lower-case ASCII words."""
-    # Fold accents; German umlauts also commonly appear spelled "ue", "ae", "oe".
-    folded = unicodedata.normalize("NFKD", layer)
-    folded = "".join(c for c in folded if not unicodedata.combining(c))
-    folded = folded.replace("ß", "ss")
+    """Words of a layer name: "A-WALL-Full", "Wände", "outerWalls", "Стены" -> lower-case words.
+
+    Latin letters are folded to ASCII (accents dropped); other scripts keep
+    their letters (Cyrillic lower-cased; Chinese, Japanese and Korean names,
+    written without spaces, stay one word each: :data:`_CJK_WORDS` looks
+    inside them)."""
+    # Fold the accents of Latin letters (German umlauts also commonly appear
+    # spelled "ue", "ae", "oe"); other scripts' marks stay (the voicing mark
+    # of the katakana ド, the breve of the Cyrillic й).
+    folded = "".join(_latin_base(c) for c in layer.replace("ß", "ss"))
     split = re.sub(r"([a-z])([A-Z])", r"\1 \2", folded)
-    return [w for w in re.split(r"[^A-Za-z]+", split.lower()) if w]
+    return [w for w in re.split(r"[\W\d_]+", split.lower()) if w]
+
+
+#: Words of Russian layer names, by role, matched as the start of a word
+#: (Russian inflects: "стена", "стены", "стен" are all walls), or whole
+#: where they end in "$" (short words that begin others: "пол", floor, and
+#: "полки", shelves). Checked in the role order of :data:`_GUESS_ORDER`.
+_CYRILLIC_STEMS = {
+    "ignore": ("текст", "надпис", "подпис", "размер", "оси$", "ось$", "осев", "штрих", "мебел", "оборуд", "сантех",
+               "электр", "обознач", "штамп", "рамк", "сетк", "виртуал"),
+    "doors": ("двер", "дверн"),
+    "windows": ("окн", "окон", "витраж", "остекл", "стекл"),
+    "walls": ("стен", "перегород", "колонн", "пилон", "несущ", "кладк", "фасад", "конструкц"),
+    "floor": ("помещен", "комнат", "пол$", "полы$", "зона$", "зоны$"),
+}
+
+#: Words of Chinese, Japanese and Korean layer names, by role: found
+#: anywhere inside a name (these scripts write no spaces between words).
+#: Checked in the role order of :data:`_GUESS_ORDER`, so an annotation
+#: layer of doors ("门墙窗标注": doors, walls, windows, dimensions) is
+#: ignored, a curtain wall ("幕墙") is glass, a door-and-window layer a door.
+_CJK_WORDS = {
+    "ignore": ("文字", "文本", "标注", "尺寸", "轴", "填充", "家具", "图框", "图签", "面积", "说明", "符号", "标高",
+               "索引", "设备", "洁具", "绿化", "植物", "寸法", "通り芯", "通芯", "ハッチ", "図枠", "器具",
+               "문자", "치수", "가구", "해치", "중심선", "도곽", "설비"),
+    "doors": ("门", "門", "扉", "ドア", "문"),
+    "windows": ("幕墙", "窗", "玻璃", "窓", "サッシ", "ガラス", "창", "유리"),
+    "walls": ("墙", "牆", "壁", "柱", "隔断", "结构", "砌体", "混凝土", "躯体", "벽", "기둥", "칸막이", "구조"),
+    "floor": ("房间", "空间", "地面", "部屋", "공간", "바닥"),
+}
+
+
+def _script_word(role: str, word: str) -> bool:
+    """Whether ``word`` (not Latin) is one of ``role``'s words in another script."""
+    if any("\u0400" <= c <= "\u04ff" for c in word):
+        return any(word == st[:-1] if st.endswith("$") else word.startswith(st) for st in _CYRILLIC_STEMS[role])
+    return any(w in word for w in _CJK_WORDS[role])
 
 
 _VIRTUAL = re.compile(r"^(?:virtual|virtuals|virtuel|virtuelle|virtuell|virtuale|notional|imaginary)$")
@@ -99,7 +149,7 @@ def explain_role(layer: str) -> tuple[str | None, str]:
     on the plan, not a wall on site: ignored, it blocks nothing."""
     words = tokens(layer)
     for role, rx in _GUESS_ORDER:
-        hit = next((w for w in words if rx.match(w)), None)
+        hit = next((w for w in words if rx.match(w) or (not w.isascii() and _script_word(role, w))), None)
         if hit is not None:
             if _VIRTUAL.match(hit):
                 return role, f"'{hit}': a partition drawn for zoning, not built: blocks nothing"

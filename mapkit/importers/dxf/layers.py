@@ -6,6 +6,7 @@ from collections import Counter
 
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers.dxf.entities import SILENT
+from mapkit.importers.dxf.read import model_space
 from mapkit.importers.dxf.layer_roles import assign_roles, unmatched_globs
 from mapkit.options import BuildOptions
 
@@ -13,7 +14,7 @@ from mapkit.options import BuildOptions
 def layer_counts(doc) -> dict[str, Counter]:
     """Model-space entity counts per layer and type; layers of the layer table with none too."""
     counts: dict[str, Counter] = {layer.dxf.name: Counter() for layer in doc.layers}
-    for entity in doc.modelspace():
+    for entity in model_space(doc):
         counts.setdefault(entity.dxf.get("layer", "0"), Counter())[entity.dxftype()] += 1
     return counts
 

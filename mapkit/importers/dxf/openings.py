@@ -152,7 +152,7 @@ def opening_at_wall_end(item: MultiLineString, barriers, max_wall_thickness: flo
 
     x0, y0, x1, y1 = item.bounds
     pad = JAMB_REACH + max_wall_thickness
-    local = shapely.clip_by_rect(barriers, x0 - pad, y0 - pad, x1 + pad, y1 + pad)
+    local = _clipped(barriers, (x0 - pad, y0 - pad, x1 + pad, y1 + pad))
     a, b, out = wall_ends(local, max_wall_thickness)
     if len(a) == 0:
         return None
@@ -175,6 +175,20 @@ def opening_at_wall_end(item: MultiLineString, barriers, max_wall_thickness: flo
     return best
 
 
+def _clipped(geom, box: tuple[float, float, float, float]):
+    """``geom`` cut to the rectangle ``box`` (x0, y0, x1, y1).
+
+    GEOS's fast rectangle clip refuses some valid inputs (walls drawn as
+    single lines on one layer per room: a ring of the clip's result
+    collapses to 3 points, IllegalArgumentException); the general
+    intersection handles them, more slowly, so it is the fallback only."""
+    try:
+        return shapely.clip_by_rect(geom, *box)
+    except shapely.errors.GEOSException:
+        cut = geom.intersection(shapely.box(*box))
+        return shapely.MultiPolygon([g for g in shapely.get_parts(cut) if isinstance(g, Polygon)])
+
+
 def _wall_direction(axis: np.ndarray, barriers, jambs) -> np.ndarray:
     """The direction of the wall faces at the jambs closest to ``axis`` (within 15 degrees).
 
@@ -186,7 +200,7 @@ def _wall_direction(axis: np.ndarray, barriers, jambs) -> np.ndarray:
     # The clip box reaches past ``near`` so that its own cut edges fall outside it.
     x0, y0, x1, y1 = near.bounds
     pad = 10 * MERGE
-    edges = shapely.clip_by_rect(barriers, x0 - pad, y0 - pad, x1 + pad, y1 + pad).boundary.intersection(near)
+    edges = _clipped(barriers, (x0 - pad, y0 - pad, x1 + pad, y1 + pad)).boundary.intersection(near)
     best, best_len = axis, 0.0
     cos_max = np.cos(np.radians(15.0))
     for part in shapely.get_parts(edges):

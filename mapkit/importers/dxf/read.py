@@ -53,11 +53,29 @@ def read_dxf(path: Path) -> tuple[object, list[str]]:
     return doc, warnings
 
 
+def model_space(doc):
+    """The entities of the drawing's model space (an ezdxf layout to iterate).
+
+    Some files (an AutoCAD 2013 drawing written by other software) name the
+    model-space layout something other than "Model" while its block
+    ``*Model_Space`` holds the drawing; ezdxf's ``modelspace()`` then raises
+    KeyError, in strict and in recover mode alike. The block is the model
+    space whatever the layout is called."""
+    try:
+        return doc.modelspace()
+    except KeyError:
+        block = doc.blocks.get("*Model_Space")
+        if block is None:
+            raise MapkitError("the file has no model space (neither a 'Model' layout nor a *Model_Space block); "
+                              "re-export it from the CAD program") from None
+        return block
+
+
 def _drop_unknown_entities(doc, path: Path) -> list[str]:
     """Remove model-space entities that have no layer attribute at all: a
     damaged group code makes a value read as an entity type ("9800.0"),
     which ezdxf keeps as raw tags. Returns a warning naming them, or []."""
-    msp = doc.modelspace()
+    msp = model_space(doc)
     try:
         bad = [e for e in msp if not e.dxf.is_supported("layer")]
     except _READ_ERRORS:
@@ -89,7 +107,7 @@ def _check_looks_like_dxf(path: Path) -> None:
 
 def _has_entities(doc) -> bool:
     try:
-        return next(iter(doc.modelspace()), None) is not None
+        return next(iter(model_space(doc)), None) is not None
     except _READ_ERRORS:
         return False
 
