@@ -111,6 +111,30 @@ SEGMENTS_CLOSE_GAP = 1.5
 #: reaches within this of it.
 LOCAL_ORIGIN_BEYOND_M = 1000.0
 
+#: A door swing drawn on a wall layer (mapkit/importers/dxf/door_swings.py):
+#: its arc's radius is a door leaf's width, metres (a narrow cupboard door
+#: to a wide single door); its sweep at most this many degrees (doors are
+#: drawn anywhere from a few degrees open to square). Its leaf line starts
+#: within ``DOOR_SWING_TIP_SHARE`` of the radius (at least
+#: ``DOOR_SWING_SNAP`` metres) of one end of the arc, crosses the arc there
+#: at ``DOOR_SWING_MIN_CROSSING_DEG`` or more (a leaf is radial; the wall a
+#: rounded corner joins is tangent), and is ``DOOR_SWING_LEAF_LENGTH``
+#: times the radius long: loosely drawn swings (hal9k's plan: arcs through
+#: three points, leaves up to 1.6 radii) still count.
+DOOR_SWING_RADIUS = (0.3, 1.5)
+DOOR_SWING_MAX_SWEEP_DEG = 120.0
+DOOR_SWING_SNAP = 0.05
+DOOR_SWING_TIP_SHARE = 0.15
+DOOR_SWING_MIN_CROSSING_DEG = 50.0
+DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
+
+#: A door drawn over an unbroken wall (mapkit/importers/dxf/openings.py,
+#: ``cut_opening``) cuts an opening at most this wide, metres (a double
+#: door; wider drawings over a wall are something else), whose footprint
+#: lies at least this share in wall.
+MAX_DOOR_WIDTH = 2.5
+CUT_MIN_WALL_SHARE = 0.5
+
 #: Plausible building extent, metres (largest side); outside it the drawing
 #: units are probably wrong.
 PLAUSIBLE_EXTENT = (1.0, 2000.0)

@@ -155,3 +155,67 @@ def test_a_georeferenced_drawing_is_moved_to_a_local_origin(tmp_path, capsys):
     lines = [f for f in json.loads((tmp_path / "geo.geojson").read_text())["features"]
              if f["geometry"]["type"] == "LineString"]
     assert np.allclose(np.array(lines[0]["geometry"]["coordinates"])[:, :2], geo.segments[0, :, :2] + offset)
+
+
+def _two_rooms(path, door: str):
+    """Two 4 x 4 m rooms side by side, their shared wall unbroken, with one
+    door drawn over it as ``door`` says: "swing" (single-line walls and the
+    door's arc and leaf, all on layer 0, as the Hal9k hackerspace's plan,
+    beside a furniture layer) or "rectangle" (double-line walls on EM_WALL,
+    the door a rectangle on EM_DOOR across the wall, as the Vietnamese
+    apartment cleaned for EnergyPlus)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    if door == "swing":
+        wall = {"layer": "0"}
+        msp.add_lwpolyline([(0, 0), (8, 0), (8, 4), (0, 4)], close=True, dxfattribs=wall)
+        msp.add_line((4, 0), (4, 4), dxfattribs=wall)
+        # Hinge at (4, 1); the leaf open square into the right room; the arc from its tip back to the wall.
+        msp.add_line((4, 1), (4.9, 1), dxfattribs=wall)
+        msp.add_arc((4, 1), 0.9, 0, 90, dxfattribs=wall)
+        msp.add_lwpolyline([(1, 1), (2, 1), (2, 2), (1, 2)], close=True, dxfattribs={"layer": "Furniture"})
+    else:
+        wall = {"layer": "EM_WALL"}
+        for x0, x1 in ((0, 4.1), (3.9, 8)):  # each room's outline, 0.2 m walls, shared at x 3.9-4.1
+            msp.add_lwpolyline([(x0, 0), (x1, 0), (x1, 4), (x0, 4)], close=True, dxfattribs=wall)
+            msp.add_lwpolyline([(x0 + 0.2, 0.2), (x1 - 0.2, 0.2), (x1 - 0.2, 3.8), (x0 + 0.2, 3.8)], close=True,
+                               dxfattribs=wall)
+        msp.add_lwpolyline([(3.9, 1), (4.1, 1), (4.1, 1.9), (3.9, 1.9)], close=True, dxfattribs={"layer": "EM_DOOR"})
+    doc.saveas(path)
+    return path
+
+
+@pytest.mark.parametrize("door", ["swing", "rectangle"])
+def test_a_door_drawn_over_an_unbroken_wall_cuts_its_opening(tmp_path, door):
+    """A door swing on the wall layer used to become a wall triangle, and a
+    door drawn over an unbroken wall was ignored ('not in a wall gap'): the
+    rooms were sealed from each other. The door is found and its opening
+    cut, so the two rooms are one free space joined through it."""
+    from mapkit.importers import load_scene
+    from mapkit.shapes import polygon_parts
+
+    scene = load_scene(_two_rooms(tmp_path / f"{door}.dxf", door))
+    doors = [o for o in scene.openings if o.kind == "door"]
+    assert len(doors) == 1
+    lo_x, lo_y, hi_x, hi_y = doors[0].footprint.bounds
+    assert lo_x <= 4.0 <= hi_x and abs(lo_y - 1.0) < 0.05 and abs(hi_y - 1.9) < 0.05
+    assert len(polygon_parts(scene.free_space)) == 1
+    if door == "swing":
+        assert any("1 door swing(s)" in w for w in scene.info["warnings"])
+    assert any("over an unbroken wall" in w for w in scene.info["warnings"])
+
+
+def test_a_rounded_corner_is_no_door_swing():
+    """An arc joining two straight walls (a rounded corner) meets them along
+    its tangent; a door's leaf crosses its arc. Only the leaf makes a swing."""
+    from mapkit.importers.dxf.door_swings import find_door_swings
+
+    doc = ezdxf.new("R2013")
+    msp = doc.modelspace()
+    msp.add_line((0, 0), (3, 0))
+    msp.add_arc((3, 1), 1.0, 270, 360)  # from (3, 0) round to (4, 1)
+    msp.add_line((4, 1), (4, 4))
+    assert find_door_swings(list(msp), 1.0) == []
+    msp.add_line((3, 1), (4, 1))  # a leaf from the centre to the arc's end, across it
+    assert len(find_door_swings(list(msp), 1.0)) == 1

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 from ezdxf import bbox
 
+from mapkit.importers.dxf.door_swings import find_door_swings
 from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
@@ -81,8 +82,17 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     factor = per_unit * float(options.scale)
 
     far_ids = {id(e) for e in far}
-    strokes, skipped = flatten_entities([e for e in msp if id(e) not in far_ids], factor, CURVE_SAGITTA / factor,
+    swings = find_door_swings([e for e in msp if roles.get(_layer(e)) == "walls" and id(e) not in far_ids], factor)
+    left_out = far_ids | {id(e) for pair in swings for e in pair}
+    strokes, skipped = flatten_entities([e for e in msp if id(e) not in left_out], factor, CURVE_SAGITTA / factor,
                                         lambda layer: True, max_entities=options.max_entities)
+    swing_strokes = _swing_strokes(swings, factor, 1 + max((s.group for s in strokes if s.group is not None),
+                                                           default=-1))
+    if swings:
+        message = (f"{len(swings)} door swing(s) (an arc and its leaf) drawn on the wall layer(s) "
+                   f"{_names(sorted({_layer(a) for a, _ in swings}))} taken as doors")
+        log.warning(message)
+        warnings.append(message)
     for e in far:
         skipped[f"{e.dxftype()} (far outside the rest of the drawing, handle {e.dxf.get('handle', '?')} "
                 f"on layer {_layer(e)})"] += 1
@@ -92,9 +102,10 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         log.warning(message)
         warnings.append(message)
 
-    offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES])
+    offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES] + swing_strokes)
     if offset is not None:
         strokes = [replace(s, coords=s.coords - offset) for s in strokes]
+        swing_strokes = [replace(s, coords=s.coords - offset) for s in swing_strokes]
         message = (f"the drawing lies {np.hypot(*offset) / 1000:.0f} km from its origin (georeferenced); moved to a "
                    f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
                    f"('mapkit export --drawing-coordinates' puts it back)")
@@ -102,6 +113,8 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         warnings.append(message)
 
     drawing = PlanDrawing()
+    if swing_strokes:
+        drawing.strokes["doors"] = list(swing_strokes)
     for s in strokes:
         role = roles.get(s.layer)
         if role in _USED_ROLES:
@@ -126,6 +139,20 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     if offset is not None:
         info["origin_offset_m"] = [float(v) for v in offset]
     return drawing, info
+
+
+def _swing_strokes(swings, factor: float, first_group: int) -> list:
+    """The strokes of each door swing ``(arc, leaf)``, one group per swing
+    (numbered from ``first_group``): one door drawing each."""
+    out = []
+    for k, pair in enumerate(swings):
+        strokes, _ = flatten_entities(list(pair), factor, CURVE_SAGITTA / factor, lambda layer: True)
+        out += [replace(s, group=first_group + k) for s in strokes]
+    return out
+
+
+def _names(layers: list[str]) -> str:
+    return ", ".join(f"'{n}'" for n in layers)
 
 
 def local_origin(strokes) -> np.ndarray | None:

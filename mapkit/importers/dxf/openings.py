@@ -14,7 +14,7 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import nearest_points, unary_union
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import JAMB_REACH, MERGE, MIN_OPENING_WIDTH, THIN_WALL
+from mapkit.tolerances import CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH, THIN_WALL
 
 
 def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:
@@ -236,6 +236,51 @@ def _thickness_band(probe, normal, origin, barriers, max_wall_thickness: float) 
     return None
 
 
+def cut_opening(item: MultiLineString, walls, max_wall_thickness: float) -> Polygon | None:
+    """Footprint of the opening a door drawn over an unbroken wall stands
+    for, or None when the drawing is not over a wall.
+
+    People draw doors over the wall line without breaking it (a swing on a
+    single-line wall, a rectangle across a double-line one). The wall piece
+    under the drawing gives the wall's direction (its rotated bounding
+    box's long side) and thickness (its extent across); the drawing's
+    extent along the wall is the door's width, between ``MIN_OPENING_WIDTH``
+    and ``MAX_DOOR_WIDTH``. The drawing must reach half way into the wall's
+    thickness, and the footprint, that rectangle, lie mostly
+    (``CUT_MIN_WALL_SHARE``) in wall: else the drawing is beside the wall,
+    not over it."""
+    under = shapely.make_valid(walls.intersection(item.buffer(JAMB_REACH)))
+    parts = [g for g in shapely.get_parts(under) if isinstance(g, Polygon) and g.area > 0]
+    if not parts:
+        return None
+    piece = max(parts, key=lambda g: g.area)
+    rect = np.asarray(piece.minimum_rotated_rectangle.exterior.coords)[:4]
+    sides = np.diff(np.vstack([rect, rect[:1]]), axis=0)
+    long = sides[np.argmax(np.linalg.norm(sides, axis=1))]
+    if not np.linalg.norm(long) > 0:
+        return None
+    axis = long / np.linalg.norm(long)
+    normal = np.array([-axis[1], axis[0]])
+    pts = np.concatenate([np.asarray(g.coords)[:, :2] for g in shapely.get_parts(item)])
+    t, across = pts @ axis, pts @ normal
+    t0, t1 = float(t.min()), float(t.max())
+    if not MIN_OPENING_WIDTH <= t1 - t0 <= MAX_DOOR_WIDTH:
+        return None
+    wall_across = np.asarray(piece.exterior.coords)[:, :2] @ normal
+    s0, s1 = float(wall_across.min()), float(wall_across.max())
+    # Over the wall, not beside it: the drawing reaches at least half way
+    # across the wall under it (a swing's hinge on a single-line wall, a
+    # rectangle across a double-line one; a door drawn against a wall's
+    # face only touches it).
+    if s1 - s0 > max_wall_thickness or min(s1, float(across.max())) - max(s0, float(across.min())) < 0.5 * (s1 - s0):
+        return None
+    footprint = Polygon([axis * t0 + normal * s0, axis * t1 + normal * s0, axis * t1 + normal * s1,
+                         axis * t0 + normal * s1])
+    if walls.intersection(footprint).area < CUT_MIN_WALL_SHARE * footprint.area:
+        return None
+    return footprint
+
+
 def glass_footprint(item: MultiLineString) -> Polygon:
     """Footprint of free-standing glass (no wall gap): the lines thickened to ``THIN_WALL``.
 
@@ -255,4 +300,4 @@ def _lines(geom) -> MultiLineString:
     return MultiLineString([g for g in shapely.get_parts(geom) if isinstance(g, LineString) and not g.is_empty])
 
 
-__all__ = ["door_openings", "drawing_items", "find_opening", "glass_footprint", "opening_at_wall_end", "opening_width"]
+__all__ = ["cut_opening", "door_openings", "drawing_items", "find_opening", "glass_footprint", "opening_at_wall_end", "opening_width"]

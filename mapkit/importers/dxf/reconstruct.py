@@ -23,7 +23,7 @@ from mapkit.errors import MapkitError, NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
-from mapkit.importers.dxf.openings import door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
@@ -56,7 +56,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
             info["zone_walls_m2"] = round(between.area, 3)
 
-    openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
+    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
@@ -102,7 +102,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
 
 
 def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
-    """Openings, obstacles (windows, glass) and door gap footprints."""
+    """The walls (with the openings of doors drawn over unbroken walls cut
+    through them), openings, obstacles (windows, glass) and door gap
+    footprints."""
     openings: list[Opening] = []
     glass_parts = []
     window_gaps = []
@@ -121,14 +123,21 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     barriers = unary_union([walls, glass]) if not glass.is_empty else walls
     door_gaps = []
     lost = []
+    cuts = []
     for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
         if gap is None:
-            lost.append(item.centroid)
-            continue
+            gap = cut_opening(item, walls, options.max_wall_thickness)
+            if gap is None or _claimed(gap, door_gaps + window_gaps):
+                lost.append(item.centroid)
+                continue
+            cuts.append(gap)
         if _claimed(gap, door_gaps + window_gaps):
             continue
         door_gaps.append(gap)
         openings.append(Opening(gap, "door", 0.0, options.door_height))
+    if cuts:
+        walls = MultiPolygon(polygon_parts(walls.difference(unary_union(cuts))))
+        warn(f"{len(cuts)} door drawing(s) over an unbroken wall: their openings cut through it")
     if lost:
         where = ", ".join(f"({p.x:.1f}, {p.y:.1f})" for p in lost[:5]) + (" ..." if len(lost) > 5 else "")
         warn(f"{len(lost)} door drawing(s) are not in a wall gap and were ignored, at {where} m; check them in 'mapkit preview'")
@@ -141,7 +150,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
         glass = glass.difference(unary_union(door_gaps))
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
-    return openings, obstacles, door_gaps
+    return walls, openings, obstacles, door_gaps
 
 
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
