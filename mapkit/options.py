@@ -7,7 +7,7 @@ Lengths in metres, angles in degrees.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import MISSING, asdict, dataclass, field
 
 from mapkit.parallel import default_jobs
 from mapkit.tolerances import DXF_MAX_ENTITIES, MAX_FLOOR_AREA_M2, MAX_SIGHT_WORK_PER_M2, VIR_MERGE_GROWTH
@@ -101,3 +101,10 @@ class BuildOptions:
 
 #: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
 LIMITS = ("max_entities", "max_floor_area", "max_sight_work", "jobs")
+
+
+def option_default(name: str):
+    """The default of :class:`BuildOptions` field ``name`` (stages that take
+    one of the options as a parameter default to it, not to a copy)."""
+    f = BuildOptions.__dataclass_fields__[name]
+    return f.default_factory() if f.default is MISSING else f.default

@@ -58,7 +58,7 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
 
     from mapkit.edges import extract_edges
     from mapkit.importers import load_scene
-    from mapkit.vir import build_regions
+    from mapkit.vir import RegionSettings, build_regions
 
     options = options or BuildOptions()
     _check_options(options)
@@ -86,18 +86,8 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
 
     _check_sight_work(segments, scene, options, plan)
     t = time.perf_counter()
-    part = build_regions(
-        segments,
-        scene.walls,
-        scene.free_space,
-        camera,
-        max_range=options.max_range,
-        min_visible_length=options.min_visible_length,
-        eps=options.eps,
-        merge_growth=options.merge_growth,
-        progress=progress,
-        workers=options.jobs,
-    )
+    part = build_regions(segments, scene.walls, scene.free_space, camera, RegionSettings.from_options(options),
+                         progress=progress, workers=options.jobs)
     report.seconds["regions"] = time.perf_counter() - t
 
     t = time.perf_counter()

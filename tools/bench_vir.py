@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     from mapkit.assemble import assemble_map
     from linemap.lmap import save_map
     from mapkit.options import BuildOptions
-    from mapkit.vir import build_regions
+    from mapkit.vir import RegionSettings, build_regions
     from linemap.camera import Camera
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -91,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
         name, segs, kinds, walls, free, _ = load_case(path, opts)
         best = None
         for _ in range(max(1, args.repeat)):
-            part = build_regions(segs, walls, free, camera, **extra)
+            part = build_regions(segs, walls, free, camera, RegionSettings(**extra))
             if best is None or part.stats["time_total_s"] < best.stats["time_total_s"]:
                 best = part
         st = best.stats

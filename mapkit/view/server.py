@@ -221,7 +221,7 @@ class Inspector:
                 pc.summary.content = "Pose tool hidden."
                 return
             img, summary = pose_tool.draw_pose(self.server.scene, self.m, self.triangles, self.camera,
-                                               self.kind_colours, *pc.values(),
+                                               self.kind_colours, pose_tool.PoseEstimate(*pc.values()),
                                                fov_filter=bool(pc.fov_filter.value))
             pc.image.image = img
             pc.summary.content = summary
