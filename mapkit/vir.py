@@ -42,11 +42,12 @@ from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,
     VIR_LIST_CHUNK,
-    VIR_PAIR_CHUNK,
     VIR_MAX_DEPTH,
     VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
+    VIR_PAIR_CHUNK,
     VIR_QUAD_SEGS,
+    ZERO,
 )
 from mapkit.visibility import Occluders, polygonal, segment_regions
 
@@ -198,7 +199,7 @@ def _partition_stats(polygons: list, lists: list, free_space) -> dict:
     lengths = np.array([len(x) for x in lists], dtype=float)
     return {
         "regions": len(polygons),
-        "mean_list_length": float((areas * lengths).sum() / max(areas.sum(), 1e-300)),
+        "mean_list_length": float((areas * lengths).sum() / max(areas.sum(), ZERO.divisor)),
         "max_list_length": int(lengths.max()) if len(lengths) else 0,
         "region_area": float(areas.sum()),
         "free_space_area": float(free_space.area),
@@ -334,7 +335,7 @@ def _quadtree_frame(free_space, min_cell: float) -> tuple[int, float, np.ndarray
     of ``min_cell`` (wider on plans past ``VIR_MAX_DEPTH`` levels)."""
     x0, y0, x1, y1 = free_space.bounds
     span = max(x1 - x0, y1 - y0, min_cell)
-    depth = max(0, math.ceil(math.log2(span / min_cell) - 1e-9))
+    depth = max(0, math.ceil(math.log2(span / min_cell) - ZERO.whole_number))
     if depth > VIR_MAX_DEPTH:  # huge plan: wider smallest cells, bounded memory
         depth = VIR_MAX_DEPTH
         min_cell = span / 2.0**depth

@@ -37,12 +37,13 @@ from mapkit.tolerances import (
     SIGHT_POINT_COST,
     SIGHT_WORK_PROBES,
     VIS_BLOCK,
-    VIS_FIRST_EDGES,
-    VIS_HIDDEN_SLACK,
     VIS_BUILD_SHRINK,
     VIS_COLLINEAR,
+    VIS_FIRST_EDGES,
+    VIS_HIDDEN_SLACK,
     VIS_RAY_OFFSET_DEG,
     VIS_VERTICAL_XY,
+    ZERO,
 )
 
 
@@ -210,7 +211,7 @@ def _hits_block(d: np.ndarray, a: np.ndarray, e: np.ndarray, best: np.ndarray | 
             u = (a[None, :, 0] * dd[..., 1] - a[None, :, 1] * dd[..., 0]) / denom
         # u within [0, 1] up to round-off: a ray through a shared vertex must
         # not slip between the two edges meeting there.
-        ok = (t > 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
+        ok = (t > 0.0) & (u >= -ZERO.edge_parameter) & (u <= 1.0 + ZERO.edge_parameter)
         out[i : i + step] = np.where(ok, t, np.inf).min(axis=1)
     return out if best is None else np.minimum(out, best)
 
@@ -302,7 +303,7 @@ def vertical_distance_band(z0, z1, need, h, e_min, e_max, max_range) -> tuple[np
         c, e = np.where(good, m, c), np.where(good, e, m)
     dmin = np.where(f(np.zeros_like(peak)) >= 0, 0.0, a)
     dmax = np.where(f(np.full_like(peak, max_range)) >= 0, max_range, e)
-    dmin, dmax = np.maximum(dmin - 1e-6, 0.0), dmax + 1e-6
+    dmin, dmax = np.maximum(dmin - ZERO.derived_length, 0.0), dmax + ZERO.derived_length
     return np.where(ok, dmin, -1.0), np.where(ok, dmax, -1.0)
 
 
@@ -370,7 +371,7 @@ class SegmentRegions:
 def sample_segment(seg: np.ndarray, spacing: float) -> np.ndarray:
     """(n, 3) points along ``seg`` (2, 3), end points included, spaced <= ``spacing``."""
     length = float(np.linalg.norm(seg[1] - seg[0]))
-    n = max(1, math.ceil(length / spacing - 1e-9))
+    n = max(1, math.ceil(length / spacing - ZERO.whole_number))
     t = np.linspace(0.0, 1.0, n + 1)
     return seg[0] + t[:, None] * (seg[1] - seg[0])
 

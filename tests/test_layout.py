@@ -198,6 +198,21 @@ def test_no_module_level_threshold_outside_tolerances(package):
     assert not found
 
 
+def test_builder_geometric_zeros_live_in_tolerances():
+    """No float literal of magnitude under 1e-5 in mapkit/ outside
+    mapkit/tolerances.py: float-noise zeros are fields of its
+    ``GeometricZeros`` (``ZERO``), one per meaning."""
+    found = []
+    for p in _python_files("mapkit"):
+        rel = str(p.relative_to(ROOT))
+        if rel == "mapkit/tolerances.py":
+            continue
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, ast.Constant) and isinstance(node.value, float) and 0 < abs(node.value) < 1e-5:
+                found.append(f"{rel}:{node.lineno} {node.value!r}")
+    assert not found
+
+
 def test_tolerances_document_every_field():
     """Each field of Tolerances and Internals has a ``#:`` comment."""
     src = (ROOT / "matcher" / "tolerances.py").read_text().splitlines()
