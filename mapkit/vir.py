@@ -551,9 +551,9 @@ def equal_lists(leaves: Leaves, pairs: np.ndarray) -> np.ndarray:
     fp, count = _leaf_fingerprints(leaves)
     maybe = np.nonzero((fp[pairs[:, 0]] == fp[pairs[:, 1]]) & (count[pairs[:, 0]] == count[pairs[:, 1]]))[0]
     out = np.zeros(len(pairs), dtype=bool)
-    step = max(1, VIR_LIST_CHUNK // max(1, int(count.max(initial=1))))
-    for i in range(0, len(maybe), step):
-        k = maybe[i : i + step]
+    chunk = max(1, VIR_LIST_CHUNK // max(1, int(count.max(initial=1))))
+    for i in range(0, len(maybe), chunk):
+        k = maybe[i : i + chunk]
         owner_a, seg_a = leaves.lists(pairs[k, 0])
         _, seg_b = leaves.lists(pairs[k, 1])
         # Equal lengths pair by pair, so the two concatenations line up.
@@ -566,9 +566,9 @@ def list_bitsets(leaves: Leaves, which: np.ndarray) -> list[int]:
     """The lists of leaves ``which`` as Python int bitsets (bit i: segment i)."""
     n = leaves.n_segments
     out: list[int] = []
-    step = max(1, VIR_LIST_CHUNK // max(n, 1))
-    for i in range(0, len(which), step):
-        k = np.asarray(which[i : i + step])
+    chunk = max(1, VIR_LIST_CHUNK // max(n, 1))
+    for i in range(0, len(which), chunk):
+        k = np.asarray(which[i : i + chunk])
         owner, seg = leaves.lists(k, ordered=False)
         rows = np.zeros((len(k), n), dtype=bool)
         rows[owner, seg] = True

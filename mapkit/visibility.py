@@ -202,9 +202,9 @@ def _hits_block(d: np.ndarray, a: np.ndarray, e: np.ndarray, best: np.ndarray | 
     (K,) where that is nearer (inf by default): the brute-force kernel of
     :func:`_nearest_hits`, in blocks of at most ``VIS_BLOCK`` ray-edge pairs."""
     out = np.empty(len(d))
-    step = max(1, VIS_BLOCK // max(1, len(a)))
-    for i in range(0, len(d), step):
-        dd = d[i : i + step, None, :]
+    chunk = max(1, VIS_BLOCK // max(1, len(a)))
+    for i in range(0, len(d), chunk):
+        dd = d[i : i + chunk, None, :]
         denom = dd[..., 0] * e[None, :, 1] - dd[..., 1] * e[None, :, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (a[None, :, 0] * e[None, :, 1] - a[None, :, 1] * e[None, :, 0]) / denom
@@ -212,7 +212,7 @@ def _hits_block(d: np.ndarray, a: np.ndarray, e: np.ndarray, best: np.ndarray | 
         # u within [0, 1] up to round-off: a ray through a shared vertex must
         # not slip between the two edges meeting there.
         ok = (t > 0.0) & (u >= -ZERO.edge_parameter) & (u <= 1.0 + ZERO.edge_parameter)
-        out[i : i + step] = np.where(ok, t, np.inf).min(axis=1)
+        out[i : i + chunk] = np.where(ok, t, np.inf).min(axis=1)
     return out if best is None else np.minimum(out, best)
 
 

@@ -21,7 +21,8 @@ def add_arguments(p) -> None:
     g.add_argument("--camera", metavar="CAM.json", help="camera.json: intrinsics, height_m, pitch_deg")
     g.add_argument("--camera-height", type=float, metavar="M",
                    help=f"camera height above the floor (default {cam['height_m']:g})")
-    g.add_argument("--pitch", type=float, metavar="DEG", help=f"camera pitch, positive looking down (default {cam['pitch_deg']:g})")
+    g.add_argument("--pitch", type=float, metavar="DEG",
+                   help=f"camera pitch, positive looking down (default {cam['pitch_deg']:g})")
     g.add_argument("--hfov", type=float, metavar="DEG",
                    help=f"horizontal field of view of an ideal camera (default {DEFAULT_HFOV_DEG:g})")
     g.add_argument("--image-size", metavar="WxH",
