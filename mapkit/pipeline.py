@@ -58,10 +58,10 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
 
     from mapkit.edges import extract_edges
     from mapkit.importers import load_scene
-    from mapkit.vir import build_regions
+    from mapkit.vir import RegionSettings, build_regions
 
     options = options or BuildOptions()
-    _check_options(options)
+    options.validate()  # again: fields may have been set since construction
     camera = Camera.from_dict(options.camera)
     report = BuildReport()
     plan = Path(plan)
@@ -86,18 +86,8 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
 
     _check_sight_work(segments, scene, options, plan)
     t = time.perf_counter()
-    part = build_regions(
-        segments,
-        scene.walls,
-        scene.free_space,
-        camera,
-        max_range=options.max_range,
-        min_visible_length=options.min_visible_length,
-        eps=options.eps,
-        merge_growth=options.merge_growth,
-        progress=progress,
-        workers=options.jobs,
-    )
+    part = build_regions(segments, scene.walls, scene.free_space, camera, RegionSettings.from_options(options),
+                         progress=progress, workers=options.jobs)
     report.seconds["regions"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -167,37 +157,6 @@ def _check_sight_work(segments: np.ndarray, scene, options: BuildOptions, plan: 
             f"tangled by faces that cross the building, or segments kilometres long? repair the input, or raise the "
             f"limit with --max-sight-work"
         )
-
-
-def _check_options(o: BuildOptions) -> None:
-    """Options a user can get wrong, checked before any work is done."""
-    positive = {
-        "wall_height": o.wall_height,
-        "max_range": o.max_range,
-        "min_visible_length": o.min_visible_length,
-        "eps": o.eps,
-        "scale": o.scale,
-    }
-    for name, v in positive.items():
-        if not (np.isfinite(v) and v > 0):
-            raise MapkitError(f"--{name.replace('_', '-')} must be a positive number, got {v}")
-    if not 0 < o.door_height <= o.wall_height:
-        raise MapkitError(f"--door-height {o.door_height:g} must be in (0, --wall-height {o.wall_height:g}]; "
-                          "lower --door-height or raise --wall-height")
-    if not 0 <= o.window_sill < o.window_head <= o.wall_height:
-        raise MapkitError(f"windows need 0 <= --window-sill < --window-head <= --wall-height, got "
-                          f"{o.window_sill:g}, {o.window_head:g}, {o.wall_height:g}")
-    if not (isinstance(o.jobs, int) and o.jobs >= 1):
-        raise MapkitError(f"--jobs is a number of threads, at least 1, got {o.jobs}")
-    if not 0 <= o.merge_growth <= 10:
-        raise MapkitError(f"--merge-growth is a fraction in [0, 10], got {o.merge_growth}")
-    for name in ("robot_radius", "min_edge_length"):
-        if not getattr(o, name) >= 0:
-            raise MapkitError(f"--{name.replace('_', '-')} must be >= 0 metres, got {getattr(o, name)}")
-    if not 0.0 < o.crease_deg < 180.0:
-        raise MapkitError(f"--crease-deg must be in (0, 180) degrees, got {o.crease_deg}")
-    if o.eps > 0.5:
-        raise MapkitError(f"--eps is the lookup tolerance and must be at most 0.5 m, got {o.eps}")
 
 
 def _single_part_regions(polygons, lists):

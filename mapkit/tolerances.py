@@ -5,6 +5,46 @@ numbers: a tolerance that lives in two places drifts. The sizes of work
 chunks (memory bounds, not geometry) are at the end, under "work sizes".
 """
 
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class GeometricZeros:
+    """Where a computed number is zero: float noise, not geometry. One
+    field per kind of quantity; the builder compares with these and never
+    with a literal (``tests/test_layout.py`` holds it), so that the same
+    zero meant in two places is one number. Unlike the tolerances below,
+    they say nothing about drawings: only about float arithmetic.
+    """
+
+    #: A distance or length, metres, computed exactly up to float noise
+    #: (coordinates metres to kilometres from the origin carry 1e-13 to
+    #: 1e-10 m): below this it is none. A point this close to a line is on
+    #: it, a radius this small is no radius, an extent this small has no scale.
+    distance: float = 1e-9
+    #: A length derived through several operations (GEOS's intersections,
+    #: bisections) equals another within this, metres: a chord this much
+    #: short of a whole probe still spans it, an annotated line this short
+    #: has no direction, a distance band found by bisection is widened by it.
+    derived_length: float = 1e-6
+    #: Norms, lengths and areas are not divided by below this: a zero
+    #: vector's direction is zero and an empty set's mean is zero, not NaN.
+    divisor: float = 1e-12
+    #: A ray meets an edge where the parameter along the edge is in [0, 1]
+    #: within this: a ray through a shared vertex hits one of its edges.
+    edge_parameter: float = 1e-12
+    #: A ratio within this above a whole number is that number when
+    #: rounded up (``ceil(3.0000000001)`` is 3: a span of exactly three
+    #: cells takes three).
+    whole_number: float = 1e-9
+    #: A unit direction's component below this is zero (a click ray that
+    #: does not point down never meets the floor).
+    direction: float = 1e-9
+
+
+#: The geometric zeros of the builder (:class:`GeometricZeros`).
+ZERO = GeometricZeros()
+
 #: Points closer than this are the same point (vertex merging, snapping of
 #: CAD endpoints that should meet). Architects' drawings are exact to well
 #: under a millimetre, but exported files carry float noise.
@@ -231,8 +271,8 @@ VIR_QUAD_SEGS = 4
 VIS_HIDDEN_SLACK = 1e-7
 
 #: Visibility polygon vertices this close to the line through their
-#: neighbours are dropped, metres.
-VIS_COLLINEAR = 1e-9
+#: neighbours are dropped, metres: on that line, up to float noise.
+VIS_COLLINEAR = ZERO.distance
 
 #: Region lookup grid cell size, metres (:mod:`mapkit.assemble`): a few
 #: regions per cell keeps queries cheap.

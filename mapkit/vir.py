@@ -34,6 +34,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from mapkit.memory import release_memory
+from mapkit.options import option_default
 from mapkit.parallel import map_chunks, map_owned
 from mapkit.progress import step
 from mapkit.shapes import polygon_parts
@@ -41,11 +42,12 @@ from mapkit.tolerances import (
     OVERLAY_GRID,
     VIR_EPS_SLACK,
     VIR_LIST_CHUNK,
-    VIR_PAIR_CHUNK,
     VIR_MAX_DEPTH,
     VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
+    VIR_PAIR_CHUNK,
     VIR_QUAD_SEGS,
+    ZERO,
 )
 from mapkit.visibility import Occluders, polygonal, segment_regions
 
@@ -65,18 +67,66 @@ class RegionPartition:
     stats: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class RegionSettings:
+    """What "visible" and "region" mean to :func:`build_regions` (docs/visibility.md).
+
+    - ``max_range`` (m): segments farther than this are not listed;
+    - ``min_visible_length`` (m): a segment counts as visible if a
+      contiguous piece this long is seen;
+    - ``eps`` (m): a region's list holds everything visible within this of it;
+    - ``min_cell`` (m): the smallest quadtree cell;
+    - ``merge_growth``: the allowed relative growth of the mean list length
+      when merging regions (0: merge equal lists only).
+
+    The defaults are those of :class:`mapkit.options.BuildOptions`; a
+    value out of range raises ValueError naming it.
+    """
+
+    max_range: float = option_default("max_range")
+    min_visible_length: float = option_default("min_visible_length")
+    eps: float = option_default("eps")
+    min_cell: float = VIR_MIN_CELL
+    merge_growth: float = option_default("merge_growth")
+
+    def __post_init__(self):
+        for name in ("max_range", "min_visible_length", "min_cell"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"{name} must be a finite number > 0.0, got {v}")
+        for name in ("eps", "merge_growth"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0, got {v}")
+
+    @classmethod
+    def from_options(cls, options) -> RegionSettings:
+        """The settings a :class:`~mapkit.options.BuildOptions` asks for."""
+        return cls(max_range=options.max_range, min_visible_length=options.min_visible_length, eps=options.eps,
+                   merge_growth=options.merge_growth)
+
+
+def _checked_segments(segments: np.ndarray, free_space) -> np.ndarray:
+    """``segments`` as an (N, 2, 3) float array; ValueError naming what is
+    wrong with them or with ``free_space``."""
+    segs = np.asarray(segments, dtype=float)
+    if segs.ndim != 3 or segs.shape[1:] != (2, 3):
+        raise ValueError(f"segments: expected shape (N, 2, 3), got {segs.shape}")
+    if not np.isfinite(segs).all():
+        raise ValueError("segments: coordinates must be finite")
+    if free_space is None or free_space.is_empty:
+        raise ValueError("free_space is empty: no place for the camera")
+    return segs
+
+
 def build_regions(
     segments: np.ndarray,
     occluders,
     free_space,
     camera,
+    settings: RegionSettings | None = None,
     *,
-    max_range: float = 10.0,
-    min_visible_length: float = 0.3,
-    eps: float = 0.05,
     progress: bool = False,
-    min_cell: float = VIR_MIN_CELL,
-    merge_growth: float = VIR_MERGE_GROWTH,
     workers: int = 1,
 ) -> RegionPartition:
     """Partition ``free_space`` into view-invariant regions.
@@ -86,41 +136,24 @@ def build_regions(
     - ``free_space``: shapely (Multi)Polygon, where the camera centre may be.
     - ``camera``: :class:`linemap.camera.Camera` (``height_m``,
       ``elevation_range()``).
-    - ``max_range`` (m), ``min_visible_length`` (m), ``eps`` (m): see
-      docs/visibility.md; ``min_cell`` (m) the smallest quadtree cell;
-      ``merge_growth`` the allowed relative growth of the mean list length
-      when merging regions (0: merge equal lists only).
+    - ``settings``: :class:`RegionSettings` (None: the defaults).
     - ``workers``: threads for the GEOS overlays and predicates
       (:mod:`mapkit.parallel`); the result does not depend on it.
 
     Guarantee: for every point q of the free space and every segment S
     visible from q, S is in the list of every region within ``eps`` of q.
     """
-    segs = np.asarray(segments, dtype=float)
-    if segs.ndim != 3 or segs.shape[1:] != (2, 3):
-        raise ValueError(f"segments: expected shape (N, 2, 3), got {segs.shape}")
-    if not np.isfinite(segs).all():
-        raise ValueError("segments: coordinates must be finite")
-    for name, v, lo in (("max_range", max_range, 0.0), ("min_visible_length", min_visible_length, 0.0), ("min_cell", min_cell, 0.0)):
-        if not (math.isfinite(v) and v > lo):
-            raise ValueError(f"{name} must be a finite number > {lo}, got {v}")
-    if not (math.isfinite(eps) and eps >= 0):
-        raise ValueError(f"eps must be a finite number >= 0, got {eps}")
-    if not (math.isfinite(merge_growth) and merge_growth >= 0):
-        raise ValueError(f"merge_growth must be a finite number >= 0, got {merge_growth}")
-    if free_space is None or free_space.is_empty:
-        raise ValueError("free_space is empty: no place for the camera")
-
+    settings = settings or RegionSettings()
+    segs = _checked_segments(segments, free_space)
     stats: dict = {"segments": len(segs)}
     t0 = time.perf_counter()
-    occ = Occluders.from_geometry(occluders)
     sr = segment_regions(
         segs,
-        occ,
+        Occluders.from_geometry(occluders),
         camera.height_m,
         camera.elevation_range(),
-        max_range=max_range,
-        min_visible_length=min_visible_length,
+        max_range=settings.max_range,
+        min_visible_length=settings.min_visible_length,
         progress=progress,
         workers=workers,
     )
@@ -129,13 +162,13 @@ def build_regions(
     stats["time_segment_regions_total_s"] = t1 - t0
 
     with step("region growth", progress):
-        grown = grow_regions(sr.regions, free_space, eps, workers)
+        grown = grow_regions(sr.regions, free_space, settings.eps, workers)
     del sr  # memory: each step's input is freed once the next holds what it needs
     release_memory()
     t2 = time.perf_counter()
     stats["time_grow_s"] = t2 - t1
 
-    leaves = quadtree_leaves(grown, free_space, min_cell, progress=progress, workers=workers)
+    leaves = quadtree_leaves(grown, free_space, settings.min_cell, progress=progress, workers=workers)
     del grown
     release_memory()
     t3 = time.perf_counter()
@@ -146,7 +179,7 @@ def build_regions(
 
     release_memory()
     with step("region merging", progress):
-        groups, bits = merge_leaves(leaves, merge_growth)
+        groups, bits = merge_leaves(leaves, settings.merge_growth)
     t4 = time.perf_counter()
     stats["time_merge_s"] = t4 - t3
 
@@ -155,14 +188,22 @@ def build_regions(
     t5 = time.perf_counter()
     stats["time_geometry_s"] = t5 - t4
     stats["time_total_s"] = t5 - t0
-    stats["regions"] = len(polygons)
+    stats.update(_partition_stats(polygons, lists, free_space))
+    return RegionPartition(polygons, lists, stats)
+
+
+def _partition_stats(polygons: list, lists: list, free_space) -> dict:
+    """The partition's counts: regions, the area-weighted mean and the
+    longest list length, the regions' and the free space's areas (m2)."""
     areas = np.array([g.area for g in polygons])
     lengths = np.array([len(x) for x in lists], dtype=float)
-    stats["mean_list_length"] = float((areas * lengths).sum() / max(areas.sum(), 1e-300))
-    stats["max_list_length"] = int(lengths.max()) if len(lengths) else 0
-    stats["region_area"] = float(areas.sum())
-    stats["free_space_area"] = float(free_space.area)
-    return RegionPartition(polygons, lists, stats)
+    return {
+        "regions": len(polygons),
+        "mean_list_length": float((areas * lengths).sum() / max(areas.sum(), ZERO.divisor)),
+        "max_list_length": int(lengths.max()) if len(lengths) else 0,
+        "region_area": float(areas.sum()),
+        "free_space_area": float(free_space.area),
+    }
 
 
 # --------------------------------------------------------------------------
@@ -287,6 +328,97 @@ def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray,
     return hit
 
 
+def _quadtree_frame(free_space, min_cell: float) -> tuple[int, float, np.ndarray]:
+    """``(depth, size, origin)`` of the quadtree over ``free_space``: the
+    root square of side ``size`` (m) centred on its bounding box, with
+    lower-left corner ``origin`` (2,), halved ``depth`` times down to cells
+    of ``min_cell`` (wider on plans past ``VIR_MAX_DEPTH`` levels)."""
+    x0, y0, x1, y1 = free_space.bounds
+    span = max(x1 - x0, y1 - y0, min_cell)
+    depth = max(0, math.ceil(math.log2(span / min_cell) - ZERO.whole_number))
+    if depth > VIR_MAX_DEPTH:  # huge plan: wider smallest cells, bounded memory
+        depth = VIR_MAX_DEPTH
+        min_cell = span / 2.0**depth
+    size = min_cell * 2.0**depth
+    origin = np.array([(x0 + x1 - size) / 2.0, (y0 + y1 - size) / 2.0])
+    return depth, size, origin
+
+
+@dataclass
+class _Level:
+    """One level of the quadtree while it is built: its cells ``ix``, ``iy``
+    (C,) and their node ids ``node`` (C,); the still-undecided (cell,
+    segment) pairs ``pc``, ``ps`` (P,) int32 (cell index into this level,
+    segment id)."""
+
+    ix: np.ndarray
+    iy: np.ndarray
+    node: np.ndarray
+    pc: np.ndarray
+    ps: np.ndarray
+
+
+def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last: bool, workers: int):
+    """Decide one level's pairs: cells off ``free`` dropped, pairs whose
+    region misses the cell dropped, pairs whose region covers the cell (all
+    at the ``last`` level) decided. ``boxes_at`` is ``(origin, s)``, the
+    tree's origin and this level's cell side. Returns the cells kept (with
+    their undecided pairs), the decided ``(node, seg)`` int32 arrays, and
+    ``done`` (C,) bool, the cells left with nothing to decide."""
+    origin, s = boxes_at
+    bx, by = origin[0] + cells.ix * s, origin[1] + cells.iy * s
+    boxes = shapely.box(bx, by, bx + s, by + s)
+    # Cells off the free space are dropped; pairs follow their cells.
+    keep = shapely.intersects(free, boxes)
+    remap = (np.cumsum(keep) - 1).astype(np.int32)
+    alive = keep[cells.pc]
+    pc, ps = remap[cells.pc[alive]], cells.ps[alive]
+    ix, iy, node, boxes = cells.ix[keep], cells.iy[keep], cells.node[keep], boxes[keep]
+    hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
+    pc, ps = pc[hit], ps[hit]
+    if last:  # smallest cells keep every segment that may be seen
+        full = np.ones(len(pc), dtype=bool)
+    else:
+        full = _pairwise(shapely.covers, grown, ps, pc, boxes, workers=workers)
+    decided = (node[pc[full]].astype(np.int32), ps[full].astype(np.int32))
+    pc, ps = pc[~full], ps[~full]
+    open_count = np.bincount(pc, minlength=len(ix))
+    done = open_count == 0 if not last else np.ones(len(ix), dtype=bool)
+    return _Level(ix, iy, node, pc, ps), decided, done
+
+
+def _split_cells(cells: _Level, done: np.ndarray, n_nodes: int) -> tuple[_Level, np.ndarray]:
+    """The next level: each undecided cell of ``cells`` split in four, the
+    children numbered from ``n_nodes`` on and inheriting their parent's
+    undecided pairs. Returns it and the children's parent node ids."""
+    split = np.nonzero(~done)[0]
+    child_of = np.full(len(cells.ix), -1)
+    child_of[split] = np.arange(len(split))
+    dx = np.array([0, 1, 0, 1])
+    dy = np.array([0, 0, 1, 1])
+    ix = (2 * cells.ix[split][:, None] + dx).ravel()
+    iy = (2 * cells.iy[split][:, None] + dy).ravel()
+    parents = np.repeat(cells.node[split], 4)
+    node = n_nodes + np.arange(4 * len(split), dtype=np.int64)
+    base = (child_of[cells.pc] * 4).astype(np.int32)
+    pc = (base[:, None] + np.arange(4, dtype=np.int32)).ravel()
+    ps = np.repeat(cells.ps, 4)
+    return _Level(ix, iy, node, pc, ps), parents
+
+
+def _node_lists(dec_node: list, dec_seg: list, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(node_ptr, node_segs)`` of :class:`Leaves` from the per-level
+    decided (node, segment) arrays (emptied as they are used: memory)."""
+    dn = np.concatenate(dec_node)
+    dec_node.clear()
+    node_ptr = np.zeros(n_nodes + 1, dtype=np.int64)
+    np.cumsum(np.bincount(dn, minlength=n_nodes), out=node_ptr[1:])
+    node_segs = np.concatenate(dec_seg)
+    dec_seg.clear()
+    node_segs = node_segs[np.argsort(dn, kind="stable")]
+    return node_ptr, node_segs
+
+
 def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False, workers: int = 1) -> Leaves:
     """Subdivide until each cell's list is decided (see the module docstring).
 
@@ -300,79 +432,36 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     """
     from tqdm import tqdm
 
-    n = len(grown)
-    x0, y0, x1, y1 = free_space.bounds
-    span = max(x1 - x0, y1 - y0, min_cell)
-    depth = max(0, math.ceil(math.log2(span / min_cell) - 1e-9))
-    if depth > VIR_MAX_DEPTH:  # huge plan: wider smallest cells, bounded memory
-        depth = VIR_MAX_DEPTH
-        min_cell = span / 2.0**depth
-    size = min_cell * 2.0**depth
-    origin = np.array([(x0 + x1 - size) / 2.0, (y0 + y1 - size) / 2.0])
+    depth, size, origin = _quadtree_frame(free_space, min_cell)
     free = free_space
     shapely.prepare(free)
 
-    ix = np.zeros(1, dtype=np.int64)
-    iy = np.zeros(1, dtype=np.int64)
-    node = np.zeros(1, dtype=np.int64)  # node ids of this level's cells
-    parents = [np.full(1, -1, dtype=np.int64)]
-    n_nodes = 1
     tree = shapely.STRtree(grown)
     ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int32)
-    pc = np.zeros(len(ps), dtype=np.int32)
+    cells = _Level(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64),
+                   np.zeros(len(ps), dtype=np.int32), ps)
+    del ps
+    parents = [np.full(1, -1, dtype=np.int64)]
+    n_nodes = 1
     out_level, out_ix, out_iy, out_node = [], [], [], []
     dec_node, dec_seg = [], []
     for lev in tqdm(range(depth + 1), desc="region quadtree", disable=not progress, leave=False):
-        s = size / 2.0**lev
-        bx, by = origin[0] + ix * s, origin[1] + iy * s
-        boxes = shapely.box(bx, by, bx + s, by + s)
-        # Cells off the free space are dropped; pairs follow their cells.
-        keep = shapely.intersects(free, boxes)
-        remap = (np.cumsum(keep) - 1).astype(np.int32)
-        alive = keep[pc]
-        pc, ps = remap[pc[alive]], ps[alive]
-        ix, iy, node, boxes = ix[keep], iy[keep], node[keep], boxes[keep]
-        hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
-        pc, ps = pc[hit], ps[hit]
-        if lev == depth:  # smallest cells keep every segment that may be seen
-            full = np.ones(len(pc), dtype=bool)
-        else:
-            full = _pairwise(shapely.covers, grown, ps, pc, boxes, workers=workers)
-        dec_node.append(node[pc[full]].astype(np.int32))
-        dec_seg.append(ps[full].astype(np.int32))
-        pc, ps = pc[~full], ps[~full]
-        open_count = np.bincount(pc, minlength=len(ix))
-        done = open_count == 0 if lev < depth else np.ones(len(ix), dtype=bool)
+        cells, decided, done = _decide_level(cells, grown, free, (origin, size / 2.0**lev), lev == depth, workers)
+        dec_node.append(decided[0])
+        dec_seg.append(decided[1])
         out_level.append(np.full(int(done.sum()), lev))
-        out_ix.append(ix[done])
-        out_iy.append(iy[done])
-        out_node.append(node[done])
+        out_ix.append(cells.ix[done])
+        out_iy.append(cells.iy[done])
+        out_node.append(cells.node[done])
         if lev == depth or done.all():
             break
         # Split the undecided cells in four; children inherit the parent's list.
-        split = np.nonzero(~done)[0]
-        child_of = np.full(len(ix), -1)
-        child_of[split] = np.arange(len(split))
-        dx = np.array([0, 1, 0, 1])
-        dy = np.array([0, 0, 1, 1])
-        ix = (2 * ix[split][:, None] + dx).ravel()
-        iy = (2 * iy[split][:, None] + dy).ravel()
-        parents.append(np.repeat(node[split], 4))
-        node = n_nodes + np.arange(4 * len(split), dtype=np.int64)
-        n_nodes += len(node)
-        base = (child_of[pc] * 4).astype(np.int32)
-        pc = (base[:, None] + np.arange(4, dtype=np.int32)).ravel()
-        ps = np.repeat(ps, 4)
+        cells, parent_row = _split_cells(cells, done, n_nodes)
+        parents.append(parent_row)
+        n_nodes += len(cells.node)
         release_memory()  # this level's cells and tests
-    del pc, ps, boxes
-    dn = np.concatenate(dec_node)
-    del dec_node
-    node_ptr = np.zeros(n_nodes + 1, dtype=np.int64)
-    np.cumsum(np.bincount(dn, minlength=n_nodes), out=node_ptr[1:])
-    node_segs = np.concatenate(dec_seg)
-    del dec_seg
-    node_segs = node_segs[np.argsort(dn, kind="stable")]
-    del dn
+    del cells
+    node_ptr, node_segs = _node_lists(dec_node, dec_seg, n_nodes)
     return Leaves(
         np.concatenate(out_level).astype(np.int64),
         np.concatenate(out_ix).astype(np.int64),
@@ -381,7 +470,7 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
         np.concatenate(parents),
         node_ptr,
         node_segs,
-        n,
+        len(grown),
         origin,
         size,
         depth,
@@ -462,9 +551,9 @@ def equal_lists(leaves: Leaves, pairs: np.ndarray) -> np.ndarray:
     fp, count = _leaf_fingerprints(leaves)
     maybe = np.nonzero((fp[pairs[:, 0]] == fp[pairs[:, 1]]) & (count[pairs[:, 0]] == count[pairs[:, 1]]))[0]
     out = np.zeros(len(pairs), dtype=bool)
-    step = max(1, VIR_LIST_CHUNK // max(1, int(count.max(initial=1))))
-    for i in range(0, len(maybe), step):
-        k = maybe[i : i + step]
+    chunk = max(1, VIR_LIST_CHUNK // max(1, int(count.max(initial=1))))
+    for i in range(0, len(maybe), chunk):
+        k = maybe[i : i + chunk]
         owner_a, seg_a = leaves.lists(pairs[k, 0])
         _, seg_b = leaves.lists(pairs[k, 1])
         # Equal lengths pair by pair, so the two concatenations line up.
@@ -477,15 +566,140 @@ def list_bitsets(leaves: Leaves, which: np.ndarray) -> list[int]:
     """The lists of leaves ``which`` as Python int bitsets (bit i: segment i)."""
     n = leaves.n_segments
     out: list[int] = []
-    step = max(1, VIR_LIST_CHUNK // max(n, 1))
-    for i in range(0, len(which), step):
-        k = np.asarray(which[i : i + step])
+    chunk = max(1, VIR_LIST_CHUNK // max(n, 1))
+    for i in range(0, len(which), chunk):
+        k = np.asarray(which[i : i + chunk])
         owner, seg = leaves.lists(k, ordered=False)
         rows = np.zeros((len(k), n), dtype=bool)
         rows[owner, seg] = True
         packed = np.packbits(rows, axis=1, bitorder="little")
         out.extend(int.from_bytes(r.tobytes(), "little") for r in packed)
     return out
+
+
+def _equal_list_components(leaves: Leaves) -> tuple[int, np.ndarray, np.ndarray]:
+    """``(n_comp, comp, pairs)``: touching leaves with equal lists joined
+    (connected components): ``comp`` (M,) each leaf's component, ``pairs``
+    (P, 2) the touching leaves."""
+    m = len(leaves.level)
+    pairs = adjacent_pairs(leaf_raster(leaves).labels)
+    same = pairs[equal_lists(leaves, pairs)]
+    graph = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(m, m))
+    n_comp, comp = connected_components(graph, directed=False)
+    return n_comp, comp, pairs
+
+
+class _Agglomeration:
+    """The greedy merge of :func:`merge_leaves` over regions 0..R-1: each
+    region's ``area`` (m2), list ``bits`` (Python int bitsets) and their
+    ``count``, its neighbours ``nbrs`` (sets); ``parent`` says which region
+    each joined (itself while it stands), ``version`` how often it grew."""
+
+    def __init__(self, area: list, bits: list, pair_ids: list):
+        n = len(area)
+        self.area, self.bits = area, bits
+        self.count = [b.bit_count() for b in bits]
+        self.nbrs: list[set] = [set() for _ in range(n)]
+        for a, b in pair_ids:
+            self.nbrs[a].add(b)
+            self.nbrs[b].add(a)
+        self.parent = list(range(n))
+        self.version = [0] * n
+
+    def entry(self, a: int, b: int, owner: int) -> tuple:
+        """The queue entry of merging a and b (a < b): cost, then ties broken
+        by (a, b, their versions); ``owner`` the end it is the cheapest of."""
+        bits, area, count, version = self.bits, self.area, self.count, self.version
+        u = (bits[a] | bits[b]).bit_count()
+        return (area[a] * (u - count[a]) + area[b] * (u - count[b]), a, b, version[a], version[b], owner)
+
+    def cheapest(self, n: int):
+        """The entry of n's cheapest merge with a current neighbour, or None
+        (:meth:`entry` inlined: this is the hot loop)."""
+        bits, area, count, version = self.bits, self.area, self.count, self.version
+        bits_n, count_n, area_n, version_n = bits[n], count[n], area[n], version[n]
+        top = None
+        for x in self.nbrs[n]:
+            u = (bits_n | bits[x]).bit_count()
+            if n < x:
+                e = (area_n * (u - count_n) + area[x] * (u - count[x]), n, x, version_n, version[x], n)
+            else:
+                e = (area[x] * (u - count[x]) + area_n * (u - count_n), x, n, version[x], version_n, n)
+            if top is None or e < top:
+                top = e
+        return top
+
+    def first_queue(self, pair_ids: list) -> list:
+        """A heap holding every region's cheapest merge among ``pair_ids``."""
+        best: list = [None] * len(self.area)
+        for a, b in pair_ids:
+            e = self.entry(a, b, a)
+            if best[a] is None or e < best[a]:
+                best[a] = e
+            if best[b] is None or e[:5] < best[b][:5]:
+                best[b] = e[:5] + (b,)
+        heap = [e for e in best if e is not None]
+        heapq.heapify(heap)
+        return heap
+
+    def join(self, a: int, b: int) -> None:
+        """Region b joins region a: lists united, areas added, neighbours moved."""
+        bits, nbrs = self.bits, self.nbrs
+        self.parent[b] = a
+        bits[a] |= bits[b]
+        self.count[a] = bits[a].bit_count()
+        bits[b] = 0  # b's list lives on in a's
+        self.area[a] += self.area[b]
+        self.version[a] += 1
+        for x in nbrs[b]:
+            nbrs[x].discard(b)
+            if x != a:
+                nbrs[x].add(a)
+                nbrs[a].add(x)
+        nbrs[a].discard(b)
+        nbrs[b] = set()
+
+    def run(self, heap: list, budget: float) -> None:
+        """Merge the cheapest current pair first until the summed cost would
+        pass ``budget``.
+
+        The queue holds, for every region, its cheapest merge (and outdated
+        entries, skipped when popped). Every current pair (a, b) then has an
+        entry in the queue no later than its own: that of a or b, or of the
+        one of them whose cheapest merge it was when it last changed. So the
+        first current entry popped is the cheapest current pair, ties broken
+        by (a, b, versions), as if every pair were queued. When an outdated
+        entry's owner is still as it was (its partner changed), the owner's
+        cheapest merge is queued anew; it cannot come before the popped one."""
+        parent, version = self.parent, self.version
+        spent = 0.0
+        while heap and budget > 0:
+            c, a, b, va, vb, owner = heapq.heappop(heap)
+            if version[a] != va or version[b] != vb or parent[a] != a or parent[b] != b:
+                vo = va if owner == a else vb
+                if parent[owner] == owner and version[owner] == vo:
+                    e = self.cheapest(owner)
+                    if e is not None:
+                        heapq.heappush(heap, e)
+                continue
+            if spent + c > budget:
+                break
+            spent += c
+            self.join(a, b)
+            e = self.cheapest(a)
+            if e is not None:
+                heapq.heappush(heap, e)
+
+    def groups(self) -> tuple[np.ndarray, list[int]]:
+        """Each region's final group (R,) and the groups' list bitsets."""
+        root = np.array(self.parent)
+        while True:  # path compression to the final representatives
+            nxt = root[root]
+            if (nxt == root).all():
+                break
+            root = nxt
+        reps, group = np.unique(root, return_inverse=True)
+        return group.ravel(), [self.bits[r] for r in reps]
 
 
 def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[int]]:
@@ -499,109 +713,24 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     ``merge_growth`` times the starting sum.
     """
     m = len(leaves.level)
-    pairs = adjacent_pairs(leaf_raster(leaves).labels)
-    same = pairs[equal_lists(leaves, pairs)]
-    graph = coo_matrix((np.ones(len(same)), (same[:, 0], same[:, 1])), shape=(m, m))
-    n_comp, comp = connected_components(graph, directed=False)
+    n_comp, comp, pairs = _equal_list_components(leaves)
     first = np.full(n_comp, -1)
     first[comp[::-1]] = np.arange(m)[::-1]
     cell_area = (leaves.size / 2.0**leaves.level) ** 2
     area = np.bincount(comp, weights=cell_area, minlength=n_comp).tolist()
-    bits = list_bitsets(leaves, first)
-    count = [b.bit_count() for b in bits]
     cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
     # One int object per component, shared by the sets and heap entries
     # below (ids from .tolist() would be new objects each: tens of MB).
     ids = list(range(n_comp))
     pair_ids = [(ids[a], ids[b]) for a, b in zip(cpairs[:, 0].tolist(), cpairs[:, 1].tolist())]
-    nbrs: list[set] = [set() for _ in range(n_comp)]
-    for a, b in pair_ids:
-        nbrs[a].add(b)
-        nbrs[b].add(a)
-
-    budget = merge_growth * sum(a * c for a, c in zip(area, count))
-    parent = list(range(n_comp))
-    version = [0] * n_comp
-
-    def entry(a: int, b: int, owner: int) -> tuple:
-        """The queue entry of merging a and b (a < b): cost, then ties broken
-        by (a, b, their versions); ``owner`` the end it is the cheapest of."""
-        u = (bits[a] | bits[b]).bit_count()
-        return (area[a] * (u - count[a]) + area[b] * (u - count[b]), a, b, version[a], version[b], owner)
-
-    def cheapest(n: int):
-        """The entry of n's cheapest merge with a current neighbour, or None
-        (:func:`entry` inlined: this is the hot loop)."""
-        bits_n, count_n, area_n, version_n = bits[n], count[n], area[n], version[n]
-        top = None
-        for x in nbrs[n]:
-            u = (bits_n | bits[x]).bit_count()
-            if n < x:
-                e = (area_n * (u - count_n) + area[x] * (u - count[x]), n, x, version_n, version[x], n)
-            else:
-                e = (area[x] * (u - count[x]) + area_n * (u - count_n), x, n, version[x], version_n, n)
-            if top is None or e < top:
-                top = e
-        return top
-
-    # The queue holds, for every region, its cheapest merge (and outdated
-    # entries, skipped when popped). Every current pair (a, b) then has an
-    # entry in the queue no later than its own: that of a or b, or of the
-    # one of them whose cheapest merge it was when it last changed. So the
-    # first current entry popped is the cheapest current pair, ties broken
-    # by (a, b, versions), as if every pair were queued. When an outdated
-    # entry's owner is still as it was (its partner changed), the owner's
-    # cheapest merge is queued anew; it cannot come before the popped one.
-    best: list = [None] * n_comp
-    for a, b in pair_ids:
-        e = entry(a, b, a)
-        if best[a] is None or e < best[a]:
-            best[a] = e
-        if best[b] is None or e[:5] < best[b][:5]:
-            best[b] = e[:5] + (b,)
+    merge = _Agglomeration(area, list_bitsets(leaves, first), pair_ids)
+    budget = merge_growth * sum(a * c for a, c in zip(merge.area, merge.count))
+    heap = merge.first_queue(pair_ids)
     del pair_ids
-    heap = [e for e in best if e is not None]
-    del best
-    heapq.heapify(heap)
-    spent = 0.0
-    while heap and budget > 0:
-        c, a, b, va, vb, owner = heapq.heappop(heap)
-        if version[a] != va or version[b] != vb or parent[a] != a or parent[b] != b:
-            vo = va if owner == a else vb
-            if parent[owner] == owner and version[owner] == vo:
-                e = cheapest(owner)
-                if e is not None:
-                    heapq.heappush(heap, e)
-            continue
-        if spent + c > budget:
-            break
-        spent += c
-        # b joins a
-        parent[b] = a
-        bits[a] |= bits[b]
-        count[a] = bits[a].bit_count()
-        bits[b] = 0  # b's list lives on in a's
-        area[a] += area[b]
-        version[a] += 1
-        for x in nbrs[b]:
-            nbrs[x].discard(b)
-            if x != a:
-                nbrs[x].add(a)
-                nbrs[a].add(x)
-        nbrs[a].discard(b)
-        nbrs[b] = set()
-        e = cheapest(a)
-        if e is not None:
-            heapq.heappush(heap, e)
-    root = np.array(parent)
-    while True:  # path compression to the final representatives
-        nxt = root[root]
-        if (nxt == root).all():
-            break
-        root = nxt
-    reps, group_of_comp = np.unique(root, return_inverse=True)
-    return group_of_comp.ravel()[comp], [bits[r] for r in reps]
+    merge.run(heap, budget)
+    group_of_comp, bits = merge.groups()
+    return group_of_comp[comp], bits
 
 
 # --------------------------------------------------------------------------
@@ -681,4 +810,4 @@ def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_spa
     return polygons, lists, order
 
 
-__all__ = ["Leaves", "RegionPartition", "build_regions", "grow_regions", "merge_leaves", "quadtree_leaves", "region_geometry"]
+__all__ = ["Leaves", "RegionPartition", "RegionSettings", "build_regions", "grow_regions", "merge_leaves", "quadtree_leaves", "region_geometry"]

@@ -37,12 +37,13 @@ from mapkit.tolerances import (
     SIGHT_POINT_COST,
     SIGHT_WORK_PROBES,
     VIS_BLOCK,
-    VIS_FIRST_EDGES,
-    VIS_HIDDEN_SLACK,
     VIS_BUILD_SHRINK,
     VIS_COLLINEAR,
+    VIS_FIRST_EDGES,
+    VIS_HIDDEN_SLACK,
     VIS_RAY_OFFSET_DEG,
     VIS_VERTICAL_XY,
+    ZERO,
 )
 
 
@@ -201,17 +202,17 @@ def _hits_block(d: np.ndarray, a: np.ndarray, e: np.ndarray, best: np.ndarray | 
     (K,) where that is nearer (inf by default): the brute-force kernel of
     :func:`_nearest_hits`, in blocks of at most ``VIS_BLOCK`` ray-edge pairs."""
     out = np.empty(len(d))
-    step = max(1, VIS_BLOCK // max(1, len(a)))
-    for i in range(0, len(d), step):
-        dd = d[i : i + step, None, :]
+    chunk = max(1, VIS_BLOCK // max(1, len(a)))
+    for i in range(0, len(d), chunk):
+        dd = d[i : i + chunk, None, :]
         denom = dd[..., 0] * e[None, :, 1] - dd[..., 1] * e[None, :, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (a[None, :, 0] * e[None, :, 1] - a[None, :, 1] * e[None, :, 0]) / denom
             u = (a[None, :, 0] * dd[..., 1] - a[None, :, 1] * dd[..., 0]) / denom
         # u within [0, 1] up to round-off: a ray through a shared vertex must
         # not slip between the two edges meeting there.
-        ok = (t > 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12)
-        out[i : i + step] = np.where(ok, t, np.inf).min(axis=1)
+        ok = (t > 0.0) & (u >= -ZERO.edge_parameter) & (u <= 1.0 + ZERO.edge_parameter)
+        out[i : i + chunk] = np.where(ok, t, np.inf).min(axis=1)
     return out if best is None else np.minimum(out, best)
 
 
@@ -302,7 +303,7 @@ def vertical_distance_band(z0, z1, need, h, e_min, e_max, max_range) -> tuple[np
         c, e = np.where(good, m, c), np.where(good, e, m)
     dmin = np.where(f(np.zeros_like(peak)) >= 0, 0.0, a)
     dmax = np.where(f(np.full_like(peak, max_range)) >= 0, max_range, e)
-    dmin, dmax = np.maximum(dmin - 1e-6, 0.0), dmax + 1e-6
+    dmin, dmax = np.maximum(dmin - ZERO.derived_length, 0.0), dmax + ZERO.derived_length
     return np.where(ok, dmin, -1.0), np.where(ok, dmax, -1.0)
 
 
@@ -370,7 +371,7 @@ class SegmentRegions:
 def sample_segment(seg: np.ndarray, spacing: float) -> np.ndarray:
     """(n, 3) points along ``seg`` (2, 3), end points included, spaced <= ``spacing``."""
     length = float(np.linalg.norm(seg[1] - seg[0]))
-    n = max(1, math.ceil(length / spacing - 1e-9))
+    n = max(1, math.ceil(length / spacing - ZERO.whole_number))
     t = np.linspace(0.0, 1.0, n + 1)
     return seg[0] + t[:, None] * (seg[1] - seg[0])
 
@@ -411,6 +412,172 @@ def sight_work(segments: np.ndarray, occluders, *, max_range: float, min_visible
     return len(xy), len(xy) * (SIGHT_POINT_COST + float(np.mean(near)))
 
 
+@dataclass
+class _Samples:
+    """The sample points of :func:`segment_regions` and the pairs of
+    consecutive samples whose visibility polygons are overlaid.
+
+    - ``xy`` (P, 2): distinct sample points (floor and ceiling edges share
+      theirs), rounded to 1e-7 m;
+    - ``vert_ids`` (V,) ids of the vertical segments, ``vert_keys`` (V,)
+      the row of ``xy`` each stands at;
+    - per pair of consecutive samples of a non-vertical segment (K,):
+      ``pair_seg`` its segment, ``pair_a``, ``pair_b`` the rows of ``xy`` of
+      its two samples, ``pair_mid`` (K, 2) their midpoint, ``pair_rin``,
+      ``pair_rout`` the radii of the annulus bounding both distance bands.
+    """
+
+    xy: np.ndarray
+    vert_ids: np.ndarray
+    vert_keys: np.ndarray
+    pair_seg: np.ndarray
+    pair_a: np.ndarray
+    pair_b: np.ndarray
+    pair_mid: np.ndarray
+    pair_rin: np.ndarray
+    pair_rout: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Sight:
+    """What a segment's visibility depends on besides the walls: the camera
+    height ``h`` (m), its (lowest, highest) ``elevation`` angles (radians),
+    ``max_range`` and ``min_visible_length`` (m)."""
+
+    h: float
+    elevation: tuple[float, float]
+    max_range: float
+    min_visible_length: float
+
+
+def _pair_annulus(pts: np.ndarray, dmin: np.ndarray, dmax: np.ndarray, j: int) -> tuple[float, float] | None:
+    """``(r_in, r_out)`` of the annulus around the midpoint of samples ``j``
+    and ``j + 1`` of ``pts`` (n, 3) that bounds both their distance bands
+    (:func:`segment_regions`), or None when the pair is never seen."""
+    if dmax[j] < 0 or dmax[j + 1] < 0:
+        return None  # one sample never seen: the pair never is
+    delta2 = float(np.sum((pts[j + 1, :2] - pts[j, :2]) ** 2))
+    r_out2 = (dmax[j] ** 2 + dmax[j + 1] ** 2) / 2.0 - delta2 / 4.0
+    r_in2 = min(dmin[j], dmin[j + 1]) ** 2 - delta2 / 4.0
+    if r_out2 <= max(r_in2, 0.0):
+        return None
+    return (math.sqrt(r_in2) if r_in2 > 0 else 0.0), math.sqrt(r_out2)
+
+
+def _samples(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> _Samples:
+    """Sample every segment of ``segs`` (N, 2, 3) (``vertical`` (N,) bool:
+    one sample at its xy point; else spaced <= ``min_visible_length / 2``)
+    and pair the consecutive samples seen from a common annulus."""
+    e_min, e_max = sight.elevation
+    keys: dict[tuple[float, float], int] = {}
+
+    def key_of(pt: np.ndarray) -> int:
+        k = (round(float(pt[0]), 7), round(float(pt[1]), 7))
+        if k not in keys:
+            keys[k] = len(keys)
+        return keys[k]
+
+    pair_seg, pair_a, pair_b, pair_mid, pair_rin, pair_rout = [], [], [], [], [], []
+    vert_ids = np.nonzero(vertical)[0]
+    vert_keys = [key_of(segs[i, 0, :2]) for i in vert_ids]
+    for i in np.nonzero(~vertical)[0]:
+        pts = sample_segment(segs[i], sight.min_visible_length / 2.0)
+        dmin, dmax = distance_band(pts[:, 2], sight.h, e_min, e_max, sight.max_range)
+        ks = [key_of(pt) for pt in pts[:, :2]]
+        for j in range(len(pts) - 1):
+            radii = _pair_annulus(pts, dmin, dmax, j)
+            if radii is None:
+                continue
+            pair_seg.append(i)
+            pair_a.append(ks[j])
+            pair_b.append(ks[j + 1])
+            pair_mid.append((pts[j, :2] + pts[j + 1, :2]) / 2.0)
+            pair_rin.append(radii[0])
+            pair_rout.append(radii[1])
+    xy = np.array(list(keys)).reshape(-1, 2)
+    return _Samples(xy, vert_ids, np.asarray(vert_keys, dtype=np.int64), np.array(pair_seg, dtype=np.int64),
+                    np.array(pair_a, dtype=np.int64), np.array(pair_b, dtype=np.int64),
+                    np.array(pair_mid).reshape(-1, 2), np.array(pair_rin), np.array(pair_rout))
+
+
+def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int) -> np.ndarray:
+    """(P,) the visibility polygon of each point of ``xy`` (P, 2) within
+    ``max_range``, collinear vertices dropped, empty for a point buried in a
+    wall."""
+    box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
+    from mapkit.visibility_batch import polygons_of, visibility_polygons
+
+    with step("visibility polygons", progress):
+        raw = polygons_of(*visibility_polygons(xy, occ, box, workers), len(xy))
+    # Rays hitting one edge give collinear points; each later overlay pays per
+    # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
+    vp = map_chunks(_simplified, [raw], workers)
+    del raw  # the largest arrays of the stage: free them before the overlays
+    release_memory()
+    # A point inside a (shrunk) wall is seen from nowhere: every sight line
+    # from outside crosses the solid. The sweep, which skips edges facing
+    # away, would instead see through that wall.
+    if len(xy):
+        buried = shapely.contains_xy(occ.geometry, xy[:, 0], xy[:, 1])
+        vp[buried] = Polygon()
+    return vp
+
+
+def _vertical_regions(regions: np.ndarray, segs: np.ndarray, samples: _Samples, vp: np.ndarray, sight: _Sight,
+                      workers: int) -> None:
+    """Fill ``regions`` at the vertical segments: the visibility polygon of
+    each one's xy point within the distance band where its visible z-extent
+    reaches min(L, its length)."""
+    vert_ids, vert_keys = samples.vert_ids, samples.vert_keys
+    if not len(vert_ids):
+        return
+    z = np.sort(segs[vert_ids, :, 2], axis=1)
+    need = np.minimum(sight.min_visible_length, z[:, 1] - z[:, 0])
+    e_min, e_max = sight.elevation
+    dmin, dmax = vertical_distance_band(z[:, 0], z[:, 1], need, sight.h, e_min, e_max, sight.max_range)
+    ok = dmax >= 0
+    if ok.any():
+        idx = np.nonzero(ok)[0]
+        ann = annuli(samples.xy[vert_keys[idx]], dmin[idx], dmax[idx])
+        regions[vert_ids[idx]] = map_chunks(_overlap, [vp[vert_keys[idx]], ann], workers)
+
+
+def _pair_pieces(samples: _Samples, vp: np.ndarray, progress: bool, workers: int) -> np.ndarray:
+    """(K,) ``V(s_i) & V(s_j)`` within each pair's annulus; the polygon
+    overlay is made once for pairs of the same two points."""
+    n_xy = len(samples.xy)
+    pa, pb = samples.pair_a, samples.pair_b
+    lo_k, hi_k = np.minimum(pa, pb), np.maximum(pa, pb)
+    uniq, inv = np.unique(lo_k * n_xy + hi_k, return_inverse=True)
+    ua, ub = uniq // n_xy, uniq % n_xy
+    with step("visibility overlaps", progress):
+        both = map_chunks(lambda a, b: _overlap(vp[a], vp[b]), [ua, ub], workers)
+        return map_chunks(
+            lambda k, mid, r_in, r_out: polygonal(shapely.intersection(both[k], annuli(mid, r_in, r_out))),
+            [inv, samples.pair_mid, samples.pair_rin, samples.pair_rout],
+            workers,
+        )
+
+
+def _unite_pieces(regions: np.ndarray, pieces: np.ndarray, pair_seg: np.ndarray, progress: bool,
+                  workers: int) -> np.ndarray:
+    """``regions`` with each segment's pair pieces (``pair_seg`` (K,) the
+    segment of each) united in place of its entry where it has any."""
+    n = len(regions)
+    order = np.argsort(pair_seg, kind="stable")
+    bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
+
+    def unite(ids: np.ndarray) -> np.ndarray:
+        out = regions[ids]
+        for k, i in enumerate(ids):
+            if bounds[i + 1] > bounds[i]:
+                out[k] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
+        return polygonal(out)
+
+    with step("segment regions", progress):
+        return map_chunks(unite, [np.arange(n)], workers)
+
+
 def segment_regions(
     segments: np.ndarray,
     occ: Occluders,
@@ -445,111 +612,27 @@ def segment_regions(
     t0 = time.perf_counter()
     segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
     n = len(segs)
-    e_min, e_max = elevation
-    L = float(min_visible_length)
+    sight = _Sight(h, elevation, max_range, float(min_visible_length))
     vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
-
-    # ---- samples: xy keys shared between segments (floor and ceiling edges)
-    keys: dict[tuple[float, float], int] = {}
-    xy_list: list[np.ndarray] = []
-
-    def key_of(pt: np.ndarray) -> int:
-        k = (round(float(pt[0]), 7), round(float(pt[1]), 7))
-        if k not in keys:
-            keys[k] = len(xy_list)
-            xy_list.append(np.array(k))
-        return keys[k]
-
-    pair_seg, pair_a, pair_b, pair_mid, pair_delta, pair_rin, pair_rout = [], [], [], [], [], [], []
-    vert_ids = np.nonzero(vertical)[0]
-    vert_keys = [key_of(segs[i, 0, :2]) for i in vert_ids]
-    for i in np.nonzero(~vertical)[0]:
-        pts = sample_segment(segs[i], L / 2.0)
-        dmin, dmax = distance_band(pts[:, 2], h, e_min, e_max, max_range)
-        ks = [key_of(pt) for pt in pts[:, :2]]
-        for j in range(len(pts) - 1):
-            if dmax[j] < 0 or dmax[j + 1] < 0:
-                continue  # one sample never seen: the pair never is
-            delta2 = float(np.sum((pts[j + 1, :2] - pts[j, :2]) ** 2))
-            r_out2 = (dmax[j] ** 2 + dmax[j + 1] ** 2) / 2.0 - delta2 / 4.0
-            r_in2 = min(dmin[j], dmin[j + 1]) ** 2 - delta2 / 4.0
-            if r_out2 <= max(r_in2, 0.0):
-                continue
-            pair_seg.append(i)
-            pair_a.append(ks[j])
-            pair_b.append(ks[j + 1])
-            pair_mid.append((pts[j, :2] + pts[j + 1, :2]) / 2.0)
-            pair_delta.append(delta2)
-            pair_rin.append(math.sqrt(r_in2) if r_in2 > 0 else 0.0)
-            pair_rout.append(math.sqrt(r_out2))
+    samples = _samples(segs, vertical, sight)
     t_sample = time.perf_counter()
 
-    # ---- visibility polygons, one per distinct xy sample point
-    xy = np.array(xy_list).reshape(-1, 2)
-    box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
-    from mapkit.visibility_batch import polygons_of, visibility_polygons
-
-    with step("visibility polygons", progress):
-        raw = polygons_of(*visibility_polygons(xy, occ, box, workers), len(xy))
-    # Rays hitting one edge give collinear points; each later overlay pays per
-    # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
-    vp = map_chunks(_simplified, [raw], workers)
-    del raw  # the largest arrays of the stage: free them before the overlays
-    release_memory()
-    # A point inside a (shrunk) wall is seen from nowhere: every sight line
-    # from outside crosses the solid. The sweep, which skips edges facing
-    # away, would instead see through that wall.
-    if len(xy):
-        buried = shapely.contains_xy(occ.geometry, xy[:, 0], xy[:, 1])
-        vp[buried] = Polygon()
+    vp = _sample_polygons(samples.xy, occ, max_range, progress, workers)
     t_vis = time.perf_counter()
 
     regions = np.array([Polygon()] * n, dtype=object)
-    # ---- vertical segments: one visibility polygon within one band
-    if len(vert_ids):
-        z = np.sort(segs[vert_ids, :, 2], axis=1)
-        need = np.minimum(L, z[:, 1] - z[:, 0])
-        dmin, dmax = vertical_distance_band(z[:, 0], z[:, 1], need, h, e_min, e_max, max_range)
-        ok = dmax >= 0
-        if ok.any():
-            idx = np.nonzero(ok)[0]
-            ann = annuli(xy[np.asarray(vert_keys)[idx]], dmin[idx], dmax[idx])
-            regions[vert_ids[idx]] = map_chunks(_overlap, [vp[np.asarray(vert_keys)[idx]], ann], workers)
-
-    # ---- pairs: V(s_i) & V(s_j), the polygon pair shared by equal xy pairs
-    n_pairs = len(pair_seg)
+    _vertical_regions(regions, segs, samples, vp, sight, workers)
+    n_pairs = len(samples.pair_seg)
     if n_pairs:
-        pa, pb = np.array(pair_a), np.array(pair_b)
-        lo_k, hi_k = np.minimum(pa, pb), np.maximum(pa, pb)
-        uniq, inv = np.unique(lo_k * len(xy) + hi_k, return_inverse=True)
-        ua, ub = uniq // len(xy), uniq % len(xy)
-        with step("visibility overlaps", progress):
-            both = map_chunks(lambda a, b: _overlap(vp[a], vp[b]), [ua, ub], workers)
-            pieces = map_chunks(
-                lambda k, mid, r_in, r_out: polygonal(shapely.intersection(both[k], annuli(mid, r_in, r_out))),
-                [inv, np.array(pair_mid), np.array(pair_rin), np.array(pair_rout)],
-                workers,
-            )
-        del both, vp
+        pieces = _pair_pieces(samples, vp, progress, workers)
+        del vp  # the pieces hold what the union needs
         release_memory()
-        pair_seg = np.array(pair_seg)
-        order = np.argsort(pair_seg, kind="stable")
-        bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
-
-        def unite(ids: np.ndarray) -> np.ndarray:
-            out = regions[ids]
-            for k, i in enumerate(ids):
-                if bounds[i + 1] > bounds[i]:
-                    out[k] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
-            return polygonal(out)
-
-        with step("segment regions", progress):
-            regions = map_chunks(unite, [np.arange(n)], workers)
+        regions = _unite_pieces(regions, pieces, samples.pair_seg, progress, workers)
     t_union = time.perf_counter()
     stats = {
         "segments": n,
         "vertical_segments": int(vertical.sum()),
-        "visibility_polygons": len(xy),
+        "visibility_polygons": len(samples.xy),
         "sample_pairs": int(n_pairs),
         "time_sampling_s": t_sample - t0,
         "time_visibility_polygons_s": t_vis - t_sample,

@@ -29,6 +29,7 @@ from mapkit.tolerances import (
     VIS_NEAR_BLOCK,
     VIS_RAY_OFFSET_DEG,
     VIS_SWEEP_EDGES,
+    ZERO,
 )
 from mapkit.visibility import Occluders, clip_box
 
@@ -195,7 +196,7 @@ def _hits(d: np.ndarray, first: np.ndarray, count: np.ndarray, a, e, cross) -> n
         with np.errstate(divide="ignore", invalid="ignore"):
             t = cr / denom
             u = (a0 * d1 - a1 * d0) / denom
-        ok = (t > 0.0) & (u >= -1e-12) & (u <= 1.0 + 1e-12) & (cols < count[i : i + step])
+        ok = (t > 0.0) & (u >= -ZERO.edge_parameter) & (u <= 1.0 + ZERO.edge_parameter) & (cols < count[i : i + step])
         out[i : i + step] = np.where(ok, t, np.inf).min(axis=0)
     return out
 

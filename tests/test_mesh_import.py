@@ -252,15 +252,22 @@ def test_walls_that_enclose_nothing(tmp_path):
 @pytest.mark.parametrize(
     "options, message",
     [
-        (BuildOptions(units="km"), "not a building"),
-        (BuildOptions(units="mm"), "not a building"),
-        (BuildOptions(scale=-1.0), "--scale must be a positive"),
-        (BuildOptions(units="furlong"), "unknown units"),
-        (BuildOptions(up="x"), "--up must be"),
+        ({"units": "km"}, "not a building"),
+        ({"units": "mm"}, "not a building"),
+        ({"scale": -1.0}, "--scale must be > 0"),
+        ({"units": "furlong"}, "unknown units"),
+        ({"up": "x"}, "--up must be"),
     ],
 )
 def test_absurd_units_and_options(options, message):
     with pytest.raises(MapkitError, match=message):
+        load_scene(HOSPITAL, BuildOptions(**options))
+
+
+def test_options_set_after_construction_are_checked_on_import():
+    options = BuildOptions()
+    options.up = "x"
+    with pytest.raises(MapkitError, match="--up must be one of auto, z, y"):
         load_scene(HOSPITAL, options)
 
 

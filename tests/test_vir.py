@@ -13,7 +13,7 @@ from mapkit_harness.visibility_oracle import VisibilityOracle, random_points
 
 from mapkit.assemble import assemble_map
 from linemap.lmap import load_map, save_map
-from mapkit.vir import build_regions
+from mapkit.vir import RegionSettings, build_regions
 from mapkit_harness.plans import apartment, scene_from_walls, single_room, two_rooms
 from linemap.camera import Camera
 
@@ -24,7 +24,7 @@ EPS = 0.05
 @pytest.fixture(scope="module")
 def flat():
     scene = apartment()
-    part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS)
+    part = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, RegionSettings(eps=EPS))
     return scene, part
 
 
@@ -118,8 +118,8 @@ def test_map_round_trip_is_small(flat, tmp_path):
 
 def test_merging_trades_regions_for_list_length():
     scene = apartment()
-    exact = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, merge_growth=0.0)
-    merged = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, merge_growth=0.5)
+    exact = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, RegionSettings(merge_growth=0.0))
+    merged = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, RegionSettings(merge_growth=0.5))
     assert merged.stats["regions"] < exact.stats["regions"]
     assert exact.stats["mean_list_length"] <= merged.stats["mean_list_length"] <= 1.5 * exact.stats["mean_list_length"] + 1e-9
 
@@ -158,9 +158,10 @@ def test_progress_bar_goes_to_stderr(capsys):
 def test_bad_input_is_named(kwargs, match):
     scene = single_room(3.0, 3.0)
     args = {"segments": scene.segments, "occluders": scene.walls, "free_space": scene.free_space, "camera": CAMERA}
+    settings = {k: kwargs.pop(k) for k in list(kwargs) if k in RegionSettings.__dataclass_fields__}
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
-        build_regions(**args)
+        build_regions(**args, settings=RegionSettings(**settings))
 
 
 def test_no_occluders_and_no_segments_work():
@@ -178,7 +179,8 @@ def test_property_holds_for_other_cameras_and_limits(pitch, height, max_range, m
     edges out of view), short range with a short minimum length."""
     scene = apartment()
     cam = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, height, pitch)
-    part = build_regions(scene.segments, scene.walls, scene.free_space, cam, max_range=max_range, min_visible_length=min_len, eps=EPS)
+    part = build_regions(scene.segments, scene.walls, scene.free_space, cam,
+                         RegionSettings(max_range=max_range, min_visible_length=min_len, eps=EPS))
     oracle = VisibilityOracle(scene.segments, scene.walls, height, cam.elevation_range(), max_range, min_len)
     _assert_property(part, oracle, random_points(scene.free_space, 60, np.random.default_rng(int(pitch) + 100)))
 
@@ -217,7 +219,7 @@ def test_property_holds_in_random_rooms_with_pillars(seed):
     # End points off the wall faces by up to 0.5 mm, as imported drawings
     # leave them: verticals slant slightly, sight lines graze corners.
     segs = scene.segments + rng.uniform(-5e-4, 5e-4, scene.segments.shape) * [1, 1, 0]
-    part = build_regions(segs, scene.walls, scene.free_space, CAMERA, eps=EPS)
+    part = build_regions(segs, scene.walls, scene.free_space, CAMERA, RegionSettings(eps=EPS))
     oracle = VisibilityOracle(segs, scene.walls, CAMERA.height_m, CAMERA.elevation_range(), 10.0, 0.3)
     _assert_property(part, oracle, random_points(scene.free_space, 25, rng))
 
@@ -296,7 +298,7 @@ def test_merging_follows_the_cheapest_pair_first(growth):
 @pytest.mark.parametrize("workers", [2, 3])
 def test_threads_give_the_same_partition(flat, workers):
     scene, part = flat
-    other = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, eps=EPS, workers=workers)
+    other = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, RegionSettings(eps=EPS), workers=workers)
     assert [shapely.to_wkb(p) for p in other.polygons] == [shapely.to_wkb(p) for p in part.polygons]
     assert all(np.array_equal(a, b) for a, b in zip(other.lists, part.lists, strict=True))
 

@@ -86,7 +86,7 @@ def run(args) -> int:
     from mapkit.assemble import assemble_map
     from linemap.lmap import save_map
     from mapkit.options import BuildOptions
-    from mapkit.vir import build_regions
+    from mapkit.vir import RegionSettings, build_regions
     from linemap.camera import Camera
 
     opts = BuildOptions(walls=args.walls, windows=args.windows)
@@ -99,7 +99,7 @@ def run(args) -> int:
         name, segs, kinds, walls, free, _ = load_case(path, opts)
         best = None
         for _ in range(max(1, args.repeat)):
-            part = build_regions(segs, walls, free, camera, **extra)
+            part = build_regions(segs, walls, free, camera, RegionSettings(**extra))
             if best is None or part.stats["time_total_s"] < best.stats["time_total_s"]:
                 best = part
         st = best.stats

@@ -10,80 +10,58 @@ HELP = "build a .lmap map from a DXF floor plan, a 3D mesh or ZInD annotations"
 
 
 def add_arguments(p) -> None:
-    from mapkit.commands._import_args import add_float_options, add_import_arguments
-    from mapkit.options import BuildOptions
-    from mapkit.parallel import MAX_DEFAULT_JOBS
+    from mapkit.commands._import_args import add_import_arguments, add_option_flags
+    from mapkit.options import BUILD_GROUPS, DEFAULT_HFOV_DEG, DEFAULT_IMAGE_SIZE, default_camera
 
-    d = BuildOptions()
     p.add_argument("plan", metavar="PLAN", help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off) or ZInD zind_data.json")
     p.add_argument("-o", "--output", required=True, metavar="OUT.lmap", help="map file to write")
     add_import_arguments(p)
+    cam = default_camera()
     g = p.add_argument_group("camera (what 'visible' means)")
     g.add_argument("--camera", metavar="CAM.json", help="camera.json: intrinsics, height_m, pitch_deg")
-    g.add_argument("--camera-height", type=float, metavar="M", help=f"camera height above the floor (default {d.camera['height_m']})")
-    g.add_argument("--pitch", type=float, metavar="DEG", help=f"camera pitch, positive looking down (default {d.camera['pitch_deg']})")
-    g.add_argument("--hfov", type=float, metavar="DEG", help="horizontal field of view of an ideal camera (default 70)")
-    g.add_argument("--image-size", metavar="WxH", help="image size in pixels with --hfov (default 640x480)")
-    g = p.add_argument_group("edges and visibility")
-    add_float_options(g, d, [("--min-edge-length", "drop shorter edges")])
-    add_float_options(g, d, [("--crease-deg", "mesh feature-edge angle")], metavar="DEG")
-    add_float_options(g, d, [
-        ("--max-range", "farthest visible distance"),
-        ("--min-visible-length", "shortest contiguous visible piece that counts"),
-        ("--eps", "region lists cover everything visible within this distance"),
-    ])
-    g.add_argument("--max-floor-area", type=float, default=d.max_floor_area, metavar="M2",
-                   help=f"largest floor a map is built for, square metres, bounding box of the free space "
-                        f"(default {d.max_floor_area:g}; the region builder's time and memory grow with it)")
-    g.add_argument("--max-sight-work", type=float, default=d.max_sight_work, metavar="N",
-                   help=f"most sight tests of the region builder per square metre of free space (default "
-                        f"{d.max_sight_work:g}; buildings need under 5000, walls tangled by faces crossing the "
-                        f"building far more)")
-    g.add_argument("--merge-growth", type=float, default=d.merge_growth, metavar="F", help=f"merge neighbouring regions while the mean list grows by at most this fraction (default {d.merge_growth}; 0: tightest lists, more regions)")
-    p.add_argument("-j", "--jobs", type=int, default=d.jobs, metavar="N",
-                   help=f"threads for the region stage's geometry work (default {d.jobs}: the cores available, "
-                        f"at most {MAX_DEFAULT_JOBS}; 1: one thread); the map is the same byte for byte")
+    g.add_argument("--camera-height", type=float, metavar="M",
+                   help=f"camera height above the floor (default {cam['height_m']:g})")
+    g.add_argument("--pitch", type=float, metavar="DEG",
+                   help=f"camera pitch, positive looking down (default {cam['pitch_deg']:g})")
+    g.add_argument("--hfov", type=float, metavar="DEG",
+                   help=f"horizontal field of view of an ideal camera (default {DEFAULT_HFOV_DEG:g})")
+    g.add_argument("--image-size", metavar="WxH",
+                   help="image size in pixels with --hfov (default {}x{})".format(*DEFAULT_IMAGE_SIZE))
+    add_option_flags(p, BUILD_GROUPS)
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
 
 
 def options_from_args(args):
     """BuildOptions from parsed arguments (import options, camera, visibility)."""
+    from mapkit.commands import _import_args
+    from mapkit.options import BUILD_GROUPS, IMPORT_GROUPS
+
+    return _import_args.options_from_args(args, IMPORT_GROUPS + BUILD_GROUPS, camera=_camera_from_args(args),
+                                          camera_from_source=not (args.camera or args.camera_height is not None))
+
+
+def _camera_from_args(args) -> dict:
+    """The camera.json shape the camera flags ask for: a camera file, or
+    the default camera with the height, pitch, field of view and image size
+    given."""
     from linemap.camera import Camera
 
-    from mapkit.commands._import_args import import_options_from_args
+    from mapkit.options import DEFAULT_HFOV_DEG, default_camera
 
-    o = import_options_from_args(args)
-    o.camera_from_source = not (args.camera or args.camera_height is not None)
     if args.camera:
         if any(v is not None for v in (args.camera_height, args.pitch, args.hfov, args.image_size)):
             raise MapkitError("--camera already sets the camera; drop --camera-height/--pitch/--hfov/--image-size")
-        o.camera = Camera.load(args.camera).to_dict()
-    else:
-        cam = dict(o.camera)
-        if args.camera_height is not None:
-            cam["height_m"] = args.camera_height
-        if args.pitch is not None:
-            cam["pitch_deg"] = args.pitch
-        if args.hfov is not None or args.image_size is not None:
-            w, h = _image_size(args.image_size or f"{cam['width']}x{cam['height']}")
-            hfov = args.hfov if args.hfov is not None else 70.0
-            c = Camera.from_fov(hfov, w, h, cam["height_m"], cam["pitch_deg"])
-            cam = c.to_dict()
-        o.camera = Camera.from_dict(cam).to_dict()  # validates
-    o.min_edge_length = args.min_edge_length
-    o.crease_deg = args.crease_deg
-    o.max_range = args.max_range
-    o.min_visible_length = args.min_visible_length
-    o.eps = args.eps
-    o.merge_growth = args.merge_growth
-    if not args.max_floor_area > 0:
-        raise MapkitError(f"--max-floor-area must be a positive number of square metres, got {args.max_floor_area}")
-    o.max_floor_area = args.max_floor_area
-    if not args.max_sight_work > 0:
-        raise MapkitError(f"--max-sight-work must be a positive number, got {args.max_sight_work}")
-    o.max_sight_work = args.max_sight_work
-    o.jobs = args.jobs
-    return o
+        return Camera.load(args.camera).to_dict()
+    cam = default_camera()
+    if args.camera_height is not None:
+        cam["height_m"] = args.camera_height
+    if args.pitch is not None:
+        cam["pitch_deg"] = args.pitch
+    if args.hfov is not None or args.image_size is not None:
+        w, h = _image_size(args.image_size or f"{cam['width']}x{cam['height']}")
+        hfov = args.hfov if args.hfov is not None else DEFAULT_HFOV_DEG
+        cam = Camera.from_fov(hfov, w, h, cam["height_m"], cam["pitch_deg"]).to_dict()
+    return Camera.from_dict(cam).to_dict()  # validates
 
 
 def _image_size(text: str) -> tuple[int, int]:

@@ -46,6 +46,7 @@ def load_scene(path: str | Path, options: BuildOptions | None = None) -> Scene:
     """Import a floor plan or mesh; the importer is chosen by the file suffix."""
     path = Path(path)
     options = options or BuildOptions()
+    options.validate()  # again: fields may have been set since construction
     if not path.exists():
         raise MapkitError(f"{path}: no such file; check the path")
     if path.is_dir():

@@ -91,9 +91,22 @@ def remove_pose(scene) -> None:
         scene.remove_by_name(name)
 
 
-def draw_pose(scene, m: LineMap, triangles: Triangles, camera, kind_colours: np.ndarray,
-              x: float, y: float, yaw: float, dt: float, dyaw: float, fov_filter: bool) -> tuple[np.ndarray, str]:
+@dataclass(frozen=True)
+class PoseEstimate:
+    """A pose estimate and its bounds: ``x``, ``y``, ``dt`` metres, ``yaw``,
+    ``dyaw`` radians (the pose panel's inputs)."""
+
+    x: float
+    y: float
+    yaw: float
+    dt: float
+    dyaw: float
+
+
+def draw_pose(scene, m: LineMap, triangles: Triangles, camera, kind_colours: np.ndarray, pose: PoseEstimate,
+              fov_filter: bool) -> tuple[np.ndarray, str]:
     """Draw the pose tool; returns (synthetic image, markdown summary for the panel)."""
+    x, y, yaw, dt, dyaw = pose.x, pose.y, pose.yaw, pose.dt, pose.dyaw
     sets = pose_sets(m, camera, x, y, yaw, dt, dyaw, fov_filter)
     half_fov = camera.horizontal_half_fov()
     out = np.setdiff1d(sets.candidates, sets.in_view)

@@ -24,6 +24,7 @@ import numpy as np
 import viser
 
 from linemap.lmap import LineMap, SegmentKind
+from mapkit.tolerances import ZERO
 from mapkit.view import palette, pose_tool, scene_nodes
 from mapkit.view.geometry import lift, map_bounds, region_adjacency, region_polygons, ring_edges, triangulate
 from mapkit.view.origin_guard import free_port, origin_checked_servers
@@ -36,7 +37,7 @@ from mapkit.view.synthetic_image import blank_image
 def floor_point(origin, direction) -> tuple[float, float] | None:
     """Where a click ray meets the floor plane z = 0, or None if it never does."""
     o, d = np.asarray(origin, dtype=float), np.asarray(direction, dtype=float)
-    if d[2] >= -1e-9:
+    if d[2] >= -ZERO.direction:
         return None
     t = -o[2] / d[2]
     return (float(o[0] + t * d[0]), float(o[1] + t * d[1])) if t > 0 else None
@@ -124,7 +125,7 @@ class Inspector:
             return float((lo[0] + hi[0]) / 2), float((lo[1] + hi[1]) / 2)
         centres = self.m.region_centres()
         areas = np.bincount(self.triangles.owner, weights=self._triangle_areas(), minlength=self.m.n_regions)
-        mid = (centres * areas[:, None]).sum(axis=0) / max(areas.sum(), 1e-12)
+        mid = (centres * areas[:, None]).sum(axis=0) / max(areas.sum(), ZERO.divisor)
         r = int(np.argmin(np.linalg.norm(centres - mid, axis=1)))
         return float(centres[r, 0]), float(centres[r, 1])
 
@@ -221,7 +222,7 @@ class Inspector:
                 pc.summary.content = "Pose tool hidden."
                 return
             img, summary = pose_tool.draw_pose(self.server.scene, self.m, self.triangles, self.camera,
-                                               self.kind_colours, *pc.values(),
+                                               self.kind_colours, pose_tool.PoseEstimate(*pc.values()),
                                                fov_filter=bool(pc.fov_filter.value))
             pc.image.image = img
             pc.summary.content = summary

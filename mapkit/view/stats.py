@@ -10,22 +10,22 @@ import numpy as np
 from linemap.lmap import LineMap, SegmentKind
 from linemap.camera import Camera
 
-#: Used when a map records no camera; the panel says so.
-FALLBACK_CAMERA = {"width": 640, "height": 480, "fx": 457.0, "fy": 457.0, "cx": 320.0, "cy": 240.0,
-                   "height_m": 1.2, "pitch_deg": 0.0}
 
 
 def map_camera(m: LineMap) -> tuple[Camera, str]:
     """The camera the map was built for and where it came from.
 
     Looks in ``meta["build"]["camera"]``, then ``meta["camera"]``; falls back
-    to a 640x480, 70 degree camera at 1.2 m (returned source says "default").
+    to the build's default camera (:func:`mapkit.options.default_camera`; the
+    returned source says "default").
     """
     build = m.meta.get("build") if isinstance(m.meta.get("build"), dict) else {}
     for source, d in (("build parameters", build.get("camera")), ("map", m.meta.get("camera"))):
         if isinstance(d, dict):
             return Camera.from_dict(d), source
-    return Camera.from_dict(FALLBACK_CAMERA), "default (the map records none)"
+    from mapkit.options import default_camera
+
+    return Camera.from_dict(default_camera()), "default (the map records none)"
 
 
 def map_statistics(m: LineMap, path: str | os.PathLike | None = None) -> dict:

@@ -19,7 +19,7 @@ import shapely
 from shapely.geometry import Point, Polygon
 
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import BRIDGE_ANGLE_DEG, BRIDGE_MAX_GAP, MERGE
+from mapkit.tolerances import BRIDGE_ANGLE_DEG, BRIDGE_MAX_GAP, MERGE, ZERO
 
 
 def wall_ends(walls, max_wall_thickness: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -42,7 +42,7 @@ def wall_ends(walls, max_wall_thickness: float) -> tuple[np.ndarray, np.ndarray,
                 continue
             d = np.roll(pts, -1, axis=0) - pts  # edge i: pts[i] -> pts[i + 1]
             length = np.hypot(d[:, 0], d[:, 1])
-            unit = d / np.maximum(length, 1e-300)[:, None]
+            unit = d / np.maximum(length, ZERO.divisor)[:, None]
             prev, nxt = np.roll(unit, 1, axis=0), np.roll(unit, -1, axis=0)
             cap = (
                 (length > MERGE)

@@ -14,7 +14,7 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import nearest_points, unary_union
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH, THIN_WALL
+from mapkit.tolerances import CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH, THIN_WALL, ZERO
 
 
 def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:
@@ -228,9 +228,9 @@ def _thickness_band(probe, normal, origin, barriers, max_wall_thickness: float) 
     hit = ray.intersection(barriers)
     point = shapely.Point(probe)
     for seg in shapely.get_parts(hit):
-        if isinstance(seg, LineString) and seg.distance(point) < 1e-9:
+        if isinstance(seg, LineString) and seg.distance(point) < ZERO.distance:
             ts = sorted(float((np.asarray(c[:2]) - origin) @ normal) for c in (seg.coords[0], seg.coords[-1]))
-            if ts[1] - ts[0] >= 2 * reach - 1e-6 or ts[1] - ts[0] > max_wall_thickness:
+            if ts[1] - ts[0] >= 2 * reach - ZERO.derived_length or ts[1] - ts[0] > max_wall_thickness:
                 return None
             return ts[0], ts[1]
     return None

@@ -28,7 +28,7 @@ from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP
+from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP, ZERO
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -66,7 +66,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if not obstacles.is_empty:
         free = free.difference(obstacles)
     # Radii below a nanometre are zero (GEOS empties polygons buffered by denormal distances).
-    if options.robot_radius > 1e-9:
+    if options.robot_radius > ZERO.distance:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
 

@@ -11,7 +11,7 @@ import math
 
 from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.tolerances import PLAUSIBLE_EXTENT, TYPICAL_EXTENT
+from mapkit.tolerances import PLAUSIBLE_EXTENT, TYPICAL_EXTENT, ZERO
 
 #: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
 #: astronomical or micro units no floor plan uses).
@@ -70,7 +70,7 @@ def _likely_units(extent: float, imperial: bool) -> str:
     """The unit that puts an ``extent`` (drawing units) closest to a typical
     building's size, in log scale."""
     guesses = _GUESSES_IMPERIAL if imperial else _GUESSES
-    return min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], 1e-9) / TYPICAL_EXTENT)))
+    return min(guesses, key=lambda u: abs(math.log10(max(extent * UNIT_METRES[u], ZERO.distance) / TYPICAL_EXTENT)))
 
 
 def _fmt(metres: float) -> str:

@@ -40,6 +40,7 @@ from mapkit.tolerances import (
     MESH_MAX_EDGE_FACES,
     MESH_OVERLAP_STEP,
     MESH_STEEP_DEG,
+    ZERO,
 )
 
 
@@ -248,7 +249,7 @@ def _chain_extremes(p: np.ndarray, u: np.ndarray, length: np.ndarray, labels: np
     segments = np.stack([pts[order][lo], pts[order][hi]], axis=1)  # labels 0..n-1 in order
 
     chord = segments[:, 1] - segments[:, 0]
-    chord /= np.maximum(np.linalg.norm(chord, axis=1, keepdims=True), 1e-12)
+    chord /= np.maximum(np.linalg.norm(chord, axis=1, keepdims=True), ZERO.divisor)
     rel = pts - segments[lab, 0]
     off = rel - np.einsum("ij,ij->i", rel, chord[lab])[:, None] * chord[lab]
     dev = np.zeros(n)
@@ -293,7 +294,7 @@ def classify(segments: np.ndarray, rises: np.ndarray, floor_z: float, top_z: flo
     are OBLIQUE.
     """
     d = segments[:, 1] - segments[:, 0]
-    sin_z = np.abs(d[:, 2]) / np.maximum(np.linalg.norm(d, axis=1), 1e-12)
+    sin_z = np.abs(d[:, 2]) / np.maximum(np.linalg.norm(d, axis=1), ZERO.divisor)
     z = segments[:, :, 2].mean(axis=1)
     kinds = np.full(len(segments), SegmentKind.OBLIQUE, dtype=np.uint8)
     horizontal = sin_z <= math.sin(math.radians(AXIS_DEG))
@@ -323,7 +324,7 @@ def merge_overlapping(segments: np.ndarray, kinds: np.ndarray) -> tuple[np.ndarr
     a, b = segments[:, 0], segments[:, 1]
     d = b - a
     length = np.linalg.norm(d, axis=1)
-    u = d / np.maximum(length, 1e-12)[:, None]
+    u = d / np.maximum(length, ZERO.divisor)[:, None]
     count = np.maximum(2, np.ceil(length / MESH_OVERLAP_STEP).astype(np.int64) + 1)
     owner = np.repeat(np.arange(n), count)
     start = np.r_[0, np.cumsum(count)[:-1]]

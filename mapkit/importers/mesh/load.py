@@ -47,14 +47,10 @@ def load_mesh(path: Path, options: BuildOptions):
     import trimesh
 
     vertices, faces = read_triangles(path)
-    if options.up not in ("auto", "z", "y"):
-        raise MapkitError(f"--up must be 'auto', 'z' or 'y', got '{options.up}'")
     up = options.up if options.up != "auto" else guess_up(vertices, faces, convention_up(path))
     if up == "y":
         vertices = vertices @ Y_UP_TO_Z_UP.T
     unit = canonical_units(options.units) if options.units else "m"
-    if not (options.scale > 0 and math.isfinite(options.scale)):
-        raise MapkitError(f"--scale must be a positive number, got {options.scale}")
     factor = UNIT_METRES[unit] * options.scale
     vertices = vertices * factor
 

@@ -24,6 +24,7 @@ from mapkit.options import BuildOptions
 from mapkit.scene import HeightZone, Opening, Scene
 from mapkit.tolerances import (
     MIN_FREE_AREA,
+    ZERO,
     ZIND_FLOOR_SNAP,
     ZIND_OPENING_REACH,
     ZIND_OPENING_SLACK,
@@ -69,7 +70,7 @@ def scene_from_floor(floor: ZindFloor, options: BuildOptions) -> Scene:
     obstacles = _multi(shapely.union_all(window_gaps + islands)) if (window_gaps or islands) else MultiPolygon()
     interior = shapely.union_all([inside, *passages])
     free = interior.difference(walls).difference(obstacles)
-    if options.robot_radius > 1e-9:
+    if options.robot_radius > ZERO.distance:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
     if free.is_empty:
@@ -147,7 +148,7 @@ def _cut(o: ZindOpening, room: Polygon, wall_material, reach: float) -> Polygon 
     a, b = o.ends
     along = b - a
     length = float(np.hypot(*along))
-    if length < 1e-6:
+    if length < ZERO.derived_length:
         return None
     normal = np.array([-along[1], along[0]]) / length
     mid = 0.5 * (a + b)
