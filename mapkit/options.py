@@ -127,6 +127,10 @@ class BuildOptions:
     floor_name: str | None = option(
         None, group="import", metavar="NAME",
         help="floor to build of a tour with several (ZInD: floor_01, ...; default the first, with a warning)")
+    plan_number: int | None = option(
+        None, group="import", flag="--plan", metavar="N", allowed=Range(1),
+        help="plan to build of a sheet with several side by side (DXF: numbered by wall length, largest first, "
+             "as 'mapkit layers' lists them; default the largest, with a warning)")
 
     # ---- reconstruction -----------------------------------------------
     wall_height: float = length_option(2.5, "reconstruction", "wall (ceiling) height")
@@ -213,11 +217,17 @@ class BuildOptions:
         d = asdict(self)
         for name in LIMITS:
             d.pop(name)
+        for name in RECORDED_WHEN_SET:
+            if d[name] is None:
+                d.pop(name)
         return d
 
 
 #: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
 LIMITS = ("max_entities", "max_floor_area", "max_sight_work", "jobs")
+#: Fields added after format 1.0, recorded in a map only when set, so maps
+#: built without them keep their bytes.
+RECORDED_WHEN_SET = ("plan_number",)
 
 
 def flags_of(f) -> tuple[str, ...]:
@@ -243,9 +253,11 @@ def _check_field(f, value) -> None:
         raise MapkitError(f"{where} must be a camera.json object, got {value!r}")
     elif kind == "list[str]" and not (isinstance(value, list) and all(isinstance(v, str) for v in value)):
         raise MapkitError(f"{where} must be a list of layer names or globs, got {value!r}")
+    elif kind == "int | None" and not (value is None or (isinstance(value, int) and not isinstance(value, bool))):
+        raise MapkitError(f"{where} must be an integer, got {value!r}")
     elif kind in ("str", "str | None") and not (isinstance(value, str) or (value is None and kind != "str")):
         raise MapkitError(f"{where} must be text, got {value!r}")
-    if isinstance(allowed, Range) and not allowed.holds(value):
+    if isinstance(allowed, Range) and value is not None and not allowed.holds(value):
         raise MapkitError(f"{flag} must be {allowed}, got {value!r} (BuildOptions.{f.name})")
     if isinstance(allowed, tuple) and value not in allowed:
         raise MapkitError(f"{flag} must be one of {', '.join(allowed)}, got {value!r} (BuildOptions.{f.name})")

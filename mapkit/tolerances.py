@@ -175,6 +175,18 @@ DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 MAX_DOOR_WIDTH = 2.5
 CUT_MIN_WALL_SHARE = 0.5
 
+#: Sheets (mapkit/importers/dxf/sheets.py): wall linework closer than
+#: this, metres, belongs to one plan (the widest opening in a facade is a
+#: few metres; plans side by side on a sheet stand farther apart); a
+#: cluster with at least this share of the largest one's wall length is a
+#: plan of its own, a smaller one (a column, a shed) stays with its plan.
+SHEET_GAP_M = 5.0
+SHEET_MIN_PLAN_SHARE = 0.2
+#: ... and whose walls' bounding box covers at least this share of the
+#: largest one's (storeys side by side cover about the same ground; an
+#: annex beside a building does not).
+SHEET_MIN_PLAN_AREA_SHARE = 0.5
+
 #: Plausible building extent, metres (largest side); outside it the drawing
 #: units are probably wrong.
 PLAUSIBLE_EXTENT = (1.0, 2000.0)

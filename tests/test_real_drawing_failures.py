@@ -219,3 +219,45 @@ def test_a_rounded_corner_is_no_door_swing():
     assert find_door_swings(list(msp), 1.0) == []
     msp.add_line((3, 1), (4, 1))  # a leaf from the centre to the arc's end, across it
     assert len(find_door_swings(list(msp), 1.0)) == 1
+
+
+def _sheet(tmp_path):
+    """The flat drawn twice on one sheet, the copy 30 m to the right of it
+    (two storeys side by side, as the Indian house of the corpus)."""
+    doc = ezdxf.readfile(FLAT)
+    msp = doc.modelspace()
+    for e in list(msp):
+        copy = e.copy()
+        try:
+            copy.translate(30_000.0, 0.0, 0.0)  # millimetres
+        except (NotImplementedError, AttributeError, TypeError):
+            continue
+        msp.add_entity(copy)
+    path = tmp_path / "sheet.dxf"
+    doc.saveas(path)
+    return path
+
+
+def test_a_sheet_of_two_plans_builds_one_and_names_the_other(tmp_path, capsys):
+    """Two storeys side by side on one sheet were built as one floor twice
+    as wide; the plans are found, the largest built with a warning naming
+    the other, ``--plan N`` chooses, ``mapkit layers`` lists them."""
+    sheet = _sheet(tmp_path)
+    code, _, err = run(capsys, "build", sheet, "-o", tmp_path / "one.lmap", "-q")
+    assert code == 0, err
+    assert "the drawing holds 2 separate plans: #1 11 x 9 m at (0, -1); #2 11 x 9 m at (30, -1); building #1" in err
+    code, _, err = run(capsys, "build", FLAT, "-o", tmp_path / "flat.lmap", "-q")
+    one, flat = load_map(tmp_path / "one.lmap"), load_map(tmp_path / "flat.lmap")
+    assert np.array_equal(one.segments, flat.segments) and one.n_regions == flat.n_regions
+
+    code, _, err = run(capsys, "build", sheet, "-o", tmp_path / "two.lmap", "-q", "--plan", "2")
+    assert code == 0, err
+    two = load_map(tmp_path / "two.lmap")
+    assert np.allclose(two.segments - [30.0, 0.0, 0.0], flat.segments)
+    assert two.meta["build"]["plan_number"] == 2 and "plan_number" not in flat.meta["build"]
+
+    code, _, err = run(capsys, "build", sheet, "-o", tmp_path / "three.lmap", "--plan", "3")
+    assert code == 2 and "--plan 3: the drawing holds 2 plan(s): #1 11 x 9 m" in err
+    assert not (tmp_path / "three.lmap").exists()
+    code, out, _ = run(capsys, "layers", sheet)
+    assert code == 0 and "plans: 2 separate plans" in out and "#2  11.0 x 9.1 m at (30.0, -0.6)" in out

@@ -52,13 +52,36 @@ def run(args) -> int:
         }
         for name, c in sorted(counts.items(), key=lambda kv: kv[0].casefold())
     ]
+    plans = _plans(path, options, roles)
     if args.json:
-        print(json.dumps({"file": path.name, "layers": rows, "warnings": warnings}))
+        print(json.dumps({"file": path.name, "layers": rows, "plans": plans, "warnings": warnings}))
         return 0
     print(_table(rows))
+    if len(plans) > 1:
+        print(f"plans: {len(plans)} separate plans on the sheet, numbered for --plan (walls' extent, metres):")
+        for p in plans:
+            (x0, y0, x1, y1), n = p["bounds_m"], p["plan"]
+            print(f"  #{n}  {x1 - x0:.1f} x {y1 - y0:.1f} m at ({x0:.1f}, {y0:.1f}), walls {p['wall_length_m']:.0f} m long"
+                  + ("  (built by default)" if n == 1 else ""))
     for w in warnings:
         print(f"note: {w}")
     return 0
+
+
+def _plans(path, options, roles) -> list[dict]:
+    """The separate plans of the drawing's walls (:mod:`mapkit.importers.dxf.sheets`), [] without walls."""
+    import logging
+
+    from mapkit.importers.dxf import load_drawing
+
+    if "walls" not in roles.values():
+        return []
+    logging.getLogger("mapkit").disabled = True  # the build's warnings are not this listing's
+    try:
+        _, info = load_drawing(path, options)
+    finally:
+        logging.getLogger("mapkit").disabled = False
+    return info.get("plans", [])
 
 
 def _why(name: str, role: str | None, options) -> str:

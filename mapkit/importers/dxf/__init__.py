@@ -25,10 +25,12 @@ from pathlib import Path
 import numpy as np
 from ezdxf import bbox
 
+from mapkit.errors import MapkitError
 from mapkit.importers.dxf.door_swings import find_door_swings
 from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
+from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
 from mapkit.importers.dxf.units import decide_units
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
@@ -81,46 +83,22 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
         warnings.append(unit_warning)
     factor = per_unit * float(options.scale)
 
-    far_ids = {id(e) for e in far}
-    swings = find_door_swings([e for e in msp if roles.get(_layer(e)) == "walls" and id(e) not in far_ids], factor)
-    left_out = far_ids | {id(e) for pair in swings for e in pair}
-    strokes, skipped = flatten_entities([e for e in msp if id(e) not in left_out], factor, CURVE_SAGITTA / factor,
-                                        lambda layer: True, max_entities=options.max_entities)
-    swing_strokes = _swing_strokes(swings, factor, 1 + max((s.group for s in strokes if s.group is not None),
-                                                           default=-1))
-    if swings:
-        message = (f"{len(swings)} door swing(s) (an arc and its leaf) drawn on the wall layer(s) "
-                   f"{_names(sorted({_layer(a) for a, _ in swings}))} taken as doors")
-        log.warning(message)
-        warnings.append(message)
-    for e in far:
-        skipped[f"{e.dxftype()} (far outside the rest of the drawing, handle {e.dxf.get('handle', '?')} "
-                f"on layer {_layer(e)})"] += 1
-    if skipped:
-        listed = ", ".join(f"{n} {kind}" for kind, n in sorted(skipped.items()))
-        message = f"skipped unsupported entities: {listed}"
+    def note(message: str) -> None:
         log.warning(message)
         warnings.append(message)
 
+    strokes, swing_strokes = _flatten(msp, roles, far, factor, options, note)
     offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES] + swing_strokes)
     if offset is not None:
         strokes = [replace(s, coords=s.coords - offset) for s in strokes]
         swing_strokes = [replace(s, coords=s.coords - offset) for s in swing_strokes]
-        message = (f"the drawing lies {np.hypot(*offset) / 1000:.0f} km from its origin (georeferenced); moved to a "
-                   f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
-                   f"('mapkit export --drawing-coordinates' puts it back)")
-        log.warning(message)
-        warnings.append(message)
-
-    drawing = PlanDrawing()
-    if swing_strokes:
-        drawing.strokes["doors"] = list(swing_strokes)
-    for s in strokes:
-        role = roles.get(s.layer)
-        if role in _USED_ROLES:
-            drawing.strokes.setdefault(role, []).append(s)
-        else:
-            drawing.ignored.setdefault(s.layer, []).append(s)
+        note(f"the drawing lies {np.hypot(*offset) / 1000:.0f} km from its origin (georeferenced); moved to a "
+             f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
+             f"('mapkit export --drawing-coordinates' puts it back)")
+    strokes, swing_strokes, plans, others = _one_plan(strokes, swing_strokes, roles, options.plan_number, note)
+    drawing = _by_role(strokes, swing_strokes, roles)
+    for s in others:  # the sheet's other plans: shown in previews, not built
+        drawing.ignored.setdefault(s.layer, []).append(s)
 
     info = {
         "source": path.name,
@@ -138,7 +116,70 @@ def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
     }
     if offset is not None:
         info["origin_offset_m"] = [float(v) for v in offset]
+    if len(plans) > 1:
+        info["plans"] = [p.to_dict() for p in plans]
     return drawing, info
+
+
+def _flatten(msp, roles: dict, far: list, factor: float, options: BuildOptions, note) -> tuple[list, list]:
+    """The strokes (metres) of the model space's entities, less those ``far``
+    outside the rest, and apart from them the strokes of the door swings
+    drawn on wall layers (:mod:`.door_swings`); what was left out is
+    ``note``-d."""
+    far_ids = {id(e) for e in far}
+    swings = find_door_swings([e for e in msp if roles.get(_layer(e)) == "walls" and id(e) not in far_ids], factor)
+    left_out = far_ids | {id(e) for pair in swings for e in pair}
+    strokes, skipped = flatten_entities([e for e in msp if id(e) not in left_out], factor, CURVE_SAGITTA / factor,
+                                        lambda layer: True, max_entities=options.max_entities)
+    first_group = 1 + max((s.group for s in strokes if s.group is not None), default=-1)
+    if swings:
+        note(f"{len(swings)} door swing(s) (an arc and its leaf) drawn on the wall layer(s) "
+             f"{_names(sorted({_layer(a) for a, _ in swings}))} taken as doors")
+    for e in far:
+        skipped[f"{e.dxftype()} (far outside the rest of the drawing, handle {e.dxf.get('handle', '?')} "
+                f"on layer {_layer(e)})"] += 1
+    if skipped:
+        note("skipped unsupported entities: " + ", ".join(f"{n} {kind}" for kind, n in sorted(skipped.items())))
+    return strokes, _swing_strokes(swings, factor, first_group)
+
+
+def _one_plan(strokes: list, swing_strokes: list, roles: dict, choice: int | None, note):
+    """The strokes of the one plan to build of a sheet that holds several
+    (:mod:`.sheets`), its door swings, the sheet's plans, and the other
+    plans' strokes; a drawing of one plan as it is."""
+    walls = [s for s in strokes if roles.get(s.layer) == "walls"]
+    plans, of_wall = find_plans(walls)
+    if len(plans) <= 1:
+        if choice not in (None, 1):
+            raise MapkitError(f"--plan {choice}: the drawing holds one plan; leave --plan out")
+        return strokes, swing_strokes, plans, []
+    chosen = choose_plan(plans, choice)
+    plan_of = {id(s): int(n) for s, n in zip(walls, of_wall)}
+
+    def ours(s) -> bool:
+        n = plan_of.get(id(s))
+        return (n if n is not None else nearest_plan(plans, (*s.coords.min(axis=0), *s.coords.max(axis=0)))) \
+            == chosen.number
+
+    note(f"the drawing holds {len(plans)} separate plans: " + "; ".join(p.describe() for p in plans)
+         + f"; building #{chosen.number}" + ("" if choice else " (the largest); choose another with --plan N"))
+    return ([s for s in strokes if ours(s)], [s for s in swing_strokes if ours(s)], plans,
+            [s for s in strokes if not ours(s)])
+
+
+def _by_role(strokes: list, swing_strokes: list, roles: dict) -> PlanDrawing:
+    """The strokes sorted by their layer's role (door swings are doors
+    whatever their layer); those of other layers kept for previews."""
+    drawing = PlanDrawing()
+    if swing_strokes:
+        drawing.strokes["doors"] = list(swing_strokes)
+    for s in strokes:
+        role = roles.get(s.layer)
+        if role in _USED_ROLES:
+            drawing.strokes.setdefault(role, []).append(s)
+        else:
+            drawing.ignored.setdefault(s.layer, []).append(s)
+    return drawing
 
 
 def _swing_strokes(swings, factor: float, first_group: int) -> list:
