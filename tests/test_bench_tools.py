@@ -8,6 +8,8 @@ import json
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tools"))
 
 import bench_budget  # noqa: E402
@@ -15,6 +17,7 @@ import bench_images  # noqa: E402
 import bench_paper  # noqa: E402
 
 
+@pytest.mark.slow
 def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
     out = tmp_path / "figs"
     js = tmp_path / "rows.json"
@@ -37,6 +40,7 @@ def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
     assert sorted(p.name for p in out.iterdir()) == ["paper_fig5.png", "paper_fig6.png"]
 
 
+@pytest.mark.slow
 def test_bench_paper_pools_seeds(tmp_path, capsys):
     js = tmp_path / "rows.json"
     code = bench_paper.main(["--poses", "2", "--peq", "2", "--seed", "0", "1", "--repeat", "1", "--baseline-poses", "0",
@@ -54,6 +58,7 @@ def test_bench_paper_pools_seeds(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.glob("*.png")) == ["paper_fig5_seed0-1.png", "paper_fig6_seed0-1.png"]
 
 
+@pytest.mark.slow
 def test_bench_images_table(capsys):
     assert bench_images.main(["--frames", "1", "--peq", "1", "--supersample", "1"]) == 0
     out = capsys.readouterr().out.splitlines()
@@ -74,6 +79,7 @@ def test_bench_budget_table(capsys):
     assert capsys.readouterr().err.strip() == "error: --poses must be at least 1 and --budgets at least 0"
 
 
+@pytest.mark.slow
 def test_bench_build_prints_a_row_with_peak_memory(capsys):
     import bench_build
 
