@@ -7,11 +7,14 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 import bench_budget
 import bench_images
 import bench_paper
 
 
+@pytest.mark.slow
 def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
     out = tmp_path / "figs"
     js = tmp_path / "rows.json"
@@ -34,6 +37,7 @@ def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
     assert sorted(p.name for p in out.iterdir()) == ["paper_fig5.png", "paper_fig6.png"]
 
 
+@pytest.mark.slow
 def test_bench_paper_pools_seeds(tmp_path, capsys):
     js = tmp_path / "rows.json"
     code = bench_paper.main(["--poses", "2", "--peq", "2", "--seed", "0", "1", "--repeat", "1", "--baseline-poses", "0",
@@ -51,6 +55,7 @@ def test_bench_paper_pools_seeds(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.glob("*.png")) == ["paper_fig5_seed0-1.png", "paper_fig6_seed0-1.png"]
 
 
+@pytest.mark.slow
 def test_bench_images_table(capsys):
     assert bench_images.main(["--frames", "1", "--peq", "1", "--supersample", "1"]) == 0
     out = capsys.readouterr().out.splitlines()
@@ -71,6 +76,7 @@ def test_bench_budget_table(capsys):
     assert capsys.readouterr().err.strip() == "error: --poses must be at least 1 and --budgets at least 0"
 
 
+@pytest.mark.slow
 def test_bench_build_prints_a_row_with_peak_memory(capsys):
     import bench_build
 

@@ -8,12 +8,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from cli_helpers import run
 
 ROOT = Path(__file__).resolve().parent.parent
 FLAT = ROOT / "maps" / "flat.dxf"
 
 
+@pytest.mark.slow
 def test_a_bulge_larger_than_any_building_is_left_out_with_a_warning(tmp_path, capsys):
     """One byte of maps/flat.dxf changed ('0.414...' to '0041...'): a bed's
     bulge of 4.14e16 used to take over 7 GB to flatten; the furniture
@@ -29,6 +31,7 @@ def test_a_bulge_larger_than_any_building_is_left_out_with_a_warning(tmp_path, c
     assert "264 segments, 104 regions" in out
 
 
+@pytest.mark.slow
 def test_the_free_space_raster_of_a_2_km_map_stays_small():
     """A plan 2 km across (the builder's limit) would need a raster of 1.6e9
     cells at 5 cm: the cells grow instead, and the distances stay right."""

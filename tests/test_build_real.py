@@ -35,6 +35,7 @@ def barcelona(tmp_path_factory):
     return build(tmp_path_factory.mktemp("barcelona"), DATA / "barcelona-pavilion.dxf", *BARCELONA)
 
 
+@pytest.mark.slow
 def test_committed_example_map_is_up_to_date(tmp_path):
     # Builds are reproducible, so the committed map must be exactly what the
     # current code makes of the committed plan (rebuild it when this fails:
@@ -66,6 +67,7 @@ def test_example_map_query_in_bedroom_sees_bedroom_walls():
     assert not ((mids[:, 0] > 6.4) & (mids[:, 1] > 5.2)).any()
 
 
+@pytest.mark.slow
 def test_barcelona(barcelona, capsys):
     s = info(capsys, barcelona)
     assert s["segments"] > 150 and s["regions"] > 50
@@ -77,11 +79,13 @@ def test_barcelona(barcelona, capsys):
     assert len(m.candidate_segments(34.0, 9.0, 0.5)) > 10
 
 
+@pytest.mark.slow
 def test_barcelona_guessed_layers_agree(tmp_path, barcelona):
     guessed = load_map(build(tmp_path, DATA / "barcelona-pavilion.dxf"))
     assert guessed.n_segments == load_map(barcelona).n_segments
 
 
+@pytest.mark.slow
 def test_thehouse(tmp_path, capsys):
     s = info(capsys, build(tmp_path, DATA / "thehouse.dxf", *THEHOUSE))
     assert s["segments"] > 50 and s["regions"] > 10
@@ -89,6 +93,7 @@ def test_thehouse(tmp_path, capsys):
     assert 40 < s["bbox"]["max"][1] - s["bbox"]["min"][1] < 50  # metres, not millimetres
 
 
+@pytest.mark.slow
 def test_threads_give_the_same_bytes(tmp_path):
     # --jobs splits the region stage's GEOS work among threads; the chunks'
     # results are put back in order, so the map is the one-thread map.

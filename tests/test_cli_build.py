@@ -139,6 +139,7 @@ def test_existing_map_survives_a_failed_build(tmp_path, capsys):
     assert code == 2 and out.read_bytes() == b"previous map"
 
 
+@pytest.mark.slow
 def test_camera_above_the_walls_is_warned(tmp_path, capsys):
     code, out, err = run(capsys, "build", ROOT / "maps" / "flat.dxf", "-o", tmp_path / "o.lmap", "--camera-height", "3")
     assert code == 0 and "camera height 3 m is not below the walls' 2.5 m" in err

@@ -30,6 +30,7 @@ def _damaged(tmp_path, kind: str) -> tuple[Path, str]:
 
 
 @pytest.mark.parametrize("kind", ["door insert", "wall line"])
+@pytest.mark.slow
 def test_an_entity_with_a_nan_coordinate_is_left_out_and_named(tmp_path, capsys, kind):
     path, handle = _damaged(tmp_path, kind)
     code, out, err = run(capsys, "build", path, "-o", tmp_path / "out.lmap")

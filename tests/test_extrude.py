@@ -162,6 +162,7 @@ def test_flat_dxf_round_trip_matches_the_plan_edges(tmp_path):
     assert at_threshold.all(), extra[~at_threshold][:5]
 
 
+@pytest.mark.slow
 def test_flat_dxf_round_trip_gives_the_same_lists(tmp_path):
     """The maps built from the plan and from its extruded model list the same
     segments at random points (segments matched by their end points within
@@ -240,6 +241,7 @@ def test_scene_without_walls_is_rejected():
         scene_to_mesh(s)
 
 
+@pytest.mark.slow
 def test_extrude_then_build_gives_the_plans_segments_with_no_option(tmp_path):
     """``mapkit extrude flat.dxf -o flat.glb`` then ``mapkit build flat.glb``,
     no --up (glTF is +Y up): the DXF build's segments come back (64 of 264

@@ -19,6 +19,7 @@ def _warm():
 @pytest.mark.parametrize("source", ["flat", "thehouse", "nested_blocks", "bulge_apse"])
 @fuzz_settings(examples=3)
 @given(rng=st.randoms(use_true_random=False))
+@pytest.mark.slow
 def test_a_damaged_plan_ends_in_a_clean_error_or_a_map(tmp_path_factory, source, rng):
     case = fuzz.dxf_case(rng, sources=[source])
     check_case(case, tmp_path_factory.mktemp("case"), BUILD_BOUND_S)

@@ -27,6 +27,7 @@ KINDS = {"lines file": fuzz._lines_file_case, "camera file": fuzz._camera_file_c
 @pytest.mark.parametrize("kind", sorted(KINDS))
 @fuzz_settings(examples=5)
 @given(rng=st.randoms(use_true_random=False))
+@pytest.mark.slow
 def test_odd_matcher_inputs_end_in_an_error_a_reason_or_a_pose(tmp_path_factory, kind, rng):
     case = KINDS[kind](rng, kind.replace(" ", "_"))
     check_case(case, tmp_path_factory.mktemp("case"), CALL_BOUND_S)

@@ -14,7 +14,12 @@ from fuzz_helpers import BUILD_BOUND_S
 CASES = sorted(p for p in (Path(__file__).parent / "data" / "fuzz").iterdir() if (p / "case.json").is_file())
 
 
-@pytest.mark.parametrize("folder", CASES, ids=[p.name for p in CASES])
+# The cases that build a map of a damaged plan or mesh take seconds each: the full run's, not the quick lane's.
+SLOW_CASES = {"dxf_polyline_vertex_without_location", "mesh_section_topology_conflict", "mesh_tangled_walls_slow_regions"}
+
+
+@pytest.mark.parametrize("folder", [pytest.param(p, marks=pytest.mark.slow) if p.name in SLOW_CASES else p
+                                    for p in CASES], ids=[p.name for p in CASES])
 def test_a_found_failure_stays_fixed(tmp_path, folder):
     expect = json.loads((folder / "case.json").read_text())
     out = fuzz.run_bounded(fuzz.load_case(folder), tmp_path, BUILD_BOUND_S)
@@ -23,6 +28,7 @@ def test_a_found_failure_stays_fixed(tmp_path, folder):
     assert "\n" not in out.detail.strip()
 
 
+@pytest.mark.slow
 def test_a_value_read_as_an_entity_type_is_left_out_with_a_warning(tmp_path, capsys):
     """The issue's case: a door INSERT's group code 10 damaged into 0, so
     its x value '10700.0' reads as an entity type (ezdxf keeps it as raw

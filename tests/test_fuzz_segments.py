@@ -20,6 +20,7 @@ def _warm():
 
 @fuzz_settings(examples=8)
 @given(rng=st.randoms(use_true_random=False))
+@pytest.mark.slow
 def test_a_damaged_segments_file_ends_in_a_clean_error_or_a_map(tmp_path_factory, rng):
     case = fuzz.segments_case(rng)
     check_case(case, tmp_path_factory.mktemp("case"), BUILD_BOUND_S)

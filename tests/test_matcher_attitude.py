@@ -45,6 +45,7 @@ def _frames(flat, n, peq, seed, roll=3.0, pitch_error=2.0):
     return [make_frame(flat, cam, rng, peq, roll_deg=roll, pitch_error_deg=pitch_error) for _ in range(n)]
 
 
+@pytest.mark.slow
 def test_vertical_lines_give_the_roll(flat):
     cam = replace(paper_camera(), pitch_std_deg=1.5, roll_std_deg=2.0)
     err = []
@@ -54,6 +55,7 @@ def test_vertical_lines_give_the_roll(flat):
     assert np.median(err) < 0.4  # the matched segments' fit brings it under 0.3 (below)
 
 
+@pytest.mark.slow
 def test_rolled_and_pitched_frames_localise_as_level_ones(flat):
     cam = replace(paper_camera(), pitch_std_deg=1.5, roll_std_deg=2.0)
     right, pitch_err, roll_err = 0, [], []
@@ -71,6 +73,7 @@ def test_rolled_and_pitched_frames_localise_as_level_ones(flat):
     assert np.median(pitch_err) < 0.3 and np.median(roll_err) < 0.3
 
 
+@pytest.mark.slow
 def test_a_known_roll_is_one_homography(flat):
     cam = paper_camera()
     for fr in _frames(flat, 4, 3, 5, roll=3.0, pitch_error=0.0):

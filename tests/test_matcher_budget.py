@@ -56,6 +56,7 @@ def test_budget_never_reached_changes_nothing(small_map, cam):
         assert b.stage1["out_of_time"] is False
 
 
+@pytest.mark.slow
 def test_budget_stops_a_long_search(cam):
     """A view along the example flat's row of door jambs (seed 0, PEQ 5,
     frame 29 of tools/bench_paper.py): unbudgeted, its tree runs to the node

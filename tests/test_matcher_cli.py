@@ -238,6 +238,7 @@ def test_python_dash_m(files):
     assert out.stderr == ""
 
 
+@pytest.mark.slow
 def test_simulated_frame_files_localise_from_the_command_line(tmp_path, capsys):
     """tools/simulate.py --out writes what `matcher localize` reads (the README's example)."""
     import simulate

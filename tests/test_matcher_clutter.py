@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import matcher
 from matcher.frame import lines_needed, prepare_lines
@@ -64,6 +65,7 @@ def test_lines_needed_grows_with_the_lines_searched():
     assert lines_needed(large, tol) == tol.min_matches + int(share * tol.search_lines)
 
 
+@pytest.mark.slow
 def test_short_clutter_changes_nothing():
     """Fifty short clutter lines: stage 1 searches the longest 25 (the map's
     own lines among them), stage 2 judges every line, and the answer is the
@@ -82,6 +84,7 @@ def test_short_clutter_changes_nothing():
             assert all(line < len(fr.lines) for _, line in res.matches)
 
 
+@pytest.mark.slow
 def test_a_pose_explaining_few_of_many_lines_is_refused_with_its_reason():
     """A view of four map lines among long clutter lines: a pose that
     explains four of 25 lines could be chance, so it is not accepted."""

@@ -8,6 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import matcher
 
@@ -31,6 +32,7 @@ def test_stripes_are_not_a_room_that_shows_its_floor_and_ceiling():
     assert "map segments in view and the image shows" in res.reason
 
 
+@pytest.mark.slow
 def test_a_true_view_shows_its_map():
     """The simulated frames of the paper's protocol pass (their lines are the
     map's segments in view)."""

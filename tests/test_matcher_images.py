@@ -51,6 +51,7 @@ def _offsets(found: np.ndarray, ideal: np.ndarray) -> np.ndarray:
     return best
 
 
+@pytest.mark.slow
 def test_lsd_lines_lie_on_the_rendered_edges(small_flat, views):
     cam, frames = views
     offsets, recall = [], []
@@ -69,6 +70,7 @@ def test_lsd_lines_lie_on_the_rendered_edges(small_flat, views):
     assert np.mean(recall) >= 0.75
 
 
+@pytest.mark.slow
 def test_localises_from_rendered_images(small_flat, views):
     cam, frames = views
     for fr, img in frames:
@@ -79,6 +81,7 @@ def test_localises_from_rendered_images(small_flat, views):
 
 
 @pytest.mark.parametrize("pitch_deg", [10.0, -5.0])
+@pytest.mark.slow
 def test_localises_from_rendered_images_of_pitched_cameras(small_flat, pitch_deg):
     """A camera 1 m up, pitched down or up, PEQ 3. (Pitched up, the second
     frame sees a floor-to-ceiling corner only as a 41 px piece at the top
@@ -117,6 +120,7 @@ def test_pieces_of_one_broken_line_are_all_matched_to_its_segment(small_flat):
     assert dist < 0.005 and dyaw < 0.05
 
 
+@pytest.mark.slow
 def test_render_command_writes_an_image(tmp_path, capsys):
     import cv2
 

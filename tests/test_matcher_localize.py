@@ -152,6 +152,7 @@ def built_map():
 
 
 @pytest.mark.parametrize("peq", sorted(PEQ))
+@pytest.mark.slow
 def test_recovery_on_the_built_example_map(built_map, cam, peq):
     # The benchmark (docs/matcher.md) finds 97-100 % correct on this map; 8 of 10 here.
     good, pos, yaw = _recover(built_map, cam, peq, seed=21, n=10)

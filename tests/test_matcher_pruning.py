@@ -50,6 +50,7 @@ def test_height_side_pitched_camera_uses_world_elevation():
     assert horizon_side_ok(cam, line, np.array([floor, ceiling]), DEFAULT)[:, 0].tolist() == [True, False]
 
 
+@pytest.mark.slow
 def test_free_space_raster_agrees_with_the_region_lookup(flat):
     fs = free_space(flat)
     assert free_space(flat) is fs  # cached with the map
@@ -86,6 +87,7 @@ def test_free_space_of_a_square():
     assert d[3] == pytest.approx(0.6 * math.sqrt(2.0), abs=0.07)
 
 
+@pytest.mark.slow
 def test_frame_of_vertical_edges_only(flat):
     """A frame whose only true lines are five vertical edges (door jambs and
     corners) with three clutter lines. Floor and ceiling lines running along
@@ -288,6 +290,7 @@ def test_edge_seen_from_a_loose_region_hand_worked():
     assert seen(aside)
 
 
+@pytest.mark.slow
 def test_loose_sets_cut_by_the_region_test(flat):
     """Frame 29 of the benchmark at PEQ 5: looking down a corridor, seven
     true lines, three of them door jambs that each fit some twenty jambs.
@@ -311,6 +314,7 @@ def test_loose_sets_cut_by_the_region_test(flat):
     assert res.stage1["tree_nodes"] < 3000  # the search ended within its budget
 
 
+@pytest.mark.slow
 def test_aiming_at_large_sets_first_finds_the_same_sets_sooner(flat, monkeypatch):
     """Frame 41 of the benchmark at PEQ 5: nine lines, six of them true. A
     single pass from the minimum size dives first into sets of four and
@@ -374,6 +378,7 @@ def test_sight_clear_against_shapely(flat, box_filter):
     assert 100 < n_blocked < 1100  # both outcomes well represented
 
 
+@pytest.mark.slow
 def test_lines_reached_as_bits_equals_the_matrix_product(flat, monkeypatch):
     """The look-ahead counts the lines a candidate still reaches as bits of
     one integer (up to 63 lines) or by a one-hot matrix product (more): both

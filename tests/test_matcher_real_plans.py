@@ -29,6 +29,7 @@ def real_map(request, tmp_path_factory):
 
 
 @pytest.mark.parametrize("peq", [3, 5])
+@pytest.mark.slow
 def test_recovery_on_real_plans(real_map, cam, peq):
     """tools/bench_paper.py finds the correct match first in 100 % of 40
     frames per PEQ on both maps (docs/matcher.md); 9 of 10 here. The pose

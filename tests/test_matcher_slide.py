@@ -68,6 +68,7 @@ def pavilion(tmp_path_factory):
     return matcher.load_map(out)
 
 
+@pytest.mark.slow
 def test_one_column_seen_from_afar_keeps_its_true_match(pavilion, cam):
     """Seed 0, PEQ 3, frame 32 of tools/bench_paper.py on the pavilion: five
     corners of one column 8 m off and three clutter lines. Least squares

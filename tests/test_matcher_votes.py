@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import matcher
 from matcher.from_prior import checked_inputs
@@ -45,6 +46,7 @@ def test_a_floor_line_puts_the_camera_beside_its_segment(cam):
     assert hit.any()
 
 
+@pytest.mark.slow
 def test_the_true_place_is_among_the_voted_ones(cam):
     """Simulated frames (1 px noise, 3 clutter lines): on most, the true
     pose is one of the 12 places the lines vote for."""

@@ -326,6 +326,7 @@ def test_edges_move_with_the_model(tmp_path, seed):
     assert same_segments(b.segments, expected, 1e-3)
 
 
+@pytest.mark.slow
 def test_build_a_map_from_each_real_mesh(tmp_path):
     """The pipeline takes the mesh scenes through to a .lmap."""
     from mapkit.cli import main

@@ -42,6 +42,7 @@ def test_a_json_room_with_an_outline_builds_with_kinds_read_from_the_geometry(tm
     assert load_map(tmp_path / "room.lmap").n_segments == 12
 
 
+@pytest.mark.slow
 def test_a_csv_of_the_example_map_finds_its_rooms_without_an_outline(tmp_path, capsys):
     """The example map's segments with their kinds, as a CSV with a header:
     the rooms the floor-level segments enclose are the free space."""

@@ -68,6 +68,7 @@ def test_spread_grows_with_distance_and_turn_and_bounds_have_floors():
 
 
 # ---- the tracker --------------------------------------------------------------
+@pytest.mark.slow
 def test_tracker_follows_a_seeded_run(flat, camera, run):
     out = follow(matcher.Tracker(flat, camera, prior=run.truth[0], dt=0.2, dyaw=10), run)
     errors = [pose_error(o.estimate, g) for o, g in zip(out, run.truth)]
@@ -79,6 +80,7 @@ def test_tracker_follows_a_seeded_run(flat, camera, run):
     assert all(o.bounds[0] >= TRACKING.min_dt_m for o in out)
 
 
+@pytest.mark.slow
 def test_a_kidnapped_robot_is_found_again_and_only_after_confirmation(flat, camera):
     run = simulate_run(flat, camera, np.random.default_rng(11), 60, kidnap=25)
     out = follow(matcher.Tracker(flat, camera, prior=run.truth[0], dt=0.2, dyaw=10), run)
@@ -92,6 +94,7 @@ def test_a_kidnapped_robot_is_found_again_and_only_after_confirmation(flat, came
     assert not out[first_search] and back > first_search
 
 
+@pytest.mark.slow
 def test_a_tracker_with_no_prior_searches_then_confirms(flat, camera, run):
     tracker = matcher.Tracker(flat, camera)
     out = follow(tracker, run, start=5)
@@ -138,6 +141,7 @@ def _cli(capsys, *argv):
     return code, out, err
 
 
+@pytest.mark.slow
 def test_track_a_json_lines_run(tmp_path, capsys, flat, camera, run):
     frames, cam = tmp_path / "run.jsonl", tmp_path / "cam.json"
     write_run(run, frames)
@@ -163,6 +167,7 @@ def test_track_a_json_lines_run(tmp_path, capsys, flat, camera, run):
     assert img is not None and img.shape[0] > 200 and len(np.unique(img.reshape(-1, 3), axis=0)) > 4
 
 
+@pytest.mark.slow
 def test_track_human_output_and_usage_errors(tmp_path, capsys, run, camera):
     frames, cam = tmp_path / "run.jsonl", tmp_path / "cam.json"
     write_run(run, frames)

@@ -420,6 +420,7 @@ def _sigint_default():
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
+@pytest.mark.slow
 def test_cli_serves_until_ctrl_c(flat_path):
     proc = subprocess.Popen([sys.executable, "-m", "mapkit", "view", str(flat_path), "--port", "0"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_sigint_default)
@@ -465,6 +466,7 @@ def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
 # A large map (timings: tools/bench_view.py; tests assert behaviour, not seconds)
 
 
+@pytest.mark.slow
 def test_a_large_map_opens_and_stays_interactive():
     """A map the size of the Barcelona pavilion's (about 1500 segments, 4600
     regions) is served: a client gets every static node, thousands of
@@ -506,6 +508,7 @@ def built_flat(tmp_path_factory):
     return plan, out
 
 
+@pytest.mark.slow
 def test_real_map_with_its_plan_overlaid(built_flat):
     from mapkit.importers import load_scene
     from linemap.lmap import load_map
@@ -523,6 +526,7 @@ def test_real_map_with_its_plan_overlaid(built_flat):
         assert ins.camera_source in ("build parameters", "map")
 
 
+@pytest.mark.slow
 def test_cli_plan_and_result_on_a_real_map(built_flat, tmp_path):
     plan_path, map_path = built_flat
     res = tmp_path / "result.json"

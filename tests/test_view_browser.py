@@ -73,6 +73,7 @@ def is_highlight(patch: np.ndarray) -> bool:
     return magenta.mean() > 0.8
 
 
+@pytest.mark.slow
 def test_page_draws_the_map_and_a_click_highlights_a_region(browser):
     m = grid_flat()
     with Inspector(m, port=0) as ins:
@@ -106,6 +107,7 @@ def test_page_draws_the_map_and_a_click_highlights_a_region(browser):
         assert ins.selected_region is None
 
 
+@pytest.mark.slow
 def test_a_large_map_renders(browser):
     """About 1500 segments and 4600 regions: chromium draws the map (the
     seconds it takes are tools/bench_view.py's table, not a test)."""
@@ -116,6 +118,7 @@ def test_a_large_map_renders(browser):
     assert (img[VIEW].min(axis=2) < 235).mean() > 0.15
 
 
+@pytest.mark.slow
 def test_html_snapshot_draws_from_file_without_a_server(browser, tmp_path):
     from mapkit.view.snapshot import write_snapshot
 

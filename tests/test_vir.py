@@ -37,6 +37,7 @@ def samples(flat):
     return pts, [oracle.visible(q) for q in pts]
 
 
+@pytest.mark.slow
 def test_every_visible_segment_is_listed_by_every_region_within_eps(flat, samples):
     _, part = flat
     polys = np.array(part.polygons + [None])[:-1]
@@ -52,6 +53,7 @@ def test_every_visible_segment_is_listed_by_every_region_within_eps(flat, sample
     assert checked > 300  # some points see several regions within eps
 
 
+@pytest.mark.slow
 def test_lists_are_tight(flat, samples):
     """The list of the region holding q is close to what q really sees."""
     _, part = flat
@@ -116,6 +118,7 @@ def test_map_round_trip_is_small(flat, tmp_path):
     assert len(back.candidate_segments(q.x, q.y, EPS)) > 0
 
 
+@pytest.mark.slow
 def test_merging_trades_regions_for_list_length():
     scene = apartment()
     exact = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, RegionSettings(merge_growth=0.0))
@@ -174,6 +177,7 @@ def test_no_occluders_and_no_segments_work():
 
 
 @pytest.mark.parametrize("pitch, height, max_range, min_len", [(20.0, 1.2, 10.0, 0.3), (-15.0, 0.6, 6.0, 0.5), (0.0, 2.0, 4.0, 0.1)])
+@pytest.mark.slow
 def test_property_holds_for_other_cameras_and_limits(pitch, height, max_range, min_len):
     """Pitched down (ceiling mostly out of view), pitched up and low (floor
     edges out of view), short range with a short minimum length."""
@@ -201,6 +205,7 @@ def _assert_property(part, oracle, points):
 
 @settings(max_examples=6, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**31 - 1))
+@pytest.mark.slow
 def test_property_holds_in_random_rooms_with_pillars(seed):
     """A random room with random free-standing pillars, segments a little off
     the wall faces."""

@@ -18,7 +18,8 @@ timed first, in ``--repeat`` passes over the frames of every PEQ and before
 any check or baseline run; per frame the best of the passes, as
 tools/bench_ab.py and tools/bench_images.py time).
 
-Figures (PNG, in ``--out``): ``paper_fig5.png``, hypotheses per sample for
+Figures (PNG, in ``--out``, by default ``out/bench_paper``, which git ignores;
+``--out docs/images`` redraws the figures the docs show): ``paper_fig5.png``, hypotheses per sample for
 each PEQ (the paper's figure 5); ``paper_fig6.png``, mean and standard
 deviation of the five smallest E per PEQ with the acceptance threshold (the
 paper's figure 6), and E of the correct hypothesis against the best false
@@ -303,7 +304,9 @@ def main(argv=None) -> int:
     ap.add_argument("--baseline-poses", type=int, default=20, help="frames per PEQ also run by the baseline")
     ap.add_argument("--baseline-limit", type=float, default=2.0, help="baseline time limit per frame, seconds")
     ap.add_argument("--quick", action="store_true", help="20 poses, baseline on 5")
-    ap.add_argument("--out", default="docs/images", help="directory for the PNG figures")
+    ap.add_argument("--out", default="out/bench_paper",
+                    help="directory for the PNG figures (default out/bench_paper; --out docs/images redraws "
+                         "the documented figures)")
     ap.add_argument("--json", help="also write all per-frame rows and the summary to this file")
     ap.add_argument("--max-hypotheses", type=int, default=matcher.Tolerances().max_hypotheses,
                     help="stage 1's cap on hypotheses (a large value shows how many pass stage 1 uncapped)")

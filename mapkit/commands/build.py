@@ -6,14 +6,16 @@ import sys
 
 from mapkit.errors import MapkitError
 
-HELP = "build a .lmap map from a DXF floor plan, a 3D mesh or ZInD annotations"
+HELP = "build a .lmap map from a DXF floor plan, a 3D mesh, 3D segments (.csv, .json) or ZInD annotations"
 
 
 def add_arguments(p) -> None:
     from mapkit.commands._import_args import add_import_arguments, add_option_flags
     from mapkit.options import BUILD_GROUPS, DEFAULT_HFOV_DEG, DEFAULT_IMAGE_SIZE, default_camera
 
-    p.add_argument("plan", metavar="PLAN", help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off) or ZInD zind_data.json")
+    p.add_argument("plan", metavar="PLAN",
+                   help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off), 3D segments (.csv, or .json with "
+                        "\"segments\") or ZInD zind_data.json")
     p.add_argument("-o", "--output", required=True, metavar="OUT.lmap", help="map file to write")
     add_import_arguments(p)
     cam = default_camera()

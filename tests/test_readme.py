@@ -1,0 +1,172 @@
+"""The README's examples run as written from a fresh clone and leave it clean.
+
+Every line of README.md inside an indented block that starts with ``$ `` is
+a runnable example; the indented lines under it, up to the next ``$ `` line
+or the end of the block, are the output it shows. Command lines without
+``$ `` (the test command, a server, data one downloads) are shown, not run.
+
+The examples run one after the other, as a newcomer would type them, in a
+copy of the repository's tracked files (a fresh clone: a git repository of
+its own, so ``git status`` can be asked). ``.venv/bin/X`` stands for the
+environment running this test (in CI that *is* ``.venv``); in the first
+command, the steps that make the environment (``python3 -m venv .venv``,
+``.venv/bin/pip install ...``) are left out, since CI's set-up has made it.
+
+Each example must exit 0 and print what the README shows: the shown lines in
+order, ``...`` standing for lines left out, with the figures that depend on
+the machine's speed (stage seconds, ``time ms``) masked. After all of them,
+``git status`` must show nothing: everything written went under ``out/``,
+which git ignores.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+PROMPT = "$ "
+INDENT = "    "
+SKIPPED_OUTPUT = "..."
+# Steps of the first command that make the environment this test already runs in.
+ENVIRONMENT_STEPS = (re.compile(r"^python3 -m venv \.venv$"), re.compile(r"^\.venv/bin/pip install "))
+
+
+@dataclass
+class Example:
+    command: str
+    shown: list[str] = field(default_factory=list)
+
+
+def readme_examples(text: str) -> list[Example]:
+    """The ``$ `` lines of the README's indented blocks, each with the output shown under it."""
+    examples: list[Example] = []
+    current = None
+    for line in text.splitlines():
+        if not line.startswith(INDENT):
+            current = None  # a blank or unindented line ends the block
+            continue
+        body = line[len(INDENT):]
+        if body.startswith(PROMPT):
+            current = Example(body[len(PROMPT):].strip())
+            examples.append(current)
+        elif current is not None:
+            current.shown.append(body.rstrip())
+    return examples
+
+
+def without_environment_steps(command: str) -> str:
+    steps = [s.strip() for s in command.split(" && ")]
+    kept = [s for s in steps if not any(p.search(s) for p in ENVIRONMENT_STEPS)]
+    return " && ".join(kept)
+
+
+def with_this_environment(command: str) -> str:
+    """``.venv/bin/X`` -> the bin directory of the interpreter running the tests."""
+    bin_dir = Path(sys.executable).parent
+    return re.sub(r"(?<![\w/.])\.venv/bin/", f"{bin_dir}/", command)
+
+
+def masked(line: str) -> str:
+    """A printed line with the figures that follow the machine's speed masked."""
+    line = re.sub(r"\b\d+\.\d+s\b", "#s", line)  # stage seconds: (import 0.34s edges 0.01s ...)
+    line = re.sub(r"(time ms: )[^(]*", r"\1# ", line)  # time ms: select 2.3, ..., total 80.1
+    return line.rstrip()
+
+
+def shown_in(shown: list[str], printed: list[str]) -> str | None:
+    """None if ``printed`` is what ``shown`` shows, else what differs.
+
+    ``shown`` is cut at its ``...`` lines into runs of lines; each run must
+    appear in ``printed`` as consecutive lines, in order; without a leading
+    (trailing) ``...`` the first (last) run must start (end) the output.
+    """
+    printed = [masked(p) for p in printed]
+    runs: list[list[str]] = [[]]
+    for line in shown:
+        if line.strip() == SKIPPED_OUTPUT:
+            runs.append([])
+        else:
+            runs[-1].append(masked(line))
+    anchored_start = bool(runs[0])
+    anchored_end = bool(runs[-1])
+    runs = [r for r in runs if r]
+    if not runs:  # nothing shown: nothing printed; only "...": anything
+        return None if shown or not printed else f"printed {printed[:3]!r} where the README shows nothing"
+    at = 0
+    for i, run in enumerate(runs):
+        starts = [at] if (i == 0 and anchored_start) else range(at, len(printed) - len(run) + 1)
+        found = next((s for s in starts if printed[s:s + len(run)] == run), None)
+        if found is None:
+            near = printed[at:at + len(run) + 2]
+            return f"expected {run!r}\n  from line {at} of the output, got {near!r}"
+        at = found + len(run)
+    if anchored_end and at != len(printed):
+        return f"output goes on after the README's last line: {printed[at:at + 3]!r}"
+    return None
+
+
+def test_readme_marks_its_examples():
+    """The README has its runnable examples, the two set-up commands among them as they should be."""
+    commands = [e.command for e in readme_examples(README.read_text())]
+    assert len(commands) >= 10
+    assert commands[0].startswith("python3 -m venv .venv && .venv/bin/pip install -e '.[build]' && ")
+    assert "mapkit build maps/flat.dxf -o out/flat.lmap" in commands[0]
+    assert "bash tools/setup_and_test.sh" in README.read_text()
+    for c in commands:
+        # Every program the README runs comes from the venv: nothing relies on an activated shell.
+        for step in re.split(r"&&|\|", c):
+            program = step.split()[0]
+            assert program in ("python3", "mkdir") or program.startswith(".venv/bin/"), c
+
+
+def test_shown_in_reads_the_readme_conventions():
+    assert shown_in(["a", "...", "c"], ["a", "b", "c"]) is None
+    assert shown_in(["a", "c"], ["a", "b", "c"]) is not None
+    assert shown_in(["...", "b"], ["a", "b"]) is None
+    assert shown_in(["b", "..."], ["a", "b"]) is not None
+    assert shown_in(["x (import 0.34s)"], ["x (import 2.35s)"]) is None
+    assert shown_in([], []) is None
+    assert shown_in([], ["noise"]) is not None
+
+
+def fresh_clone(dest: Path) -> Path:
+    """The repository's tracked files (as they are in the working tree) in a git repository of their own."""
+    names = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True, check=True).stdout
+    for name in names.decode().split("\0"):
+        if name and (ROOT / name).is_file():
+            (dest / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name, dest / name)
+    git = ["git", "-c", "user.name=readme test", "-c", "user.email=readme@test", "-c", "commit.gpgsign=false"]
+    subprocess.run(git + ["init", "-q"], cwd=dest, check=True)
+    subprocess.run(git + ["add", "-A"], cwd=dest, check=True)
+    subprocess.run(git + ["commit", "-q", "-m", "fresh clone"], cwd=dest, check=True)
+    return dest
+
+
+@pytest.mark.slow  # builds two maps and tracks a 150-frame run: about a minute
+def test_readme_examples_run_as_written(tmp_path):
+    repo = fresh_clone(tmp_path / "clone")
+    env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=str(repo), MPLBACKEND="Agg")
+    env.pop("PYTHONSTARTUP", None)
+    for example in readme_examples(README.read_text()):
+        command = with_this_environment(without_environment_steps(example.command))
+        done = subprocess.run(["bash", "-c", command], cwd=repo, env=env, capture_output=True, text=True,
+                              timeout=600)
+        assert done.returncode == 0, f"$ {example.command}\nexit {done.returncode}\n{done.stdout}{done.stderr}"
+        # stderr first: the CLIs' warnings come before their summary line (stdout is unbuffered).
+        printed = (done.stderr + done.stdout).splitlines()
+        differs = shown_in(example.shown, printed)
+        assert differs is None, f"$ {example.command}\n{differs}"
+    status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all"], cwd=repo,
+                            capture_output=True, text=True, check=True).stdout
+    assert status == "", f"the README's examples left files outside out/:\n{status}"
+    assert (repo / "out" / "flat.lmap").read_bytes() == (repo / "maps" / "flat.lmap").read_bytes()
