@@ -17,12 +17,18 @@ test derived from them widens with it.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 
 import numpy as np
 
 from linemap.errors import InputError
+
+
+def _number(v) -> bool:
+    """Is ``v`` a real number (not a bool, not a string)? Compared with 0 otherwise it would raise TypeError."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
 
 
 @dataclass(frozen=True)
@@ -359,8 +365,8 @@ class Internals:
         for f in fields(self):
             v = getattr(self, f.name)
             for x in (v if isinstance(v, tuple) else (v,)):
-                if not (x == x) or x < 0:
-                    raise InputError(f"internal tolerance {f.name} must be >= 0, got {v}")
+                if not _number(x) or not (x == x) or x < 0:
+                    raise InputError(f"internal tolerance {f.name} must be >= 0, got {v!r}")
 
     @cached_property
     def grid_sight_array(self) -> np.ndarray:
@@ -522,8 +528,8 @@ class Tolerances:
                 if not isinstance(v, Internals):
                     raise InputError(f"tolerance internals must be a matcher.tolerances.Internals, got {v!r}")
                 continue
-            if not (v == v) or v < 0:
-                raise InputError(f"tolerance {f.name} must be >= 0, got {v}")
+            if not _number(v) or not (v == v) or v < 0:
+                raise InputError(f"tolerance {f.name} must be >= 0, got {v!r}")
         if self.yaw_step_deg <= 0 or self.yaw_step_deg > 10:
             raise InputError(f"tolerance yaw_step_deg must be in (0, 10], got {self.yaw_step_deg}")
         if self.min_matches < 2:
