@@ -191,7 +191,8 @@ def test_the_fuzz_classifier_reads_exit_codes():
 
 def test_a_built_map_is_read_by_every_command_that_reads_maps(tmp_path, monkeypatch):
     """The build families follow a build with info, view --html and export
-    on the map it wrote; a bug in one of them is the case's bug."""
+    on the map it wrote; a bug in one of them is the case's bug, and so is a
+    clean error: the builder wrote a map its readers refuse."""
     import mapkit.commands.export
 
     monkeypatch.chdir(tmp_path)
@@ -204,6 +205,13 @@ def test_a_built_map_is_read_by_every_command_that_reads_maps(tmp_path, monkeypa
     monkeypatch.setattr(mapkit.commands.export, "to_geojson", _numpy_slip)
     kind, detail = fuzz.run_case_here(case)
     assert kind == fuzz.BUG and detail.startswith("then mapkit export out.lmap")
+
+    def refuse(m):
+        raise MapkitError("this map is refused")
+
+    monkeypatch.setattr(mapkit.commands.export, "to_geojson", refuse)
+    kind, detail = fuzz.run_case_here(case)
+    assert kind == fuzz.BUG and "a map the case wrote is refused: mapkit: error: this map is refused" in detail
 
 
 # ---- what the commands read of a map ------------------------------------------------

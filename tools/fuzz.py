@@ -90,7 +90,9 @@ class Case:
     ``["matcher", *argv]`` or ``["api", function, {arguments}]`` with file
     names of that folder wherever a path belongs; ``then``: commands of the
     same form run after it, in turn, while each ends valid (those that read
-    what the one before wrote, or the same input another way)."""
+    what the one before wrote, or the same input another way);
+    ``then_valid``: they read what ``call`` wrote (a map ``mapkit build``
+    wrote), so any other end of theirs, even a clean error, is a bug."""
 
     family: str
     name: str
@@ -98,6 +100,7 @@ class Case:
     call: list
     note: str = ""
     then: list = field(default_factory=list)
+    then_valid: bool = False
 
 
 @dataclass
@@ -259,12 +262,13 @@ def dxf_case(rng: random.Random, name: str = "dxf", sources=None) -> Case:
             "layers": ["layers", "plan.dxf"]}[cmd]
     if src == "thehouse" and cmd != "layers":
         argv += ["--walls", "s001-*", "--units", "m"]
-    return Case("dxf", name, files, ["mapkit", *argv], f"{src}: {note}", _follow_ups(argv))
+    return Case("dxf", name, files, ["mapkit", *argv], f"{src}: {note}", **_follow_ups(argv))
 
 
-def _follow_ups(argv: list) -> list:
-    """The commands that read the map ``argv`` writes, if it builds one."""
-    return [list(c) for c in FOLLOW_UPS] if argv[0] == "build" else []
+def _follow_ups(argv: list) -> dict:
+    """``then`` and ``then_valid`` of a case: the commands that read the map
+    ``argv`` writes, if it builds one."""
+    return {"then": [list(c) for c in FOLLOW_UPS] if argv[0] == "build" else [], "then_valid": True}
 
 
 # ---- meshes --------------------------------------------------------------------
@@ -303,7 +307,7 @@ def mesh_case(rng: random.Random, name: str = "mesh") -> Case:
         blob, note = mutate_bytes(blob, rng)
     ext = "." + src.rsplit(".", 1)[1]
     return Case("mesh", name, {"model" + ext: blob}, ["mapkit", "build", "model" + ext, "-o", "out.lmap"],
-                f"{src}: {note}", _follow_ups(["build"]))
+                f"{src}: {note}", **_follow_ups(["build"]))
 
 
 # ---- JSON documents ------------------------------------------------------------
@@ -483,7 +487,7 @@ def zind_case(rng: random.Random, name: str = "zind") -> Case:
         text, note = mutate_json_doc(base_zind(), rng)
     cmd = rng.choices(("build", "preview"), weights=(9, 1))[0]
     argv = [cmd, "zind_data.json", "-o", "out.lmap" if cmd == "build" else "out.png"]
-    return Case("zind", name, {"zind_data.json": text.encode()}, ["mapkit", *argv], note, _follow_ups(argv))
+    return Case("zind", name, {"zind_data.json": text.encode()}, ["mapkit", *argv], note, **_follow_ups(argv))
 
 
 # ---- segments files ------------------------------------------------------------
@@ -599,7 +603,7 @@ def segments_case(rng: random.Random, name: str = "segments") -> Case:
     argv = ["build", fname, "-o", "out.lmap"]
     if rng.random() < 0.1:
         argv += ["--units", rng.choice(("mm", "cm", "ft", "in", "km"))]
-    return Case("segments", name, {fname: blob}, ["mapkit", *argv], note, _follow_ups(argv))
+    return Case("segments", name, {fname: blob}, ["mapkit", *argv], note, **_follow_ups(argv))
 
 
 # ---- .lmap ---------------------------------------------------------------------
@@ -1018,6 +1022,8 @@ def run_case_here(case: Case) -> tuple[str, str]:
     for k, call in enumerate([case.call, *case.then]):
         kind, detail = run_call(call)
         if kind != VALID:
+            if k and case.then_valid and kind in (ERROR, FALSY):
+                kind, detail = BUG, f"a map the case wrote is refused: {detail}"
             return kind, (f"then {' '.join(map(str, call))}: {detail}" if k else detail)
     return VALID, ""
 
@@ -1125,15 +1131,17 @@ def save_case(case: Case, outcome: Outcome, folder: Path) -> Path:
     for fname, blob in case.files.items():
         (d / fname).write_bytes(blob)
     (d / "case.json").write_text(json.dumps({"family": case.family, "call": case.call, "then": case.then,
-                                             "note": case.note, "outcome": outcome.kind,
-                                             "detail": outcome.detail}, indent=1, default=str))
+                                             "then_valid": case.then_valid, "note": case.note,
+                                             "outcome": outcome.kind, "detail": outcome.detail}, indent=1,
+                                            default=str))
     return d
 
 
 def load_case(folder: Path) -> Case:
     meta = json.loads((folder / "case.json").read_text())
     files = {p.name: p.read_bytes() for p in folder.iterdir() if p.name != "case.json" and p.is_file()}
-    return Case(meta["family"], folder.name, files, meta["call"], meta.get("note", ""), meta.get("then", []))
+    return Case(meta["family"], folder.name, files, meta["call"], meta.get("note", ""), meta.get("then", []),
+                meta.get("then_valid", False))
 
 
 # ---- the campaign --------------------------------------------------------------
