@@ -22,6 +22,9 @@ class InputError(ValueError):
 
 #: Exit code of a command that met a bug of ours (2 is bad input, 1 a valid "not found").
 EXIT_BUG = 3
+#: The one line of a MemoryError (exit 2): work too large for the memory the
+#: process may use is not a bug, and not quite a mistake in the input either.
+OUT_OF_MEMORY = "out of memory: the work this input asks for does not fit in the memory this process may use"
 
 
 def add_debug_option(parser, subparsers=()) -> None:

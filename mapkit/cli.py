@@ -18,7 +18,7 @@ import sys
 import mapkit.commands
 from linemap.argv import join_negative_values
 from linemap.atomic import OutputPathError
-from linemap.errors import InputError, add_debug_option, report_bug
+from linemap.errors import OUT_OF_MEMORY, InputError, add_debug_option, report_bug
 
 #: Order in ``mapkit --help``; any other command module is listed after these.
 ORDER = ["build", "info", "query", "export", "layers", "preview", "view", "extrude"]
@@ -108,10 +108,6 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except Exception as exc:  # noqa: BLE001 - anything else is a bug of ours, said to be one
         return report_bug("mapkit", exc, args.debug)
-
-
-#: Work too large for the memory the process may use: not a bug, not quite a mistake in the input.
-OUT_OF_MEMORY = "out of memory: the work this input asks for does not fit in the memory this process may use"
 
 
 def _fail(message: str) -> int:

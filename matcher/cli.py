@@ -28,7 +28,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from linemap.argv import join_negative_values
-from linemap.errors import InputError, add_debug_option, report_bug
+from linemap.errors import OUT_OF_MEMORY, InputError, add_debug_option, report_bug
 
 #: Exit codes: localised, not localised (a valid answer), user error; a bug
 #: exits with linemap.errors.EXIT_BUG (3).
@@ -283,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:
         return _fail(f"{getattr(exc, 'filename', '') or ''}: {exc.strerror or exc}".lstrip(": "))
     except MemoryError:
-        return _fail("out of memory: the work this input asks for does not fit in the memory this process may use")
+        return _fail(OUT_OF_MEMORY)
     except Exception as exc:  # noqa: BLE001 - anything else is a bug of ours, said to be one
         return report_bug("matcher", exc, args.debug)
 
