@@ -4,6 +4,7 @@
   :func:`load_map`, :func:`save_map`) and :mod:`linemap.regions`, region
   lookup on a loaded map;
 - :mod:`linemap.camera`: the camera model and camera files;
+- :mod:`linemap.errors`: :class:`InputError`, what every check of bad input raises;
 - :mod:`linemap.geometry`: angle wrap, vertical segments, the horizontal
   field-of-view test, the projection of segments;
 - :mod:`linemap.atomic` and :mod:`linemap.argv`: file writes that never
@@ -14,6 +15,7 @@ nothing here imports either of them.
 """
 
 from linemap.camera import Camera, CameraError
+from linemap.errors import InputError
 from linemap.lmap import FORMAT_MAJOR, FORMAT_MINOR, KIND_NAMES, LineMap, LmapError, SegmentKind, load_map, save_map
 
 __all__ = [
@@ -22,6 +24,7 @@ __all__ = [
     "KIND_NAMES",
     "Camera",
     "CameraError",
+    "InputError",
     "LineMap",
     "LmapError",
     "SegmentKind",

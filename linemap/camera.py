@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from linemap.errors import InputError
+
 REQUIRED_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch_deg")
 #: Optional fields of the mounting, degrees, 0 when absent: the roll, and
 #: how far the real pitch and roll of a frame may stray from the file's
@@ -29,7 +31,7 @@ REQUIRED_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "height_m", "pitch
 ATTITUDE_FIELDS = ("roll_deg", "pitch_std_deg", "roll_std_deg")
 
 
-class CameraError(ValueError):
+class CameraError(InputError):
     """A camera description is missing a field or holds an impossible value."""
 
 

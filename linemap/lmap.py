@@ -35,6 +35,8 @@ import numpy as np
 T = TypeVar("T")
 
 from linemap.atomic import write_atomic
+from linemap.camera import Camera, CameraError
+from linemap.errors import InputError
 from linemap.regions import concat_ranges
 
 MAGIC = b"\x89LMP\r\n\x1a\n"  # PNG-style: catches text-mode and 7-bit mangling
@@ -66,7 +68,7 @@ MAX_META_DEPTH = 32
 MAX_EXTENT_M = 10_000.0
 
 
-class LmapError(ValueError):
+class LmapError(InputError):
     """A ``.lmap`` file is unreadable: wrong magic, newer version, truncated,
     corrupt (checksum) or inconsistent. The message says which and what to do."""
 
@@ -523,15 +525,29 @@ def _json_depth(text: bytes) -> int:
     return best
 
 
+#: The JSON types each META entry the commands read (``mapkit info``,
+#: ``view``) may have, when present. ``source`` is the plan's file name or
+#: (what ``mapkit build`` writes) an object with the string ``name``.
+META_TYPES = {"units": (str,), "generator": (str,), "source": (str, dict), "build": (dict,), "scene": (dict,),
+              "stats": (dict,)}
+_JSON_TYPE_NAMES = {str: "string", dict: "object"}
+
+
 def _check_meta(meta, name: str) -> None:
-    """The parts of META that readers use: an object, a positive finite wall
-    height, a camera with its numeric fields, the origin offset of a
-    georeferenced plan."""
+    """The parts of META that readers use: an object, the entries of
+    :data:`META_TYPES` of their types, a positive finite wall height, cameras
+    that are valid cameras, the origin offset of a georeferenced plan."""
     def bad(msg: str) -> LmapError:
         return LmapError(f"{name} has an invalid META chunk: {msg}; rebuild it with 'mapkit build'")
 
     if not isinstance(meta, dict):
         raise bad("it is not a JSON object")
+    for key, kinds in META_TYPES.items():
+        if key in meta and not isinstance(meta[key], kinds):
+            wanted = " or ".join(f"a JSON {_JSON_TYPE_NAMES[k]}" for k in kinds)
+            raise bad(f"{key} must be {wanted}, got {str(meta[key])[:80]!r}")
+    if isinstance(meta.get("source"), dict) and not isinstance(meta["source"].get("name"), str):
+        raise bad("source lacks its file name (a string 'name')")
     wh = meta.get("wall_height")
     if wh is not None and not (isinstance(wh, (int, float)) and not isinstance(wh, bool) and math.isfinite(wh)
                                and wh > 0):
@@ -551,6 +567,10 @@ def _check_meta(meta, name: str) -> None:
             v = cam.get(key)
             if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
                 raise bad(f"{where} lacks a numeric {key}")
+        try:
+            Camera.from_dict(cam)
+        except CameraError as exc:
+            raise bad(f"{where}: {exc}") from None
 
 
 def validate(m: LineMap, name: str = "map") -> None:

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from linemap.errors import InputError
+
 
 def concat_ranges(starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """``np.concatenate([np.arange(s, s + n) for s, n in zip(starts, lengths)])``
@@ -96,7 +98,7 @@ class RegionLookup:
     def regions_near(self, x: float, y: float, radius: float) -> np.ndarray:
         """Sorted ids of regions meeting the closed disk (radius 0: containing the point)."""
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(radius)) or radius < 0:
-            raise ValueError(f"query needs finite x, y and radius >= 0, got ({x}, {y}, {radius})")
+            raise InputError(f"query needs finite x, y and radius >= 0, got ({x}, {y}, {radius})")
         cand = self.candidate_regions(x, y, radius)
         starts = self.region_edge_start[cand]
         lengths = self.region_edge_start[cand + 1] - starts

@@ -1,7 +1,10 @@
 """The ``mapkit`` command line. Subcommands live in :mod:`mapkit.commands`.
 
-User errors (missing file, bad format, no walls, bad option) print one line
-``mapkit: error: ...`` to stderr and exit 2, never a traceback.
+User errors (missing file, bad format, no walls, bad option: an
+:class:`~linemap.errors.InputError` or an ``OSError``) print one line
+``mapkit: error: ...`` to stderr and exit 2, never a traceback. Any other
+exception is a bug: one line ``mapkit: internal error: ...`` asking for a
+report, exit 3, and its traceback with ``--debug``.
 """
 
 from __future__ import annotations
@@ -15,8 +18,7 @@ import sys
 import mapkit.commands
 from linemap.argv import join_negative_values
 from linemap.atomic import OutputPathError
-from mapkit.errors import MapkitError
-from linemap.lmap import LmapError
+from linemap.errors import OUT_OF_MEMORY, InputError, add_debug_option, report_bug
 
 #: Order in ``mapkit --help``; any other command module is listed after these.
 ORDER = ["build", "info", "query", "export", "layers", "preview", "view", "extrude"]
@@ -46,6 +48,7 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=mod.HELP, description=mod.HELP)
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)
+    add_debug_option(parser, sub.choices.values())
     return parser
 
 
@@ -78,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
     _setup_logging()
     try:
         return int(args._run(args) or 0)
-    except (MapkitError, LmapError) as exc:
+    except InputError as exc:  # MapkitError, LmapError, CameraError, ...
         return _fail(str(exc))
     except OutputPathError as exc:
         return _fail(f"{exc.filename}: {exc.strerror}")
@@ -96,14 +99,15 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"{exc.filename}: is a directory, expected a file")
     except PermissionError as exc:
         return _fail(f"{exc.filename}: permission denied")
-    except ValueError as exc:
-        # Validation errors of our own types (camera, options) are ValueErrors with clear text.
-        return _fail(str(exc))
     except OSError as exc:  # a full disk, a read-only file system, ...
         return _fail(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else f"{exc.strerror or exc}")
+    except MemoryError:
+        return _fail(OUT_OF_MEMORY)
     except KeyboardInterrupt:
         print("mapkit: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # noqa: BLE001 - anything else is a bug of ours, said to be one
+        return report_bug("mapkit", exc, args.debug)
 
 
 def _fail(message: str) -> int:

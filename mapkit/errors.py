@@ -1,7 +1,13 @@
-"""Errors a user can cause. The CLI turns them into one line, exit code 2."""
+"""Errors a user can cause. The CLI turns them into one line, exit code 2.
+
+All are :class:`linemap.errors.InputError` subclasses: anything else a command
+raises is a bug (exit 3).
+"""
+
+from linemap.errors import InputError
 
 
-class MapkitError(Exception):
+class MapkitError(InputError):
     """A problem with the user's input or options: the message says what to do."""
 
 

@@ -24,6 +24,7 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.geometry.polygon import orient
 
+from mapkit.errors import MapkitError
 from mapkit.shapes import polygon_parts
 from mapkit.importers.mesh.load import weld
 from mapkit.scene import Scene
@@ -44,7 +45,7 @@ def scene_to_mesh(scene: Scene, ceiling: bool = False, robot_radius: float = 0.0
 
     height = float(scene.wall_height)
     if not height > 0:
-        raise ValueError(f"wall_height must be positive, got {height}")
+        raise MapkitError(f"the walls' height must be positive, got {height}; check --wall-height")
     levels, bands = wall_bands(scene)
     slab = floor_region(scene, bands[0], robot_radius)
 
@@ -68,7 +69,8 @@ def scene_to_mesh(scene: Scene, ceiling: bool = False, robot_radius: float = 0.0
     tris += [_cap_triangles(g, z, up, splits) for g, z, up in caps]
     tris = [t for t in tris if len(t)]
     if not tris:
-        raise ValueError("the scene has no walls to extrude")
+        raise MapkitError("no walls to extrude (too thin at this scale?); check --units and the layers with "
+                          "'mapkit preview'")
     tri = np.concatenate(tris)  # (T, 3, 3)
     vertices, faces = weld(tri.reshape(-1, 3), np.arange(len(tri) * 3).reshape(-1, 3))
     return trimesh.Trimesh(vertices=vertices, faces=faces, process=False)

@@ -78,4 +78,21 @@ CASES = [
     ("too few visible-list entries",
      lambda ch: write_chunks(with_meta(ch, lambda m: m["counts"].update(list_entries=10))), "more than the 10 entries"),
     ("10^9 chunks claimed", more_chunks_than_the_file_holds, "claims 1000000000 chunks"),
+    # META entries 'mapkit info' and 'mapkit view' read, of the wrong type (once a TypeError in 'info')
+    ("source a list", lambda ch: write_chunks(with_meta(ch, lambda m: m.update(source=["flat.dxf"]))),
+     "source must be a JSON string or a JSON object"),
+    ("source without its name", lambda ch: write_chunks(with_meta(ch, lambda m: m["source"].pop("name"))),
+     "source lacks its file name"),
+    ("build parameters a list", lambda ch: write_chunks(with_meta(ch, lambda m: m.update(build=[1, 2]))),
+     "build must be a JSON object"),
+    ("generator a number", lambda ch: write_chunks(with_meta(ch, lambda m: m.update(generator=7))),
+     "generator must be a JSON string"),
+    ("camera with a negative focal length",
+     lambda ch: write_chunks(with_meta(ch, lambda m: m["camera"].update(fx=-457.0))), "camera: camera fx and fy"),
+    ("build camera of zero width",
+     lambda ch: write_chunks(with_meta(ch, lambda m: m["build"]["camera"].update(width=0))),
+     "build camera: camera width and height must be positive"),
 ]
+
+#: The cases whose META entries load_map once passed and a command then tripped over.
+META_SHAPE_CASES = CASES[-6:]

@@ -18,6 +18,7 @@ hypothesis generation; :mod:`matcher.stage2`, verification);
 """
 
 from linemap.camera import Camera, CameraError
+from linemap.errors import InputError
 from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
 from matcher.from_prior import localize
 from matcher.lost import localize_global
@@ -28,6 +29,7 @@ from matcher.tracking import TrackedFrame, Tracker
 __all__ = [
     "Camera",
     "CameraError",
+    "InputError",
     "LineMap",
     "LmapError",
     "LocalizeResult",

@@ -8,9 +8,12 @@
                   [--out TRAJ.txt] [--plot ROUTE.png] [--json]
 
 Human-readable output by default, one JSON object on stdout with ``--json``
-(the result shape of docs/architecture.md). Errors a user can cause print
-one line ``matcher: error: ...`` on stderr and exit 2, never a traceback.
-A failed localisation is not an error: it prints its reason and exits 1.
+(the result shape of docs/architecture.md). Errors a user can cause (an
+:class:`~linemap.errors.InputError` or an ``OSError``) print one line
+``matcher: error: ...`` on stderr and exit 2, never a traceback. A failed
+localisation is not an error: it prints its reason and exits 1. Any other
+exception is a bug: one line ``matcher: internal error: ...`` asking for a
+report, exit 3, and its traceback with ``--debug``.
 """
 
 from __future__ import annotations
@@ -25,12 +28,14 @@ from dataclasses import replace
 from pathlib import Path
 
 from linemap.argv import join_negative_values
+from linemap.errors import OUT_OF_MEMORY, InputError, add_debug_option, report_bug
 
-#: Exit codes: localised, not localised (a valid answer), user error.
+#: Exit codes: localised, not localised (a valid answer), user error; a bug
+#: exits with linemap.errors.EXIT_BUG (3).
 EXIT_OK, EXIT_NOT_FOUND, EXIT_USAGE = 0, 1, 2
 
 
-class UsageError(Exception):
+class UsageError(InputError):
     """A mistake the user can fix; the message says how."""
 
 
@@ -64,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     from matcher.cli_track import add_track_parser
 
     add_track_parser(sub)
+    add_debug_option(parser, sub.choices.values())
     return parser
 
 
@@ -269,9 +275,7 @@ def main(argv: list[str] | None = None) -> int:
 
             return run_track(args)
         return run_localize(args)
-    except UsageError as exc:
-        return _fail(str(exc))
-    except ValueError as exc:  # CameraError, LmapError and input checks: clear messages
+    except InputError as exc:  # UsageError, CameraError, LmapError, BagError and the input checks
         return _fail(str(exc))
     except BrokenPipeError:  # the reader went away (`matcher localize ... | head -1`); before OSError
         # Point stdout at devnull so the interpreter's final flush stays quiet.
@@ -279,6 +283,10 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_OK
     except OSError as exc:
         return _fail(f"{getattr(exc, 'filename', '') or ''}: {exc.strerror or exc}".lstrip(": "))
+    except MemoryError:
+        return _fail(OUT_OF_MEMORY)
+    except Exception as exc:  # noqa: BLE001 - anything else is a bug of ours, said to be one
+        return report_bug("matcher", exc, args.debug)
 
 
 def _fail(message: str) -> int:

@@ -17,6 +17,7 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
+from linemap.errors import InputError
 from matcher.cli import EXIT_NOT_FOUND, EXIT_OK, UsageError, _camera, _input_file, _prior_options, _tolerances
 
 
@@ -61,7 +62,7 @@ def _settings(args):
                if getattr(args, name) is not None}
     try:
         return replace(TRACKING, **changes)
-    except ValueError as exc:
+    except InputError as exc:
         raise UsageError(str(exc).replace("tracking setting ", "--").replace("_", "-")) from None
 
 
@@ -104,13 +105,7 @@ class _Source:
         from matcher.cli import _read_image
         from matcher.tracking.frames import read_jsonl
 
-        def detect(image_path):
-            try:
-                return _read_image(str(image_path), self.camera)
-            except UsageError as exc:
-                raise ValueError(str(exc)) from None
-
-        return read_jsonl(self.path, detect)
+        return read_jsonl(self.path, lambda image_path: _read_image(str(image_path), self.camera))
 
     def close(self) -> None:
         if self.bag is not None:

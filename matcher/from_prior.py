@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from linemap.camera import Camera
+from linemap.errors import InputError
 from linemap.geometry import wrap
 from linemap.lmap import LineMap
 from matcher import ambiguity, attitude
@@ -77,11 +78,11 @@ def checked_types(linemap, camera, tolerances) -> Tolerances:
     """ValueError unless the map, camera and tolerances are of their types;
     the tolerances to use."""
     if not isinstance(linemap, LineMap):
-        raise ValueError(f"linemap must be a map from matcher.load_map('map.lmap'), got {type(linemap).__name__}")
+        raise InputError(f"linemap must be a map from matcher.load_map('map.lmap'), got {type(linemap).__name__}")
     if not isinstance(camera, Camera):
-        raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
+        raise InputError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
     if tolerances is not None and not isinstance(tolerances, Tolerances):
-        raise ValueError(f"tolerances must be a matcher.Tolerances, got {type(tolerances).__name__}")
+        raise InputError(f"tolerances must be a matcher.Tolerances, got {type(tolerances).__name__}")
     return tolerances or DEFAULT
 
 

@@ -20,6 +20,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from linemap.camera import Camera
+from linemap.errors import InputError
 from matcher.tolerances import DETECTION, LineDetection
 
 
@@ -38,15 +39,15 @@ def to_grey(image: np.ndarray) -> np.ndarray:
             img = img.astype(np.float32)
         img = cv2.cvtColor(np.ascontiguousarray(img), cv2.COLOR_BGR2GRAY if img.shape[2] == 3 else cv2.COLOR_BGRA2GRAY)
     if img.ndim != 2:
-        raise ValueError(f"image: Expected shape (H, W), (H, W, 3) or (H, W, 4), got {np.asarray(image).shape}")
+        raise InputError(f"image: Expected shape (H, W), (H, W, 3) or (H, W, 4), got {np.asarray(image).shape}")
     if img.size == 0:
-        raise ValueError(f"image is empty (shape {np.asarray(image).shape})")
+        raise InputError(f"image is empty (shape {np.asarray(image).shape})")
     if not (img.dtype == np.bool_ or np.issubdtype(img.dtype, np.integer) or np.issubdtype(img.dtype, np.floating)):
-        raise ValueError(f"image must hold numbers, got dtype {img.dtype}")
+        raise InputError(f"image must hold numbers, got dtype {img.dtype}")
     if img.dtype != np.uint8:
         f = img.astype(np.float64)
         if not np.isfinite(f).all():
-            raise ValueError("image holds non-finite values")
+            raise InputError("image holds non-finite values")
         top = float(f.max())
         if np.issubdtype(img.dtype, np.integer):
             scale = 255.0 / float(np.iinfo(img.dtype).max) if top > 255.0 else 1.0
@@ -153,16 +154,16 @@ def detect_lines(image, camera=None, min_length: float | None = None, merge: boo
         min_length = settings.min_length_px
     if isinstance(min_length, bool) or not isinstance(min_length, numbers.Real) or not (
             math.isfinite(min_length) and min_length >= 0):
-        raise ValueError(f"min_length must be a number of pixels >= 0, got {min_length!r}")
+        raise InputError(f"min_length must be a number of pixels >= 0, got {min_length!r}")
     if camera is not None and not isinstance(camera, Camera):
-        raise ValueError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
+        raise InputError(f"camera must be a matcher.Camera (Camera.load('camera.json')), got {type(camera).__name__}")
     grey = to_grey(image)
     if camera is not None and (grey.shape[1], grey.shape[0]) != (camera.width, camera.height):
-        raise ValueError(
+        raise InputError(
             f"image is {grey.shape[1]}x{grey.shape[0]} but the camera is {camera.width}x{camera.height}"
         )
     if grey.size > settings.max_image_pixels:
-        raise ValueError(f"image is {grey.shape[1]}x{grey.shape[0]}, over {settings.max_image_pixels:.0f} pixels "
+        raise InputError(f"image is {grey.shape[1]}x{grey.shape[0]}, over {settings.max_image_pixels:.0f} pixels "
                          "(LineDetection.max_image_pixels); scale it down first")
     lsd = cv2.createLineSegmentDetector(cv2.LSD_REFINE_STD)
     found = lsd.detect(grey)[0]

@@ -17,10 +17,18 @@ test derived from them widens with it.
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, field, fields
 from functools import cached_property
 
 import numpy as np
+
+from linemap.errors import InputError
+
+
+def _number(v) -> bool:
+    """Is ``v`` a real number (not a bool, not a string)? Compared with 0 otherwise it would raise TypeError."""
+    return isinstance(v, numbers.Real) and not isinstance(v, bool)
 
 
 @dataclass(frozen=True)
@@ -357,8 +365,8 @@ class Internals:
         for f in fields(self):
             v = getattr(self, f.name)
             for x in (v if isinstance(v, tuple) else (v,)):
-                if not (x == x) or x < 0:
-                    raise ValueError(f"internal tolerance {f.name} must be >= 0, got {v}")
+                if not _number(x) or not (x == x) or x < 0:
+                    raise InputError(f"internal tolerance {f.name} must be >= 0, got {v!r}")
 
     @cached_property
     def grid_sight_array(self) -> np.ndarray:
@@ -518,16 +526,16 @@ class Tolerances:
             v = getattr(self, f.name)
             if f.name == "internals":
                 if not isinstance(v, Internals):
-                    raise ValueError(f"tolerance internals must be a matcher.tolerances.Internals, got {v!r}")
+                    raise InputError(f"tolerance internals must be a matcher.tolerances.Internals, got {v!r}")
                 continue
-            if not (v == v) or v < 0:
-                raise ValueError(f"tolerance {f.name} must be >= 0, got {v}")
+            if not _number(v) or not (v == v) or v < 0:
+                raise InputError(f"tolerance {f.name} must be >= 0, got {v!r}")
         if self.yaw_step_deg <= 0 or self.yaw_step_deg > 10:
-            raise ValueError(f"tolerance yaw_step_deg must be in (0, 10], got {self.yaw_step_deg}")
+            raise InputError(f"tolerance yaw_step_deg must be in (0, 10], got {self.yaw_step_deg}")
         if self.min_matches < 2:
-            raise ValueError(f"tolerance min_matches must be >= 2, got {self.min_matches}")
+            raise InputError(f"tolerance min_matches must be >= 2, got {self.min_matches}")
         if self.search_lines < self.min_matches:
-            raise ValueError(f"tolerance search_lines must be >= min_matches ({self.min_matches}), got {self.search_lines}")
+            raise InputError(f"tolerance search_lines must be >= min_matches ({self.min_matches}), got {self.search_lines}")
 
 
 DEFAULT = Tolerances()
@@ -568,9 +576,9 @@ class LineDetection:
         for f in fields(self):
             v = getattr(self, f.name)
             if not (v == v) or v < 0 or v == math.inf:
-                raise ValueError(f"line detection setting {f.name} must be a finite number >= 0, got {v}")
+                raise InputError(f"line detection setting {f.name} must be a finite number >= 0, got {v}")
         if self.merge_sample_px <= 0:
-            raise ValueError(f"line detection setting merge_sample_px must be > 0, got {self.merge_sample_px}")
+            raise InputError(f"line detection setting merge_sample_px must be > 0, got {self.merge_sample_px}")
 
 
 #: The default line detection.
@@ -642,11 +650,11 @@ class Tracking:
         for f in fields(self):
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
-                raise ValueError(f"tracking setting {f.name} must be a finite number >= 0, got {v!r}")
+                raise InputError(f"tracking setting {f.name} must be a finite number >= 0, got {v!r}")
         if self.max_dt_m < self.min_dt_m or self.max_dyaw_deg < self.min_dyaw_deg:
-            raise ValueError("tracking settings: max_dt_m/max_dyaw_deg must be at least min_dt_m/min_dyaw_deg")
+            raise InputError("tracking settings: max_dt_m/max_dyaw_deg must be at least min_dt_m/min_dyaw_deg")
         if self.max_candidates < 1 or self.relocalise_budget_ms <= 0:
-            raise ValueError("tracking settings: max_candidates must be >= 1 and relocalise_budget_ms > 0")
+            raise InputError("tracking settings: max_candidates must be >= 1 and relocalise_budget_ms > 0")
 
 
 #: The default tracking settings.

@@ -1,7 +1,7 @@
 """Random values for every matcher input: lines files and arrays of odd
 shapes and dtypes, camera files of each format, priors, dt, dyaw, budgets,
 images of odd sizes and dtypes, and the JSON Lines frame files of
-``matcher track``. Each case ends in a one-line error (exit 2, ValueError
+``matcher track``. Each case ends in a one-line error (exit 2, InputError
 through the API), a falsy result with its reason, or a valid result."""
 
 from __future__ import annotations

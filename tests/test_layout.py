@@ -32,6 +32,7 @@ NOT_THRESHOLDS = {
     ("linemap/camera_files.py", "_MAX_CALIBRATION_DEPTH"): "input size limits of a file parser",
     ("linemap/atomic.py", "STALE_TEMP_S"): "file housekeeping (a killed write's leftovers), not a tolerance of the method",
     ("matcher/cli.py", "EXIT_OK"): "exit codes",
+    ("linemap/errors.py", "EXIT_BUG"): "exit codes",
     ("matcher/tracking/route_plot.py", "_WALL"): "colours of a picture",
     ("matcher/tracking/route_plot.py", "_LOST"): "colours of a picture",
     ("matcher/tracking/route_plot.py", "_JUMP_M"): "where a picture breaks its line",

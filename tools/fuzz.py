@@ -25,20 +25,28 @@ so a run is reproducible and any case can be drawn again by its number):
   then ``mapkit build``.
 - ``lmap``: ``maps/flat.lmap`` with flipped bits, overwritten bytes, cuts
   and appended bytes, or its chunks re-encoded with valid checksums around
-  a damaged payload; then ``mapkit info/query/export`` or ``matcher localize``.
+  a damaged payload; then ``mapkit info``, ``view --html`` and ``export``,
+  and ``mapkit query``, ``info --json`` or ``matcher localize``.
 - ``matcher``: random values for every input of the matcher: lines files and
   arrays of odd shapes and dtypes, camera files (ours, OpenCV's, ROS's),
   priors, ``dt``, ``dyaw``, budgets, images of odd sizes and dtypes, and the
   JSON Lines frame files of ``matcher track``.
 
-Each case must end in a clean one-line error (exit 2 on the command line, a
-ValueError through the Python API), a falsy result with its reason (exit 1),
-or a valid result. Anything else is a failure: a traceback (an exception
-escaping, a crash, an error message of more than one line) or a run past
-the bound (killed after ``--bound-s`` seconds, or out of the ``--mem-gb``
-address-space limit). Every case runs in a forked child; ``--save DIR``
-writes each failing case as a folder (its input files and ``case.json``
-with the command), and ``--replay DIR`` runs such a folder again.
+A map the build families' ``mapkit build`` writes is then read by the
+commands that read maps (``FOLLOW_UPS``: ``mapkit info``, ``info --json``,
+``view --html``, ``export``): damage that passes the importer must not trip
+them either.
+
+Each case must end in a clean one-line error (exit 2 on the command line, an
+``InputError`` through the Python API), a falsy result with its reason (exit
+1), or a valid result. Anything else is a failure: a bug (an internal error,
+exit 3; an exception escaping; any other exception through the API, even a
+one-line ``ValueError``; a crash; an error message of more than one line) or
+a run past the bound (killed after ``--bound-s`` seconds, or out of the
+``--mem-gb`` address-space limit). Every case runs in a forked child;
+``--save DIR`` writes each failing case as a folder (its input files and
+``case.json`` with the commands), and ``--replay DIR`` runs such a folder
+again.
 """
 
 from __future__ import annotations
@@ -67,21 +75,32 @@ FAMILIES = ("dxf", "mesh", "zind", "segments", "lmap", "matcher")
 FLAT_LMAP = "{ROOT}/maps/flat.lmap"
 
 #: Outcomes; the first three are what a case may end in.
-ERROR, VALID, FALSY, TRACEBACK, OVER = "clean error", "valid", "falsy", "traceback", "over bound"
+ERROR, VALID, FALSY, BUG, OVER = "clean error", "valid", "falsy", "bug", "over bound"
+
+#: What reads a map a case's command wrote (``out.lmap``), run in turn while each ends valid.
+FOLLOW_UPS = (["mapkit", "info", "out.lmap"], ["mapkit", "info", "out.lmap", "--json"],
+              ["mapkit", "view", "out.lmap", "--html", "out.html"],
+              ["mapkit", "export", "out.lmap", "--geojson", "out.geojson"])
 
 
 @dataclass
 class Case:
-    """One input and the command run on it: ``files`` (name -> bytes) are
+    """One input and the commands run on it: ``files`` (name -> bytes) are
     written into a fresh folder; ``call`` is ``["mapkit", *argv]``,
     ``["matcher", *argv]`` or ``["api", function, {arguments}]`` with file
-    names of that folder wherever a path belongs."""
+    names of that folder wherever a path belongs; ``then``: commands of the
+    same form run after it, in turn, while each ends valid (those that read
+    what the one before wrote, or the same input another way);
+    ``then_valid``: they read what ``call`` wrote (a map ``mapkit build``
+    wrote), so any other end of theirs, even a clean error, is a bug."""
 
     family: str
     name: str
     files: dict[str, bytes]
     call: list
     note: str = ""
+    then: list = field(default_factory=list)
+    then_valid: bool = False
 
 
 @dataclass
@@ -243,7 +262,13 @@ def dxf_case(rng: random.Random, name: str = "dxf", sources=None) -> Case:
             "layers": ["layers", "plan.dxf"]}[cmd]
     if src == "thehouse" and cmd != "layers":
         argv += ["--walls", "s001-*", "--units", "m"]
-    return Case("dxf", name, files, ["mapkit", *argv], f"{src}: {note}")
+    return Case("dxf", name, files, ["mapkit", *argv], f"{src}: {note}", **_follow_ups(argv))
+
+
+def _follow_ups(argv: list) -> dict:
+    """``then`` and ``then_valid`` of a case: the commands that read the map
+    ``argv`` writes, if it builds one."""
+    return {"then": [list(c) for c in FOLLOW_UPS] if argv[0] == "build" else [], "then_valid": True}
 
 
 # ---- meshes --------------------------------------------------------------------
@@ -282,7 +307,7 @@ def mesh_case(rng: random.Random, name: str = "mesh") -> Case:
         blob, note = mutate_bytes(blob, rng)
     ext = "." + src.rsplit(".", 1)[1]
     return Case("mesh", name, {"model" + ext: blob}, ["mapkit", "build", "model" + ext, "-o", "out.lmap"],
-                f"{src}: {note}")
+                f"{src}: {note}", **_follow_ups(["build"]))
 
 
 # ---- JSON documents ------------------------------------------------------------
@@ -462,7 +487,7 @@ def zind_case(rng: random.Random, name: str = "zind") -> Case:
         text, note = mutate_json_doc(base_zind(), rng)
     cmd = rng.choices(("build", "preview"), weights=(9, 1))[0]
     argv = [cmd, "zind_data.json", "-o", "out.lmap" if cmd == "build" else "out.png"]
-    return Case("zind", name, {"zind_data.json": text.encode()}, ["mapkit", *argv], note)
+    return Case("zind", name, {"zind_data.json": text.encode()}, ["mapkit", *argv], note, **_follow_ups(argv))
 
 
 # ---- segments files ------------------------------------------------------------
@@ -578,7 +603,7 @@ def segments_case(rng: random.Random, name: str = "segments") -> Case:
     argv = ["build", fname, "-o", "out.lmap"]
     if rng.random() < 0.1:
         argv += ["--units", rng.choice(("mm", "cm", "ft", "in", "km"))]
-    return Case("segments", name, {fname: blob}, ["mapkit", *argv], note)
+    return Case("segments", name, {fname: blob}, ["mapkit", *argv], note, **_follow_ups(argv))
 
 
 # ---- .lmap ---------------------------------------------------------------------
@@ -646,13 +671,15 @@ def lmap_case(rng: random.Random, name: str = "lmap") -> Case:
     files = {"m.lmap": bad, "camera.json": json.dumps(base_camera()).encode(),
              "lines.json": json.dumps({"lines": base_frame()["lines"]}).encode()}
     f = base_frame()
-    call = rng.choice((
-        ["mapkit", "info", "m.lmap"], ["mapkit", "info", "m.lmap", "--json"],
+    # Every command that reads a map reads this one (one of the last three at random): the
+    # loader's checks must cover what each of them reads.
+    readers = [[c.replace("out.lmap", "m.lmap") for c in cmd] for cmd in FOLLOW_UPS if "--json" not in cmd]
+    readers.append(rng.choice((
+        ["mapkit", "info", "m.lmap", "--json"],
         ["mapkit", "query", "m.lmap", "--at", "2.0,6.6", "--radius", "0.3"],
-        ["mapkit", "export", "m.lmap", "--geojson", "out.geojson"],
         ["matcher", "localize", "--map", "m.lmap", "--camera", "camera.json", "--lines", "lines.json",
-         "--prior", ",".join(map(str, f["prior"])), "--dt", str(f["dt"]), "--dyaw", str(f["dyaw"])]))
-    return Case("lmap", name, files, call, note)
+         "--prior", ",".join(map(str, f["prior"])), "--dt", str(f["dt"]), "--dyaw", str(f["dyaw"])])))
+    return Case("lmap", name, files, readers[0], note, readers[1:])
 
 
 # ---- matcher inputs ------------------------------------------------------------
@@ -938,21 +965,26 @@ def make_case(family: str, seed: int, i: int) -> Case:
 # ---- running a case ------------------------------------------------------------
 
 def _classify_cli(prog: str, code, out: str, err: str) -> tuple[str, str]:
+    """The outcome of a command line from its exit code and output: exit 2 is
+    a clean error only as one line ``PROG: error: ...``; exit 3 (an internal
+    error) and any traceback are bugs."""
     if "Traceback" in err:
-        return TRACEBACK, err[-2000:]
+        return BUG, err[-2000:]
     if code == 0:
         return VALID, ""
     if code == 1 and prog == "matcher":
         # localize prints 'not localised: REASON'; track one line a frame, with its reason
         said = out.strip().splitlines()
         reason = next((ln for ln in said if ln.startswith("not localised")), said[-1] if said else "")
-        return (FALSY, reason) if reason else (TRACEBACK, f"exit 1 without a reason: {err[-500:]}")
+        return (FALSY, reason) if reason else (BUG, f"exit 1 without a reason: {err[-500:]}")
     if code == 2:
         errors = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith(f"{prog}: warning:")]
+        if len(errors) == 1 and errors[0].startswith(f"{prog}: error: out of memory"):
+            return OVER, errors[0]  # the --mem-gb limit
         if len(errors) == 1 and errors[0].startswith(f"{prog}: error: "):
             return ERROR, errors[0]
-        return TRACEBACK, f"exit 2 but not one error line: {err[-1000:]}"
-    return TRACEBACK, f"exit {code}: {err[-1000:]}"
+        return BUG, f"exit 2 but not one error line: {err[-1000:]}"
+    return BUG, f"exit {code}: {err[-1000:]}"
 
 
 def _api(function: str, args: dict):
@@ -967,33 +999,49 @@ def _api(function: str, args: dict):
         lines = np.load(args["lines"], allow_pickle=True)
         res = matcher.localize(m, cam, lines, args["prior"], args["dt"], args["dyaw"])
         if not res:
-            return (FALSY, res.reason) if res.reason else (TRACEBACK, "falsy result without a reason")
+            return (FALSY, res.reason) if res.reason else (BUG, "falsy result without a reason")
         return VALID, ""
     kwargs = {} if args.get("min_length") is None else {"min_length": args["min_length"]}
     lines = matcher.detect_lines(np.load(args["image"], allow_pickle=True), cam, **kwargs)
     if not (isinstance(lines, np.ndarray) and lines.ndim == 3 and lines.shape[1:] == (2, 2)
             and np.isfinite(lines).all()):
-        return TRACEBACK, f"detect_lines returned {type(lines).__name__} {getattr(lines, 'shape', '')}"
+        return BUG, f"detect_lines returned {type(lines).__name__} {getattr(lines, 'shape', '')}"
     return VALID, ""
 
 
 def run_case_here(case: Case) -> tuple[str, str]:
     """Run ``case`` in this process, in the current directory (its files
-    written there); returns (kind, detail). May not return (a hang)."""
+    written there): its call, then each of ``case.then`` while the one
+    before ended valid; returns (kind, detail) of the first that did not
+    (the detail naming a follow-up's command), or (VALID, ""). May not
+    return (a hang)."""
     for fname, blob in case.files.items():
         Path(fname).write_bytes(blob)
-    what = case.call[0]
+    for k, call in enumerate([case.call, *case.then]):
+        kind, detail = run_call(call)
+        if kind != VALID:
+            if k and case.then_valid and kind in (ERROR, FALSY):
+                kind, detail = BUG, f"a map the case wrote is refused: {detail}"
+            return kind, (f"then {' '.join(map(str, call))}: {detail}" if k else detail)
+    return VALID, ""
+
+
+def run_call(call: list) -> tuple[str, str]:
+    """Run one command or API call of a case in the current directory; (kind, detail)."""
+    from linemap.errors import InputError
+
+    what = call[0]
     if what == "api":
         try:
-            return _api(case.call[1], case.call[2])
-        except ValueError as exc:
+            return _api(call[1], call[2])
+        except InputError as exc:
             msg = str(exc)
-            return (ERROR, msg) if msg and "\n" not in msg else (TRACEBACK, f"ValueError not one line: {msg!r}")
+            return (ERROR, msg) if msg and "\n" not in msg else (BUG, f"InputError not one line: {msg!r}")
         except MemoryError:
             return OVER, "MemoryError"
-        except Exception:  # noqa: BLE001 - the point of the exercise
-            return TRACEBACK, traceback.format_exc()[-2000:]
-    argv = [a.replace("{ROOT}", str(ROOT)) if isinstance(a, str) else a for a in case.call[1:]]
+        except Exception:  # noqa: BLE001 - the point of the exercise: any other exception is a bug, ValueError too
+            return BUG, traceback.format_exc()[-2000:]
+    argv = [a.replace("{ROOT}", str(ROOT)) if isinstance(a, str) else a for a in call[1:]]
     if what == "mapkit":
         from mapkit.cli import main
     else:
@@ -1010,7 +1058,7 @@ def run_case_here(case: Case) -> tuple[str, str]:
         return OVER, "MemoryError"
     except Exception:  # noqa: BLE001
         said = err.getvalue()[-500:]
-        return TRACEBACK, (f"stderr: {said}\n" if said else "") + traceback.format_exc()[-2000:]
+        return BUG, (f"stderr: {said}\n" if said else "") + traceback.format_exc()[-2000:]
     return _classify_cli(what, code, out.getvalue(), err.getvalue())
 
 
@@ -1023,7 +1071,7 @@ def _child(case: Case, folder: Path, conn, mem_bytes: int) -> None:
             os.dup2(null.fileno(), 2)
         result = run_case_here(case)
     except BaseException as exc:  # noqa: BLE001
-        result = (OVER, "MemoryError") if isinstance(exc, MemoryError) else (TRACEBACK, repr(exc))
+        result = (OVER, "MemoryError") if isinstance(exc, MemoryError) else (BUG, repr(exc))
     try:
         conn.send(result)
     finally:
@@ -1052,10 +1100,10 @@ def finish_case(pid: int, conn, t0: float, bound_s: float, block: bool = True) -
         try:
             kind, detail = conn.recv()
         except EOFError:  # the child died without a word: a crash
-            kind, detail = TRACEBACK, "child died"
+            kind, detail = BUG, "child died"
         _, status = os.waitpid(pid, 0)
         if os.WIFSIGNALED(status):
-            kind, detail = TRACEBACK, f"killed by signal {os.WTERMSIG(status)}"
+            kind, detail = BUG, f"killed by signal {os.WTERMSIG(status)}"
         conn.close()
         return Outcome(kind, detail, time.monotonic() - t0)
     if time.monotonic() - t0 < bound_s:
@@ -1080,7 +1128,8 @@ def save_case(case: Case, outcome: Outcome, folder: Path) -> Path:
     d.mkdir(parents=True, exist_ok=True)
     for fname, blob in case.files.items():
         (d / fname).write_bytes(blob)
-    (d / "case.json").write_text(json.dumps({"family": case.family, "call": case.call, "note": case.note,
+    (d / "case.json").write_text(json.dumps({"family": case.family, "call": case.call, "then": case.then,
+                                             "then_valid": case.then_valid, "note": case.note,
                                              "outcome": outcome.kind, "detail": outcome.detail}, indent=1,
                                             default=str))
     return d
@@ -1089,7 +1138,8 @@ def save_case(case: Case, outcome: Outcome, folder: Path) -> Path:
 def load_case(folder: Path) -> Case:
     meta = json.loads((folder / "case.json").read_text())
     files = {p.name: p.read_bytes() for p in folder.iterdir() if p.name != "case.json" and p.is_file()}
-    return Case(meta["family"], folder.name, files, meta["call"], meta.get("note", ""))
+    return Case(meta["family"], folder.name, files, meta["call"], meta.get("note", ""), meta.get("then", []),
+                meta.get("then_valid", False))
 
 
 # ---- the campaign --------------------------------------------------------------
@@ -1110,6 +1160,7 @@ def preload() -> None:
     import mapkit.importers.zind  # noqa: F401
     import mapkit.pipeline  # noqa: F401
     import mapkit.preview  # noqa: F401
+    import mapkit.view.snapshot  # noqa: F401
     import mapkit.vir  # noqa: F401
     import mapkit.visibility  # noqa: F401
     import matcher.cli  # noqa: F401
@@ -1131,7 +1182,7 @@ def campaign(counts: dict[str, int], seed: int, workers: int, bound_s: float, me
                   key=lambda c: ((c[1] + 0.5) / counts[c[0]], FAMILIES.index(c[0])))
     started = time.monotonic()
     stop_at = started + 60.0 * minutes
-    table = {fam: {k: 0 for k in (ERROR, VALID, FALSY, TRACEBACK, OVER)} for fam in FAMILIES if counts.get(fam)}
+    table = {fam: {k: 0 for k in (ERROR, VALID, FALSY, BUG, OVER)} for fam in FAMILIES if counts.get(fam)}
     preload()
     for fam in table:  # build the shared inputs once, before forking
         make_case(fam, seed, 0)
@@ -1155,7 +1206,7 @@ def campaign(counts: dict[str, int], seed: int, workers: int, bound_s: float, me
             done += 1
             table[case.family][out.kind] += 1
             _clean(scratch / case.name)
-            if out.kind in (TRACEBACK, OVER):
+            if out.kind in (BUG, OVER):
                 where = save_case(case, out, save) if save else None
                 print(f"{case.name}: {out.kind} ({case.note}) {out.detail.strip().splitlines()[-1:]}"
                       + (f" -> {where}" if where else ""), file=sys.stderr)
@@ -1171,8 +1222,8 @@ def _clean(folder: Path) -> None:
 
 
 def print_table(table: dict, seconds: float) -> None:
-    cols = (ERROR, VALID, FALSY, TRACEBACK, OVER)
-    print("| family | cases | clean errors | valid results | falsy results | tracebacks | over time bound |")
+    cols = (ERROR, VALID, FALSY, BUG, OVER)
+    print("| family | cases | clean errors | valid results | falsy results | bugs | over time bound |")
     print("|---|---|---|---|---|---|---|")
     for fam, row in table.items():
         print(f"| {fam} | {sum(row.values())} | " + " | ".join(str(row[c]) for c in cols) + " |")
@@ -1210,7 +1261,7 @@ def main(argv=None) -> int:
                          minutes=args.minutes)
     print(f"seed {args.seed}, {args.workers} workers, bound {args.bound_s:g} s and {args.mem_gb:g} GiB a case")
     print_table(table, time.monotonic() - t0)
-    bad = sum(row[TRACEBACK] + row[OVER] for row in table.values())
+    bad = sum(row[BUG] + row[OVER] for row in table.values())
     return 1 if bad else 0
 
 

@@ -63,9 +63,10 @@ def run(args) -> int:
         return 0
     kinds = ", ".join(f"{k} {v}" for k, v in s["segments_per_kind"].items() if v)
     b = s["bbox"]
+    source = s["source"]["name"] if isinstance(s["source"], dict) else s["source"]  # build writes an object
     lines = [
         f"{s['path']}: .lmap format {s['format_version']}, {s['file_bytes'] / 1024:.1f} KiB",
-        f"  source     {s['source']['name'] if s['source'] else '?'}  ({s['generator']})",
+        f"  source     {source or '?'}  ({s['generator']})",
         f"  segments   {s['segments']}  ({kinds})",
         f"  regions    {s['regions']}  (visible list length: mean {s['list_length']['mean']:.1f}, max {s['list_length']['max']})",
     ]

@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from linemap.errors import InputError
+
 
 @dataclass
 class FrameInput:
@@ -43,7 +45,7 @@ def count_frames(path: str | Path) -> int:
 
 def read_jsonl(path: str | Path, detect=None) -> Iterator[FrameInput]:
     """The frames of a JSON Lines file. ``detect(image_path) -> lines``
-    turns an ``image`` entry into lines (it may raise ValueError, which
+    turns an ``image`` entry into lines (it may raise InputError, which
     becomes the frame's error); without it an image frame is an error."""
     path = Path(path)
     with open(path, "rb") as f:
@@ -85,5 +87,5 @@ def _frame(raw: bytes, where: str, folder: Path, detect) -> FrameInput:
         return bad("image frames need a camera to detect lines with", t, odom)
     try:
         return FrameInput(float(t), odom, detect(folder / image), where)
-    except ValueError as exc:
+    except InputError as exc:
         return bad(str(exc), t, odom)

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from linemap.errors import InputError
 from matcher.tolerances import TRACKING
 from matcher.tracking.frames import FrameInput
 from matcher.tracking.odometry import wrap_deg
@@ -30,7 +31,7 @@ INFO_TYPE = "sensor_msgs/msg/CameraInfo"
 ODOM_TYPE = "nav_msgs/msg/Odometry"
 
 
-class BagError(ValueError):
+class BagError(InputError):
     """A bag that cannot be followed: unreadable, or without the topics asked for."""
 
 
@@ -182,7 +183,7 @@ class BagFrames:
                 continue
             try:
                 yield FrameInput(t, odom, detect(decode_image(msg, conn.msgtype)), where)
-            except ValueError as exc:
+            except InputError as exc:
                 yield FrameInput(t, odom, None, where, str(exc))
 
 
@@ -198,7 +199,7 @@ def _stamp(msg, bag_ns: int) -> float:
 
 
 def decode_image(msg, msgtype: str) -> np.ndarray:
-    """The pixels of a ``sensor_msgs`` Image or CompressedImage; ValueError
+    """The pixels of a ``sensor_msgs`` Image or CompressedImage; BagError
     for an encoding it cannot read."""
     import cv2
 
@@ -206,16 +207,16 @@ def decode_image(msg, msgtype: str) -> np.ndarray:
     if msgtype.endswith("CompressedImage"):
         img = cv2.imdecode(data, cv2.IMREAD_GRAYSCALE)
         if img is None:
-            raise ValueError(f"compressed image ({msg.format or 'no format'}) could not be decoded")
+            raise BagError(f"compressed image ({msg.format or 'no format'}) could not be decoded")
         return img
     enc = msg.encoding.lower()
     channels = {"mono8": 1, "8uc1": 1, "bgr8": 3, "rgb8": 3, "8uc3": 3, "bgra8": 4, "rgba8": 4, "8uc4": 4,
                 "mono16": 2, "16uc1": 2}.get(enc)
     if channels is None:
-        raise ValueError(f"image encoding {msg.encoding!r} is not supported (mono8, bgr8, rgb8, bgra8, rgba8, mono16)")
+        raise BagError(f"image encoding {msg.encoding!r} is not supported (mono8, bgr8, rgb8, bgra8, rgba8, mono16)")
     h, w, step = int(msg.height), int(msg.width), int(msg.step)
     if step < w * channels or len(data) < h * step:
-        raise ValueError(f"image message is {len(data)} bytes, too short for {w}x{h} {msg.encoding}")
+        raise BagError(f"image message is {len(data)} bytes, too short for {w}x{h} {msg.encoding}")
     rows = data[: h * step].reshape(h, step)[:, : w * channels]
     if channels == 2:
         px = rows.view(">u2" if msg.is_bigendian else "<u2").reshape(h, w)

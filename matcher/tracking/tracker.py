@@ -32,6 +32,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from linemap.camera import Camera
+from linemap.errors import InputError
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
@@ -129,10 +130,10 @@ class Tracker:
             self.state = RELOCALISING
         else:
             if dt is None or dyaw is None:
-                raise ValueError("a tracker's prior needs its bounds dt (metres) and dyaw (degrees)")
+                raise InputError("a tracker's prior needs its bounds dt (metres) and dyaw (degrees)")
             x, y, yaw = (float(v) for v in prior)
             if not all(math.isfinite(v) for v in (x, y, yaw, dt, dyaw)) or dt <= 0 or dyaw <= 0:
-                raise ValueError(f"prior must be finite with dt, dyaw > 0, got {prior}, {dt}, {dyaw}")
+                raise InputError(f"prior must be finite with dt, dyaw > 0, got {prior}, {dt}, {dyaw}")
             self.estimate, self.spread = (x, y, wrap_deg(yaw)), Spread.of_bounds(dt, dyaw, self.settings)
             self.state = TRACKING_STATE
         self.failed = 0
@@ -169,7 +170,7 @@ class Tracker:
                 return self._relocalise(t, lines, t0)
             return self._out(t, False, f"not localised ({self._last_reason}); pose from odometry",
                              self._last_result, t0)
-        except ValueError as exc:  # the frame's lines: shapes, NaN, outside the image
+        except InputError as exc:  # the frame's lines: shapes, NaN, outside the image
             return self._skipped(t, str(exc), t0)
 
     def _skipped(self, t, why: str, t0: float) -> TrackedFrame:
