@@ -97,13 +97,12 @@ def _residuals(params, hyp, terms: MatchTerms, jacobian=False):
     return r, J
 
 
-def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, work: Internals, robust_scale=None,
-           iterations: int | None = None):
+def refine(init, hyp, terms: MatchTerms, work: Internals, robust_scale=None, iterations: int | None = None):
     """Gauss-Newton on all hypotheses together.
 
-    ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,), model segment
-    end points ``seg_a, seg_b`` (T, 3) world, unit rays of the image line end
-    points ``ray_a, ray_b`` (T, 3) camera frame. With ``robust_scale`` (T,)
+    ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,) and its
+    residuals' constants ``terms`` (:class:`MatchTerms`: the model segment's
+    end points, the unit rays of the image line's). With ``robust_scale`` (T,)
     (radians), residuals are weighted by Tukey's biweight (zero beyond twice
     the scale; iteratively reweighted), so that a wrong match does not drag
     the pose of the others away. ``work`` gives the iterations (``refine_iterations``
@@ -111,7 +110,6 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, work: Internals
     convergence step. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
-    terms = MatchTerms(seg_a, seg_b, ray_a, ray_b, pitch, height)
     # Sums over each hypothesis's matches as one product: (H, 2T) one-hot of
     # each residual's hypothesis (np.add.at costs more on these short arrays).
     onehot = (np.repeat(hyp, 2)[None, :] == np.arange(H)[:, None]).astype(float)
