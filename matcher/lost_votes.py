@@ -26,7 +26,7 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.geometry import segment_is_vertical, world_normals
 from matcher.frame import ImageLines, longest
-from matcher.map_index import MapIndex
+from matcher.map_index import index_of
 from matcher.tolerances import Internals
 
 
@@ -55,7 +55,7 @@ def vote_places(linemap, camera: Camera, image_lines: ImageLines, work: Internal
     s = sightings(linemap, camera, image_lines, work)
     votes = np.concatenate([meetings(s, work), edge_meetings(linemap, image_lines, s, work)])
     if len(votes):
-        free = linemap.derived(MapIndex, work).free
+        free = index_of(linemap).free(work)
         votes = votes[free.distance(votes[:, :2]) <= work.vote_free_m]
     return _peaks(votes, work, count) if len(votes) else np.zeros((0, 4))
 
@@ -63,7 +63,7 @@ def vote_places(linemap, camera: Camera, image_lines: ImageLines, work: Internal
 def sightings(linemap, camera: Camera, image_lines: ImageLines, work: Internals) -> Sightings:
     """The :class:`Sightings` of the frame's usable non-vertical lines on the
     map's horizontal segments (see the module docstring)."""
-    index = linemap.derived(MapIndex, work)
+    index = index_of(linemap)
     segs = linemap.segments
     horiz = ~segment_is_vertical(segs, work.vertical_axis_deg)
     flat = np.abs(segs[:, 1, 2] - segs[:, 0, 2]) <= work.vote_flat_m
@@ -92,7 +92,7 @@ def sightings(linemap, camera: Camera, image_lines: ImageLines, work: Internals)
     u = d_seg / length[:, None]
     nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
     yaw0 = np.arctan2(u[:, 1], u[:, 0]) - np.arctan2(d_img[:, 1], d_img[:, 0])
-    faces = index.faces[sid[sj]]
+    faces = index.faces(work)[sid[sj]]
     slack = work.vote_slack_m + work.vote_slack_share * reach[li, h_of[sj]].max(axis=1)
     out = []
     for turn in (0.0, math.pi):
