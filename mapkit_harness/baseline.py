@@ -53,9 +53,9 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
         lj = np.array([j for _, j in assign])
         p = np.array(start, dtype=float)
         scale = np.array([dt, dt, dyaw])
+        terms = verify.MatchTerms(segs[si, 0], segs[si, 1], rays[lj, 0], rays[lj, 1], camera.pitch, camera.height_m)
         for _ in range(4):
-            r, J = verify.residuals(p[None], np.zeros(len(si), dtype=np.int64), segs[si, 0], segs[si, 1],
-                                     rays[lj, 0], rays[lj, 1], camera.pitch, camera.height_m, jacobian=True)
+            r, J = verify.residuals(p[None], np.zeros(len(si), dtype=np.int64), terms, jacobian=True)
             r, J = r.reshape(-1), J.reshape(-1, 3)
             dp = p - np.array([xe, ye, yaw_e])
             dp[2] = wrap(dp[2])
@@ -64,8 +64,7 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
             A = J.T @ J + Jp.T @ Jp
             b = J.T @ r + Jp.T @ rp
             p -= np.linalg.solve(A, b)
-        r = verify.residuals(p[None], np.zeros(len(si), dtype=np.int64), segs[si, 0], segs[si, 1], rays[lj, 0],
-                              rays[lj, 1], camera.pitch, camera.height_m)
+        r = verify.residuals(p[None], np.zeros(len(si), dtype=np.int64), terms)
         ok = np.abs(r).max() <= tol
         ok &= math.hypot(p[0] - xe, p[1] - ye) <= dt + 0.05
         ok &= abs(float(wrap(p[2] - yaw_e))) <= dyaw + 0.02

@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import numpy as np
 
@@ -205,13 +206,51 @@ def fit_on_matches(camera: Camera, lines: np.ndarray, segments: np.ndarray, matc
     return (float(x[0]), float(x[1]), float(x[2])), out, cost
 
 
-def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.ndarray, run, lost: bool = False):
+@dataclass(frozen=True)
+class Run:
+    """One run of the matcher on a levelled frame (:func:`levelled`): its
+    tolerances; ``quick``, a band's first run, which needs a few hypotheses
+    near the truth rather than the best answer (an entry point runs its
+    cheapest search that gives them); ``near``, ``(x, y, yaw_deg, dt,
+    dyaw)``, a narrow prior around a first answer (:attr:`RerunPolicy.around_answer`),
+    or None: the problem as asked."""
+
+    tol: Tolerances
+    quick: bool = False
+    near: tuple | None = None
+
+
+class Localiser(Protocol):
+    """An entry point's search (:mod:`matcher.from_prior`, :mod:`matcher.lost`)
+    on a frame levelled by :func:`levelled`, on the map whose ``segments``
+    (N, 2, 3) it searches."""
+
+    segments: np.ndarray
+
+    def localize_levelled(self, camera: Camera, lines: np.ndarray, run: Run): ...
+
+
+@dataclass(frozen=True)
+class RerunPolicy:
+    """How the second runs, on the lines moved with an attitude a first
+    run's fit gave, search: ``around_answer``, a narrow prior around that
+    fit's pose (``attitude_again_m``, ``attitude_again_deg``: lost mode,
+    whose problem as asked is the whole map), or else the problem as asked."""
+
+    around_answer: bool = False
+
+
+def levelled(camera: Camera, lines: np.ndarray, att: Attitude) -> tuple[Camera, np.ndarray]:
+    """The problem as the nominal camera (:func:`nominal`) would pose it: that
+    camera and the frame's lines (M, 2, 2) taken at ``att`` moved to it."""
+    return nominal(camera), rectify(camera, lines, att)
+
+
+def localize_with_attitude(camera: Camera, lines, tol: Tolerances, localiser: Localiser,
+                           policy: RerunPolicy = RerunPolicy()):
     """Localise a frame whose camera file gives a roll or leaves the pitch
-    and roll uncertain: ``run(nominal_camera, lines, tolerances, prior)``
-    localises lines of the nominal camera on the map whose ``segments``
-    (N, 2, 3) are given (``prior`` None: as asked; else
-    ``(x, y, yaw_deg, dt, dyaw)``, a narrow prior around a first answer);
-    ``run(..., quick=True)`` with the interpretation tree alone.
+    and roll uncertain: each run levels the frame (:func:`levelled`) and
+    has ``localiser`` search it.
 
     Exact attitude: one homography, one run. Otherwise quick runs over
     bands of pitch ``attitude_band_deg`` wide around
@@ -221,28 +260,40 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
     best few hypotheses, one per attitude among those whose residuals fit;
     for at most ``attitude_second_runs`` of them, the lines moved with it
     and run again with the tolerances widened by ``attitude_sigmas`` of what
-    its fit left (``lost``: around its pose); the run accepted with most
-    matches, then the least E, stands. Every run counts against the call's
-    one ``time_budget_ms``. The result carries the attitude (``pitch_deg``,
-    ``roll_deg``), refitted on its own matches when it has a pose."""
+    its fit left (as ``policy`` says: around its pose, or as asked); the
+    run accepted with most matches, then the least E, stands. Every run
+    counts against the call's one ``time_budget_ms``. The result carries
+    the attitude (``pitch_deg``, ``roll_deg``), refitted on its own matches
+    when it has a pose."""
     t0 = time.perf_counter()
     arr = check_lines(lines, camera, tol)
-    nom = nominal(camera)
-
-    def left(t: Tolerances) -> Tolerances | None:
-        """``t`` with the time the call's budget has left (every run counts
-        against the one ``time_budget_ms``), or None when none is left."""
-        ms = tol.time_budget_ms - (time.perf_counter() - t0) * 1e3
-        return replace(t, time_budget_ms=ms) if ms > 0 else None
-
     est = from_verticals(camera, arr, tol)
     if not camera.attitude_free:
-        return _carrying(run(nom, rectify(camera, arr, est), tol, None), est, t0)
+        return _carrying(localiser.localize_levelled(*levelled(camera, arr, est), Run(tol)), est, t0)
+    first, fits = _band_runs(camera, arr, tol, localiser, est, t0)
+    if not fits:
+        return _carrying(first, est, t0)
+    best = _second_runs(camera, arr, tol, localiser, policy, est, fits, t0)
+    if best is None:  # the budget was spent before any second run
+        return _carrying(first, est, t0)
+    return _carrying(*best, t0)
+
+
+def _left(tol: Tolerances, t: Tolerances, t0: float) -> Tolerances | None:
+    """``t`` with the time the budget of ``tol`` has left of a call started
+    at ``t0`` (every run counts against the one ``time_budget_ms``), or
+    None when none is left."""
+    ms = tol.time_budget_ms - (time.perf_counter() - t0) * 1e3
+    return replace(t, time_budget_ms=ms) if ms > 0 else None
+
+
+def _band_runs(camera: Camera, arr: np.ndarray, tol: Tolerances, localiser: Localiser, est: Attitude,
+               t0: float) -> tuple:
+    """The first runs: bands of pitch ``attitude_band_deg`` wide over the
+    estimate ``est``'s ``attitude_sigmas`` standard deviations, nearest
+    first, each widened by half a band and what the vertical lines left of
+    the roll. The first band's result and the fits (:func:`_fits`) of all."""
     work = tol.internals
-    # The first runs: bands of pitch ``attitude_band_deg`` wide over the
-    # estimate's ``attitude_sigmas`` standard deviations, nearest first,
-    # each widened by half a band and what the vertical lines left of the
-    # roll; the fits of all of them.
     band = math.radians(work.attitude_band_deg)
     k_max = int(math.ceil(max(work.attitude_sigmas * est.pitch_std / band - 0.5, 0.0)))
     fits, first = [], None
@@ -250,43 +301,47 @@ def localize_with_attitude(camera: Camera, lines, tol: Tolerances, segments: np.
         att = replace(est, pitch=est.pitch + k * band, pitch_std=0.5 * band)
         wide = replace(widened(tol, camera, att, 1.0), max_nodes=min(tol.max_nodes, work.attitude_band_nodes),
                        max_hypotheses=min(tol.max_hypotheses, work.attitude_band_hypotheses))
-        budgeted = left(wide)
+        budgeted = _left(tol, wide, t0)
         if budgeted is None:
             if first is not None:  # the budget is spent: the bands run so far stand
                 break
             # The first band runs whatever is left, as the strategy's first
             # source does: with none, it ends not localised, saying so.
             budgeted = replace(wide, time_budget_ms=0.0)
-        res = run(nom, rectify(camera, arr, att), budgeted, None, True)
+        res = localiser.localize_levelled(*levelled(camera, arr, att), Run(budgeted, quick=True))
         first = res if first is None else first
-        fits += _fits(camera, arr, segments, res, att, est, tol)
-    fits = _distinct(sorted(fits, key=lambda f: f[:2]), work.attitude_same_deg)[: work.attitude_second_runs]
-    if not fits:
-        return _carrying(first, est, t0)
-    # Then each attitude the fits give (a wrong set can fit too, with an
-    # attitude of its own): the lines moved with it, the tolerances widened
-    # by what its fit left; the run accepted with most matches, then the
-    # least E, stands, with the attitude refitted on its matches.
+        fits += _fits(camera, arr, localiser.segments, res, att, est, tol)
+    return first, _distinct(sorted(fits, key=lambda f: f[:2]), work.attitude_same_deg)[: work.attitude_second_runs]
+
+
+def _second_runs(camera: Camera, arr: np.ndarray, tol: Tolerances, localiser: Localiser, policy: RerunPolicy,
+                 est: Attitude, fits: list, t0: float) -> tuple | None:
+    """Each attitude the ``fits`` give (a wrong set can fit too, with an
+    attitude of its own): the lines moved with it, the tolerances widened
+    by what its fit left; ``(result, attitude)`` of the run accepted with
+    most matches, then the least E, with the attitude refitted on its
+    matches; None when the budget left no time for any."""
+    work = tol.internals
+    band = math.radians(work.attitude_band_deg)
     best = None
     for *_, att, p in fits:
-        near = (p[0], p[1], math.degrees(p[2]), work.attitude_again_m, work.attitude_again_deg) if lost else None
+        near = ((p[0], p[1], math.degrees(p[2]), work.attitude_again_m, work.attitude_again_deg)
+                if policy.around_answer else None)
         # Widened by what the fit left, at most half a band (matches that
         # leave the pitch loose, vertical edges alone, came from a band).
         cap = 0.5 * band / work.attitude_sigmas
         loose = replace(att, pitch_std=min(att.pitch_std, cap), roll_std=min(att.roll_std, cap))
-        budgeted = left(widened(tol, camera, loose, work.attitude_sigmas))
+        budgeted = _left(tol, widened(tol, camera, loose, work.attitude_sigmas), t0)
         if budgeted is None:  # the budget is spent: the runs so far stand
             break
-        res = run(nom, rectify(camera, arr, att), budgeted, near)
+        res = localiser.localize_levelled(*levelled(camera, arr, att), Run(budgeted, near=near))
         if res:
             pose = (res.pose[0], res.pose[1], math.radians(res.pose[2]))
-            att = fit_on_matches(camera, arr, segments, res.matches, pose, att, est, tol)[1]
+            att = fit_on_matches(camera, arr, localiser.segments, res.matches, pose, att, est, tol)[1]
         rank = (bool(res), len(res.matches), -(res.score if res.score is not None else math.inf))
         if best is None or rank > best[0]:
             best = (rank, res, att)
-    if best is None:  # the budget was spent before any second run
-        return _carrying(first, est, t0)
-    return _carrying(best[1], best[2], t0)
+    return None if best is None else best[1:]
 
 
 def _fits(camera: Camera, arr: np.ndarray, segments: np.ndarray, res, att: Attitude, prior: Attitude,
@@ -317,6 +372,5 @@ def _distinct(fits: list, same_deg: float) -> list:
 
 def _carrying(res, att: Attitude, t0: float):
     """``res`` with the frame's attitude, degrees, and the whole call's time."""
-    res.pitch_deg, res.roll_deg = math.degrees(att.pitch), math.degrees(att.roll)
-    res.time_ms["total"] = (time.perf_counter() - t0) * 1e3
-    return res
+    return replace(res, pitch_deg=math.degrees(att.pitch), roll_deg=math.degrees(att.roll),
+                   time_ms=replace(res.time_ms, total=(time.perf_counter() - t0) * 1e3))

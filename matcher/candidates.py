@@ -16,7 +16,7 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.geometry import in_field_of_view
 from linemap.lmap import LineMap
-from matcher.map_index import MapIndex
+from matcher.map_index import index_of
 from matcher.scene.collinear import class_faces, collinear_classes
 from matcher.tolerances import Tolerances
 
@@ -58,9 +58,9 @@ def select_candidates(linemap: LineMap, camera: Camera, px, tol: Tolerances,
     if len(ids) == 0:
         return "no candidate segment lies in the field of view for any heading of the prior interval"
     work = tol.internals
-    index = linemap.derived(MapIndex, work)
+    index = index_of(linemap)
     segs = linemap.segments[ids]
     # Collinear groups: made once per map, spans per frame.
-    label, reps = collinear_classes(segs, work.collinear_deg, work.collinear_m, label=index.collinear[ids])
-    return Candidates(ids, segs, label, reps, class_faces(index.faces[ids], label), index.walls, index.free,
-                      index.sight)
+    label, reps = collinear_classes(segs, work.collinear_deg, work.collinear_m, label=index.collinear(work)[ids])
+    return Candidates(ids, segs, label, reps, class_faces(index.faces(work)[ids], label), index.walls,
+                      index.free(work), index.sight(work))

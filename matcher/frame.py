@@ -85,16 +85,16 @@ def longest(lines: np.ndarray, mask: np.ndarray, count: int) -> np.ndarray:
     return np.sort(idx[np.argsort(-length, kind="stable")[:count]])
 
 
-def lines_needed(img: ImageLines, tol: Tolerances) -> int:
+def lines_needed(image_lines: ImageLines, tol: Tolerances) -> int:
     """How many lines an accepted pose must explain in this frame:
     ``min_matches`` and a share of the lines searched (a wrong pose among
     clutter explains some by chance; ``Internals.chance_fit_share``)."""
-    return tol.min_matches + int(tol.internals.chance_fit_share * int(img.searched.sum()))
+    return tol.min_matches + int(tol.internals.chance_fit_share * int(image_lines.searched.sum()))
 
 
-def too_few_lines(img: ImageLines, tol: Tolerances) -> str:
+def too_few_lines(image_lines: ImageLines, tol: Tolerances) -> str:
     """Why the image lines cannot give a pose, or "" if they may."""
-    n = int(img.usable.sum())
+    n = int(image_lines.usable.sum())
     if n >= tol.min_matches:
         return ""
     return f"only {n} usable image lines (need {tol.min_matches} of >= {tol.min_line_px:g} px)"

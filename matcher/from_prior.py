@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -21,14 +22,15 @@ from linemap.geometry import wrap
 from linemap.lmap import LineMap
 from matcher import ambiguity, attitude
 from matcher.budget import NO_LIMIT, Deadlines
-from matcher.candidates import Candidates, select_candidates
+from matcher.candidates import select_candidates
 from matcher.checks import check_lines, check_prior
 from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
-from matcher.result import LocalizeResult
+from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
 from matcher.stage2.covariance import pose_std_of
-from matcher.stage2.fit import coverage
-from matcher.strategy import SOURCES, Answer, Frame, run_strategy
+from matcher.stage2.fit import coverage as coverage_of
+from matcher.strategy import SOURCES, TREE_ALONE, Answer, Problem, run_strategy
 from matcher.tolerances import DEFAULT, Tolerances
+from matcher.verdict import BY_SEARCH_BUDGET, BY_TIME, UNCUT, Evidence, decide
 
 
 def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
@@ -46,25 +48,46 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
         # to the nominal camera, then localised as any.
         tol = checked_types(linemap, camera, tolerances)
         check_prior(prior, dt, dyaw)
-
-        def run(nom, moved, tol_, near, quick=False):
-            return localize_lines(linemap, nom, prepare_lines(nom, moved, tol_), prior, dt, dyaw, tol_,
-                                  sources=SOURCES[:1] if quick else SOURCES)
-
-        return attitude.localize_with_attitude(camera, lines, tol, linemap.segments, run)
-    tol, img = checked_inputs(linemap, camera, lines, tolerances)
-    return localize_lines(linemap, camera, img, prior, dt, dyaw, tol, t0)
+        return attitude.localize_with_attitude(camera, lines, tol, FromPrior(linemap, prior, dt, dyaw))
+    tol, image_lines = checked_inputs(linemap, camera, lines, tolerances)
+    return _localize_checked(linemap, camera, image_lines, check_prior(prior, dt, dyaw), tol, t0)
 
 
-def localize_lines(linemap, camera: Camera, img: ImageLines, prior, dt, dyaw, tol: Tolerances, t0=None,
-                   sources=SOURCES):
-    """:func:`localize` on prepared lines ``img`` (the lines moved to the
+@dataclass(frozen=True)
+class FromPrior:
+    """:func:`localize`'s search of a levelled frame (:class:`matcher.attitude.Localiser`):
+    the ``prior`` ``(x, y, yaw_deg)`` within ``dt`` metres and ``dyaw``
+    degrees on ``linemap``; a quick run (an attitude band's) with the
+    interpretation tree alone."""
+
+    linemap: LineMap
+    prior: tuple
+    dt: float
+    dyaw: float
+
+    @property
+    def segments(self) -> np.ndarray:
+        return self.linemap.segments
+
+    def localize_levelled(self, camera: Camera, lines: np.ndarray, run: attitude.Run) -> LocalizeResult:
+        return localize_lines(self.linemap, camera, prepare_lines(camera, lines, run.tol), self.prior, self.dt,
+                              self.dyaw, run.tol, sources=TREE_ALONE if run.quick else SOURCES)
+
+
+def localize_lines(linemap, camera: Camera, image_lines: ImageLines, prior, dt, dyaw, tol: Tolerances, sources=SOURCES):
+    """:func:`localize` on prepared lines ``image_lines`` (the lines moved to the
     nominal camera by :mod:`matcher.attitude` need not lie in the image),
     with the strategy's ``sources``."""
-    t0 = time.perf_counter() if t0 is None else t0
-    px = check_prior(prior, dt, dyaw)
+    t0 = time.perf_counter()
+    return _localize_checked(linemap, camera, image_lines, check_prior(prior, dt, dyaw), tol, t0, sources)
+
+
+def _localize_checked(linemap, camera: Camera, image_lines: ImageLines, px, tol: Tolerances, t0: float,
+                      sources=SOURCES):
+    """:func:`localize_prepared` on the checked prior ``px`` with the time
+    budget of ``tol`` counted from ``t0``."""
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
-    return localize_prepared(linemap, camera, img, px, tol, t0, deadlines, sources=sources)
+    return localize_prepared(linemap, camera, image_lines, px, tol, t0, deadlines, Scope(sources))
 
 
 def checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
@@ -86,46 +109,59 @@ def checked_types(linemap, camera, tolerances) -> Tolerances:
     return tolerances or DEFAULT
 
 
-def localize_prepared(linemap, camera: Camera, img: ImageLines, px, tol: Tolerances, t0: float,
-                      deadlines: Deadlines = NO_LIMIT, candidate_ids=None, sources=SOURCES) -> LocalizeResult:
+@dataclass(frozen=True)
+class Scope:
+    """What one search covers: the strategy's hypothesis ``sources``
+    (:data:`matcher.strategy.SOURCES`) and ``candidate_ids``, the segments
+    to consider instead of those of the regions the prior disk meets (lost
+    mode: a region's list; None: those)."""
+
+    sources: tuple = SOURCES
+    candidate_ids: np.ndarray | None = None
+
+
+def localize_prepared(linemap, camera: Camera, image_lines: ImageLines, px, tol: Tolerances, t0: float,
+                      deadlines: Deadlines = NO_LIMIT, scope: Scope = Scope()) -> LocalizeResult:
     """One prior ``px`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians) on prepared
-    lines, within the time budget's ``deadlines``: the candidates
-    (:mod:`matcher.candidates`), then the strategy (:mod:`matcher.strategy`),
-    then the result. ``candidate_ids``: the segments to consider instead of
-    those of the regions the prior disk meets (lost mode: a region's list);
-    ``sources`` the strategy's hypothesis sources (:data:`matcher.strategy.SOURCES`)."""
+    lines, within the time budget's ``deadlines`` (``t0`` the start of the
+    call's clock): the candidates (:mod:`matcher.candidates`), then the
+    strategy (:mod:`matcher.strategy`), then the verdict
+    (:mod:`matcher.verdict`) and the result; ``scope`` what it covers."""
     times: dict[str, float] = {}
-    cands = select_candidates(linemap, camera, px, tol, candidate_ids)
+    cands = select_candidates(linemap, camera, px, tol, scope.candidate_ids)
     times["select"] = (time.perf_counter() - t0) * 1e3
-    reason = cands if isinstance(cands, str) else too_few_lines(img, tol)
+    reason = cands if isinstance(cands, str) else too_few_lines(image_lines, tol)
     late = not reason and not deadlines.may_search()  # line preparation and selection count too
     if late:
-        reason = f"no time left to search after preparing {len(img.lines)} lines" + _cut_short(None, tol, True)
+        reason = f"no time left to search after preparing {len(image_lines.lines)} lines"
     if reason:
+        verdict = decide(Evidence(unsearched=reason, cut=BY_TIME if late else UNCUT), tol)
         times["total"] = (time.perf_counter() - t0) * 1e3
-        return LocalizeResult(False, reason, time_ms=times, stage1={"out_of_time": True, "tree_nodes": 0} if late else {})
-    answer = run_strategy(Frame(camera, img, cands, px, tol, deadlines), sources)
+        return LocalizeResult(False, verdict.reason, time_ms=Timings(**times),
+                              stage1=SearchStats(out_of_time=True, tree_nodes=0) if late else SearchStats())
+    problem = Problem(camera, image_lines, cands, px, tol, deadlines)
+    answer = run_strategy(problem, scope.sources)
     times.update(answer.times)
-    return _result(answer, camera, img, cands, tol, t0, times)
+    return _result(answer, problem, t0, times)
 
 
-def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, tol: Tolerances, t0: float,
-            times: dict) -> LocalizeResult:
-    """The :class:`LocalizeResult` of the strategy's answer: the best ranked
-    pose if accepted, else a falsy result with the reason; the ranking,
-    stage 1's counters and the times either way."""
-    hyps, ranked_h, spent = answer.hyps, answer.ranked, answer.spent
-    stage1 = dict(hyps.counts, out_of_time=bool(hyps.counts.get("out_of_time") or spent))
+def _result(answer: Answer, problem: Problem, t0: float, times: dict) -> LocalizeResult:
+    """The :class:`LocalizeResult` of the strategy's answer as
+    :func:`matcher.verdict.decide` judges it: the best ranked pose if
+    accepted, else a falsy result with the reason (and the poses it cannot
+    tell apart); the ranking, stage 1's counters and the times either way."""
+    hyps, ranked_h, tol = answer.hyps, answer.ranked, problem.tol
+    cut = BY_TIME if (answer.spent or hyps.counts.get("out_of_time")) else BY_SEARCH_BUDGET if hyps.truncated else UNCUT
+    stage1 = SearchStats(**dict(hyps.counts, out_of_time=bool(hyps.counts.get("out_of_time") or answer.spent)))
     if ranked_h is None:
+        verdict = decide(Evidence(n_correspondences=hyps.n_correspondences, cut=cut), tol)
         times["total"] = (time.perf_counter() - t0) * 1e3
-        return LocalizeResult(False, f"no consistent set of {tol.min_matches} or more correspondences "
-                              f"({hyps.n_correspondences} correspondences passed the unary tests)"
-                              + _cut_short(hyps, tol, spent), time_ms=times, stage1=stage1)
-    E, order, ids, n_h = ranked_h.score, ranked_h.order, cands.ids, len(hyps.sets)
+        return LocalizeResult(False, verdict.reason, time_ms=Timings(**times), stage1=stage1)
+    E, order, ids, n_h = ranked_h.score, ranked_h.order, problem.cands.ids, len(hyps.sets)
 
     def matches_of(h):
-        sel = ranked_h.hyp == h
-        return sorted([int(ids[a]), int(b)] for a, b in zip(ranked_h.local[sel], ranked_h.line[sel]))
+        mine = ranked_h.matches.of_one(h)
+        return sorted([int(ids[a]), int(b)] for a, b in zip(mine.local, mine.line))
 
     def pose_deg(p):
         return (float(p[0]), float(p[1]), float(math.degrees(wrap(p[2]))))
@@ -133,47 +169,37 @@ def _result(answer: Answer, camera: Camera, img: ImageLines, cands: Candidates, 
     ranked = [(float(E[h]), matches_of(h), pose_deg(ranked_h.poses[h])) for h in order]
     best = int(order[0])
     runner = float(E[order[1]]) if n_h > 1 and np.isfinite(E[order[1]]) else None
-    times["total"] = (time.perf_counter() - t0) * 1e3
-    common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=times, ranked=ranked,
-                  sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=stage1)
-    if not E[best] <= tol.e_accept:
-        why = ranked_h.why if not np.isfinite(E[best]) else (
-            f"best score E={E[best]:.3g} is above the acceptance threshold {tol.e_accept:g}")
-        res = LocalizeResult(False, why + _cut_short(hyps, tol, spent), **common)
-        res.score = float(E[best]) if np.isfinite(E[best]) else None
-        return res
-    predicted, seen = coverage(camera, ranked_h.poses[best], cands.segments, cands.label,
-                               ranked_h.local[ranked_h.hyp == best], cands.walls, tol)
-    work = tol.internals
-    if predicted >= work.coverage_min_predicted and seen < work.coverage_min_share * predicted:
-        return LocalizeResult(False, f"the best pose predicts {predicted} map segments in view and the image shows "
-                              f"{seen} of them: the lines do not look like the map there", **common)
-    # Counted among the lines searched: the ones added back from the rest
-    # (stage 2 judges every line) come with clutter of their own.
-    n_best = int(np.unique(ranked_h.line[(ranked_h.hyp == best) & img.searched[ranked_h.line]]).size)
-    needed = lines_needed(img, tol)
-    if n_best < needed:
-        return LocalizeResult(False, f"the best pose explains {n_best} of the {int(img.searched.sum())} longest "
-                              f"lines, fewer than the {needed} that clutter makes needed", **common)
-    res = LocalizeResult(True, "", pose=pose_deg(ranked_h.poses[best]), score=float(E[best]),
-                         matches=matches_of(best), **common)
     # Worked out when first read (a few tenths of a millisecond a robot
     # that only wants the pose does not spend).
-    res.pose_std_from(lambda: pose_std_of(camera, img, cands.segments, ranked_h, best, tol))
-    n_fin = np.bincount(ranked_h.hyp, minlength=n_h)
-    answers = [(pose_deg(ranked_h.poses[h]), int(n_fin[h]), float(E[h]), float(ranked_h.cost[h])) for h in order
-               if np.isfinite(E[h])]
-    if len(answers) > 1 and answers[1][1] == answers[0][1]:  # a rival explains as many lines: is it elsewhere?
-        kept = ambiguity.rivals(answers, tol.internals, ambiguity.spread_of(res.pose_std))
-        if len(kept) > 1:
-            return LocalizeResult(False, ambiguity.reason(kept), candidates=ambiguity.candidates_of(kept), **common)
-    return res
+    pose_std = Deferred(lambda: pose_std_of(problem.camera, problem.lines, problem.cands.segments, ranked_h, best,
+                                            tol))
+    verdict = decide(_evidence(ranked_h, ranked, problem, cut, pose_std), tol)
+    times["total"] = (time.perf_counter() - t0) * 1e3
+    common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=Timings(**times), ranked=ranked,
+                  sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=stage1)
+    if not verdict:
+        return LocalizeResult(False, verdict.reason, score=verdict.score, candidates=list(verdict.candidates),
+                              **common)
+    return LocalizeResult(True, "", pose=ranked[0][2], score=verdict.score, matches=ranked[0][1], _pose_std=pose_std,
+                          **common)
 
 
-def _cut_short(hyps, tol: Tolerances, spent: bool) -> str:
-    """What a failure's reason adds when the search stopped early: the time
-    budget spent (by stage 1, or ``spent``: a later step skipped), or
-    stage 1's node or set budget."""
-    if spent or hyps.counts.get("out_of_time"):
-        return f" (time budget of {tol.time_budget_ms:g} ms spent; --budget-ms, Tolerances.time_budget_ms)"
-    return " (hypothesis search truncated)" if hyps.truncated else ""
+def _evidence(ranked_h, ranked: list, problem: Problem, cut: str, pose_std: Deferred) -> Evidence:
+    """The :class:`~matcher.verdict.Evidence` of stage 2's ranking
+    ``ranked_h`` (``ranked``: its hypotheses' E, matches and poses in
+    degrees, best first) on its best hypothesis; ``cut``, how the search
+    was cut short; ``pose_std``, the best pose's standard deviations."""
+    camera, image_lines, cands, tol = problem.camera, problem.lines, problem.cands, problem.tol
+    best = int(ranked_h.order[0])
+    mine = ranked_h.matches.of_one(best)
+    coverage = Deferred(lambda: coverage_of(camera, ranked_h.poses[best], cands.segments, cands.label, mine.local,
+                                            cands.walls, tol))
+    # Counted among the lines searched: the ones added back from the rest
+    # (stage 2 judges every line) come with clutter of their own.
+    explained = int(np.unique(mine.line[image_lines.searched[mine.line]]).size)
+    n_fin = np.bincount(ranked_h.matches.hyp, minlength=len(ranked_h.order))
+    answers = tuple((pose, int(n_fin[h]), E, float(ranked_h.cost[h])) for (E, _, pose), h in zip(ranked, ranked_h.order)
+                    if math.isfinite(E))
+    return Evidence(score=float(ranked_h.score[best]), unscored=ranked_h.why, coverage=coverage, explained=explained,
+                    searched=int(image_lines.searched.sum()), needed=lines_needed(image_lines, tol), answers=answers,
+                    spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut)

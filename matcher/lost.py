@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,9 +20,10 @@ from matcher import ambiguity, attitude, from_prior
 from matcher.budget import Deadlines
 from matcher.frame import prepare_lines, too_few_lines
 from matcher.lost_votes import vote_places
-from matcher.result import LocalizeResult
-from matcher.strategy import SOURCES, TreeSearch
+from matcher.result import Deferred, LocalizeResult, Timings
+from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
+from matcher.verdict import BY_TIME, UNCUT, Evidence, Sweep, Verdict, decide, trusted
 
 
 def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None,
@@ -43,7 +44,7 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     a region has given an answer, the later regions' trees look only for
     sets that could beat it (at least its matches less one: stage 2 adds a
     line or so). The regions are first searched with the tree alone
-    (:class:`~matcher.strategy.TreeSearch`); only when none gives an answer
+    (:data:`~matcher.strategy.TREE_ALONE`); only when none gives an answer
     does a second pass run the whole strategy (second search, resection),
     which costs most on the many regions where the robot is not.
     ``time_ms['total']`` covers all tries (the other entries are the winning
@@ -60,40 +61,58 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
         # on the lines moved with the attitude the first answer gave, is a
         # narrow prior around that answer.
         tol = from_prior.checked_types(linemap, camera, tolerances)
-
-        def run(nom, moved, tol_, near, quick=False):
-            img_ = prepare_lines(nom, moved, tol_)
-            if near is None:
-                # A band's run (quick) needs a few hypotheses near the truth,
-                # not the best region: it stops at the first accepted one.
-                return _localize_global(linemap, nom, img_, tol_, time.perf_counter(), first_accepted or quick,
-                                        progress, regions)
-            return from_prior.localize_lines(linemap, nom, img_, near[:3], near[3], near[4], tol_)
-
-        return attitude.localize_with_attitude(camera, lines, tol, linemap.segments, run, lost=True)
-    tol, img = from_prior.checked_inputs(linemap, camera, lines, tolerances)
-    return _localize_global(linemap, camera, img, tol, t0, first_accepted, progress, regions)
+        return attitude.localize_with_attitude(camera, lines, tol, Lost(linemap, first_accepted, progress, regions),
+                                               attitude.RerunPolicy(around_answer=True))
+    tol, image_lines = from_prior.checked_inputs(linemap, camera, lines, tolerances)
+    return _localize_global(linemap, camera, image_lines, tol, t0, first_accepted, progress, regions)
 
 
-def _localize_global(linemap, camera: Camera, img, tol: Tolerances, t0: float, first_accepted: bool, progress,
+@dataclass(frozen=True)
+class Lost:
+    """:func:`localize_global`'s search of a levelled frame
+    (:class:`matcher.attitude.Localiser`) on ``linemap``: the whole map, or
+    a narrow prior around a first answer (``run.near``). A quick run (an
+    attitude band's) needs a few hypotheses near the truth, not the best
+    region: it stops at the first accepted one."""
+
+    linemap: object
+    first_accepted: bool = False
+    progress: object = None
+    regions: object = None
+
+    @property
+    def segments(self) -> np.ndarray:
+        return self.linemap.segments
+
+    def localize_levelled(self, camera: Camera, lines: np.ndarray, run: attitude.Run) -> LocalizeResult:
+        image_lines = prepare_lines(camera, lines, run.tol)
+        if run.near is None:
+            return _localize_global(self.linemap, camera, image_lines, run.tol, time.perf_counter(),
+                                    self.first_accepted or run.quick, self.progress, self.regions)
+        x, y, yaw_deg, dt, dyaw = run.near
+        return from_prior.localize_lines(self.linemap, camera, image_lines, (x, y, yaw_deg), dt, dyaw, run.tol)
+
+
+def _localize_global(linemap, camera: Camera, image_lines, tol: Tolerances, t0: float, first_accepted: bool, progress,
                      regions) -> LocalizeResult:
-    """:func:`localize_global` on prepared lines ``img``."""
+    """:func:`localize_global` on prepared lines ``image_lines``."""
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
-    if linemap.n_regions == 0:
-        return LocalizeResult(False, "the map has no regions", time_ms={"total": 0.0, "regions_tried": 0})
-    too_few = too_few_lines(img, tol)
-    if too_few:  # the same for every region
-        return LocalizeResult(False, too_few, time_ms={"total": (time.perf_counter() - t0) * 1e3, "regions_tried": 0})
+    # The same for every region:
+    unsearched = "the map has no regions" if linemap.n_regions == 0 else too_few_lines(image_lines, tol)
+    if unsearched:
+        total = 0.0 if linemap.n_regions == 0 else (time.perf_counter() - t0) * 1e3
+        return LocalizeResult(False, decide(Evidence(unsearched=unsearched), tol).reason,
+                              time_ms=Timings(total=total, regions_tried=0))
     # The robot is stopped: the whole strategy gets a larger search budget
     # per region than when tracking.
     factor = tol.internals.lost_budget_factor
     wide = replace(tol, max_nodes=tol.max_nodes * factor, max_sets=tol.max_sets * factor)
-    search = _RegionSearch(linemap, camera, img, deadlines, progress)
+    search = _RegionSearch(linemap, camera, image_lines, deadlines, progress)
     # The places the frame's lines vote for first (a few narrow priors,
     # milliseconds each); the sweep of every region only when none holds.
     voted = search.run_voted(tol) or search.run_voted(wide, SOURCES)
     best = max((a[1] for res in voted.values() for a in _answers(res)), default=0)
-    if voted and (first_accepted or best >= tol.internals.vote_trust_share * int(img.usable.sum())):
+    if voted and (first_accepted or trusted(best, int(image_lines.usable.sum()), tol.internals)):
         # A voted place explains most of the image: no region can explain
         # much more, the sweep is not needed.
         if progress is not None:
@@ -103,7 +122,7 @@ def _localize_global(linemap, camera: Camera, img, tol: Tolerances, t0: float, f
     # on the most floor, and a budget spent early has searched the most.
     order = np.argsort(-linemap.region_areas(), kind="stable").tolist() if regions is None else [
         int(r) for r in regions if 0 <= int(r) < linemap.n_regions]
-    found = search.run(order, (TreeSearch(),), tol, first_accepted, best)
+    found = search.run(order, TREE_ALONE, tol, first_accepted, best)
     found.update(voted)
     if found and not first_accepted:
         # The whole strategy where the tree's answers contend: a view the
@@ -122,8 +141,8 @@ class _RegionSearch:
     """Searches of lost mode, one per region, sharing the frame's lines, the
     call's time budget and what has been searched."""
 
-    def __init__(self, linemap, camera, img, deadlines, progress) -> None:
-        self.linemap, self.camera, self.img = linemap, camera, img
+    def __init__(self, linemap, camera, image_lines, deadlines, progress) -> None:
+        self.linemap, self.camera, self.image_lines = linemap, camera, image_lines
         self.deadlines, self.progress = deadlines, progress
         self.centres, self.radii = linemap.region_centres(), linemap.region_radii()
         self.tried: set[int] = set()
@@ -131,7 +150,7 @@ class _RegionSearch:
         self.places = None  # the voted places (n, 4), once worked out
         self.voted: set[int] = set()  # the voted places searched
 
-    def run_voted(self, tol: Tolerances, sources=(TreeSearch(),), only: list | None = None) -> dict:
+    def run_voted(self, tol: Tolerances, sources=TREE_ALONE, only: list | None = None) -> dict:
         """Key ``("vote", k)`` -> accepted result (or one naming look-alike
         poses) of the places the lines vote for
         (:func:`~matcher.lost_votes.vote_places`), each a narrow prior searched
@@ -141,7 +160,7 @@ class _RegionSearch:
             self.out_of_time = True
             return {}
         if self.places is None:
-            self.places = vote_places(self.linemap, self.camera, self.img, work, work.vote_places)
+            self.places = vote_places(self.linemap, self.camera, self.image_lines, work, work.vote_places)
         found: dict = {}
         dt, dyaw = work.vote_prior_m, math.radians(work.vote_prior_deg)
         for k, (x, y, yaw, _) in enumerate(self.places):
@@ -150,10 +169,10 @@ class _RegionSearch:
             if not self.deadlines.may_search():
                 self.out_of_time = True
                 break
-            res = from_prior.localize_prepared(self.linemap, self.camera, self.img, (x, y, yaw, dt, dyaw), tol,
-                                               time.perf_counter(), self.deadlines, sources=sources)
+            res = from_prior.localize_prepared(self.linemap, self.camera, self.image_lines, (x, y, yaw, dt, dyaw), tol,
+                                               time.perf_counter(), self.deadlines, from_prior.Scope(sources))
             self.voted.add(k)
-            self.out_of_time |= bool(res.stage1.get("out_of_time"))
+            self.out_of_time |= bool(res.stage1.out_of_time)
             if res or res.candidates:
                 found[("vote", k)] = res
         return found
@@ -176,11 +195,10 @@ class _RegionSearch:
                 continue
             self.tried.add(r)
             tol_r = replace(tol, min_matches=max(tol.min_matches, best - 1)) if best else tol
-            res = from_prior.localize_prepared(self.linemap, self.camera, self.img,
+            res = from_prior.localize_prepared(self.linemap, self.camera, self.image_lines,
                                                (cx, cy, 0.0, min(dt, 100.0), math.pi), tol_r, time.perf_counter(),
-                                               self.deadlines, candidate_ids=self.linemap.region_list(r),
-                                               sources=sources)
-            self.out_of_time |= bool(res.stage1.get("out_of_time"))
+                                               self.deadlines, from_prior.Scope(sources, self.linemap.region_list(r)))
+            self.out_of_time |= bool(res.stage1.out_of_time)
             if res or res.candidates:  # accepted, or poses the region cannot tell apart
                 found[r] = res
                 best = max(best, max([len(res.matches)] + [c["matches"] for c in res.candidates]))
@@ -190,35 +208,30 @@ class _RegionSearch:
 
 
 def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float) -> LocalizeResult:
-    """The answer of lost mode from the regions' accepted results: the one
-    that explains the most lines, then the smallest E; falsy, naming them,
-    when others that explain as many lines at a pose elsewhere fit about as
-    well (:mod:`matcher.ambiguity`: a symmetric room, a row of like rooms)."""
-    n, tried = search.linemap.n_regions, len(search.tried)
+    """The answer of lost mode from the places' and regions' results (each
+    accepted or naming poses its search could not tell apart): the one that
+    explains the most lines, then the smallest E, as
+    :func:`matcher.verdict.decide` judges it: falsy, naming them, when
+    others that explain as many lines at a pose elsewhere fit about as well
+    (:mod:`matcher.ambiguity`: a symmetric room, a row of like rooms), or
+    when the time budget cut the search before one explained most of the
+    image."""
+    tried, places = len(search.tried), len(search.voted)
+    times = dict(total=total_ms, regions_tried=tried, places_tried=places)
+    cut = BY_TIME if search.out_of_time else UNCUT
+    sweep = Sweep(places, tried, search.linemap.n_regions)
     if not found:
-        spent = f"; the time budget of {tol.time_budget_ms:g} ms ran out" if search.out_of_time else ""
-        return LocalizeResult(False, f"no region gave an accepted hypothesis ({len(search.voted)} voted places and "
-                              f"{tried} of {n} regions tried{spent})",
-                              time_ms={"total": total_ms, "regions_tried": tried, "places_tried": len(search.voted)})
+        return LocalizeResult(False, decide(Evidence(sweep=sweep, cut=cut), tol).reason, time_ms=Timings(**times))
     # Every answer: each region's pose, or the poses it could not tell apart.
     answers = sorted(((c, res) for res in found.values() for c in _answers(res)), key=lambda a: (-a[0][1], a[0][2]))
     best = answers[0][1]
-    kept = ambiguity.rivals([a for a, _ in answers], tol.internals, ambiguity.spread_of(best.pose_std) if best else None)
-    best.time_ms["total"] = total_ms
-    best.time_ms["regions_tried"] = tried
-    best.time_ms["places_tried"] = len(search.voted)
+    spread = Deferred(lambda: ambiguity.spread_of(best.pose_std)) if best else None
+    sweep = replace(sweep, explained=len(best.matches), usable=int(search.image_lines.usable.sum()))
+    verdict = decide(Evidence(answers=tuple(a for a, _ in answers), spread=spread, standing=Verdict.of_result(best),
+                              sweep=sweep, cut=cut), tol)
     # The best of the regions searched, not of all: the result says so.
-    best.stage1["out_of_time"] = search.out_of_time
-    if len(kept) > 1:
-        best.candidates, best.ok, best.reason = ambiguity.candidates_of(kept), False, ambiguity.reason(kept)
-    usable = int(search.img.usable.sum())
-    if best and search.out_of_time and len(best.matches) < tol.internals.vote_trust_share * usable:
-        # Cut short, the best so far explains too little to stand for the
-        # whole map (a place voted by chance, a look-alike room): a candidate.
-        best.candidates, best.ok = ambiguity.candidates_of([answers[0][0]]), False
-        best.reason = (f"the time budget of {tol.time_budget_ms:g} ms ran out before the whole map was searched; the "
-                       f"best pose so far explains {len(best.matches)} of {usable} lines, too few to trust unchecked")
-    return best
+    return replace(best, ok=bool(verdict), reason=verdict.reason, candidates=list(verdict.candidates),
+                   time_ms=replace(best.time_ms, **times), stage1=replace(best.stage1, out_of_time=search.out_of_time))
 
 
 def _contenders(found: dict) -> list:

@@ -26,7 +26,7 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.geometry import segment_is_vertical, world_normals
 from matcher.frame import ImageLines, longest
-from matcher.map_index import MapIndex
+from matcher.map_index import index_of
 from matcher.tolerances import Internals
 
 
@@ -47,34 +47,34 @@ class Sightings:
     line: np.ndarray
 
 
-def vote_places(linemap, camera: Camera, img: ImageLines, work: Internals, count: int) -> np.ndarray:
+def vote_places(linemap, camera: Camera, image_lines: ImageLines, work: Internals, count: int) -> np.ndarray:
     """Up to ``count`` places (n, 4): x, y (metres), yaw (radians) and
     score (the image lines that voted for it), best first, no two closer
     than ``work.vote_apart_m`` and ``work.vote_apart_deg``. Empty when the
     lines give no vote."""
-    s = sightings(linemap, camera, img, work)
-    votes = np.concatenate([meetings(s, work), edge_meetings(linemap, img, s, work)])
+    s = sightings(linemap, camera, image_lines, work)
+    votes = np.concatenate([meetings(s, work), edge_meetings(linemap, image_lines, s, work)])
     if len(votes):
-        free = linemap.derived(MapIndex, work).free
+        free = index_of(linemap).free(work)
         votes = votes[free.distance(votes[:, :2]) <= work.vote_free_m]
     return _peaks(votes, work, count) if len(votes) else np.zeros((0, 4))
 
 
-def sightings(linemap, camera: Camera, img: ImageLines, work: Internals) -> Sightings:
+def sightings(linemap, camera: Camera, image_lines: ImageLines, work: Internals) -> Sightings:
     """The :class:`Sightings` of the frame's usable non-vertical lines on the
     map's horizontal segments (see the module docstring)."""
-    index = linemap.derived(MapIndex, work)
+    index = index_of(linemap)
     segs = linemap.segments
     horiz = ~segment_is_vertical(segs, work.vertical_axis_deg)
     flat = np.abs(segs[:, 1, 2] - segs[:, 0, 2]) <= work.vote_flat_m
     sid = np.flatnonzero(horiz & flat)
-    lid = longest(img.lines, img.usable & ~img.vertical, work.vote_lines)
+    lid = longest(image_lines.lines, image_lines.usable & ~image_lines.vertical, work.vote_lines)
     if len(sid) == 0 or len(lid) == 0:
         return _no_sightings()
     # End points of each line on the plane z = segment height, camera frame
     # levelled and turned to yaw 0 (x ahead, y left): per line and height.
     heights, h_of = np.unique(np.round(0.5 * (segs[sid, 0, 2] + segs[sid, 1, 2]), 2), return_inverse=True)
-    rays = world_normals(camera.pixel_rays(img.lines[lid]), 0.0, camera.pitch)  # (L, 2, 3)
+    rays = world_normals(camera.pixel_rays(image_lines.lines[lid]), 0.0, camera.pitch)  # (L, 2, 3)
     dz = heights - camera.height_m  # (H,)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = dz[None, :, None] / rays[:, None, :, 2]  # (L, H, 2)
@@ -92,7 +92,7 @@ def sightings(linemap, camera: Camera, img: ImageLines, work: Internals) -> Sigh
     u = d_seg / length[:, None]
     nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
     yaw0 = np.arctan2(u[:, 1], u[:, 0]) - np.arctan2(d_img[:, 1], d_img[:, 0])
-    faces = index.faces[sid[sj]]
+    faces = index.faces(work)[sid[sj]]
     slack = work.vote_slack_m + work.vote_slack_share * reach[li, h_of[sj]].max(axis=1)
     out = []
     for turn in (0.0, math.pi):
@@ -147,19 +147,19 @@ def meetings(s: Sightings, work: Internals) -> np.ndarray:
     return np.column_stack([c, mean_yaw, s.line[i], s.line[j]])
 
 
-def edge_meetings(linemap, img: ImageLines, s: Sightings, work: Internals) -> np.ndarray:
+def edge_meetings(linemap, image_lines: ImageLines, s: Sightings, work: Internals) -> np.ndarray:
     """(V, 3) poses x, y, yaw where a sighting's camera line meets the ray
     back from a vertical map edge along a vertical image line's bearing at
     the sighting's heading (in front of the edge, within the stretch)."""
     segs = linemap.segments
     vid = np.flatnonzero(segment_is_vertical(segs, work.vertical_axis_deg))
-    lid = longest(img.lines, img.usable & img.vertical, work.vote_lines)
+    lid = longest(image_lines.lines, image_lines.usable & image_lines.vertical, work.vote_lines)
     if len(vid) == 0 or len(lid) == 0 or len(s.yaw) == 0:
         return np.zeros((0, 5))
     edge = segs[vid, 0, :2]  # (E, 2)
     out = []
     for li in lid:
-        beta = s.yaw - img.alpha[li]  # (K,) world bearing of the edge from the camera
+        beta = s.yaw - image_lines.alpha[li]  # (K,) world bearing of the edge from the camera
         w = np.stack([np.cos(beta), np.sin(beta)], axis=1)  # (K, 2)
         cross = s.u[:, 0] * w[:, 1] - s.u[:, 1] * w[:, 0]  # (K,)
         ok = np.abs(cross) >= math.sin(math.radians(work.vote_cross_deg))

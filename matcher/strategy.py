@@ -34,19 +34,20 @@ from matcher.budget import Deadlines
 from matcher.candidates import Candidates
 from matcher.frame import ImageLines
 from matcher.stage1.generate import Hypotheses, generate, search_again
-from matcher.stage1.resection import vertical_hypotheses
+from matcher.stage1.resection import EdgeCorrespondences, vertical_hypotheses
 from matcher.stage2.rank import Ranked, verify_hypotheses
 from matcher.tolerances import Tolerances
+from matcher.verdict import score_accepted
 
 
-@dataclass
-class Frame:
-    """One localisation's fixed inputs: the camera, the frame's lines, the
-    candidates, the prior ``(xe, ye, yaw_e, dt, dyaw)`` (radians), the
+@dataclass(frozen=True)
+class Problem:
+    """One localisation's fixed inputs: the camera, the frame's image lines,
+    the candidates, the prior ``(xe, ye, yaw_e, dt, dyaw)`` (radians), the
     tolerances and the time budget."""
 
     camera: object
-    img: ImageLines
+    lines: ImageLines
     cands: Candidates
     prior: tuple
     tol: Tolerances
@@ -65,9 +66,11 @@ class Answer:
     times: dict = field(default_factory=dict)
 
     def accepted(self, tol: Tolerances) -> bool:
-        """Is the best ranked hypothesis accepted?"""
+        """Is the best ranked hypothesis's score accepted
+        (:func:`matcher.verdict.score_accepted`)? The strategy looks at the
+        score alone: the verdict's other tests judge the final ranking."""
         r = self.ranked
-        return r is not None and bool(r.score[r.order[0]] <= tol.e_accept)
+        return r is not None and score_accepted(r.score[r.order[0]], tol)
 
 
 class TreeSearch:
@@ -79,8 +82,8 @@ class TreeSearch:
     def applies(self, answer: Answer, tol: Tolerances) -> bool:
         return answer.hyps is None
 
-    def run(self, answer: Answer, frame: Frame) -> Hypotheses | None:
-        return generate(frame.cands, frame.camera, frame.img, frame.prior, frame.tol, frame.deadlines)
+    def run(self, answer: Answer, problem: Problem) -> Hypotheses | None:
+        return generate(problem.cands, problem.camera, problem.lines, problem.prior, problem.tol, problem.deadlines)
 
 
 class SecondSearch:
@@ -92,8 +95,8 @@ class SecondSearch:
     def applies(self, answer: Answer, tol: Tolerances) -> bool:
         return answer.ranked is not None and tol.match_slack == 0 and doubtful(answer.ranked, answer.hyps, tol)
 
-    def run(self, answer: Answer, frame: Frame) -> Hypotheses | None:
-        again = search_again(answer.hyps, replace(frame.tol, match_slack=1))
+    def run(self, answer: Answer, problem: Problem) -> Hypotheses | None:
+        again = search_again(answer.hyps, replace(problem.tol, match_slack=1))
         if again.counts["out_of_time"]:  # cut short: the first search's sets stand
             answer.spent = True
             return None
@@ -113,39 +116,44 @@ class Resection:
             return False
         return hyps.truncated or (answer.ranked is not None and not answer.accepted(tol))
 
-    def run(self, answer: Answer, frame: Frame) -> Hypotheses | None:
-        ranked, kept = answer.ranked, frame.tol.internals.tree_sets_kept
+    def run(self, answer: Answer, problem: Problem) -> Hypotheses | None:
+        ranked, kept = answer.ranked, problem.tol.internals.tree_sets_kept
         held = [] if ranked is None else [int(h) for h in ranked.order if np.isfinite(ranked.score[h])][:kept]
-        more = with_resection(answer.hyps, held, frame)
+        more = with_resection(answer.hyps, held, problem)
         # With nothing ranked yet the resection's (possibly empty) sets stand,
         # its count with them; otherwise only if it found some.
         return more if (more.counts["resection"] or ranked is None) else None
 
 
+#: The interpretation tree alone, no source after it: lost mode's first
+#: sweep of the regions (the second search and the resection cost most
+#: where the robot is not) and an attitude band's quick run.
+TREE_ALONE = (TreeSearch(),)
+
 #: The strategy: the sources in the order they are tried.
-SOURCES = (TreeSearch(), SecondSearch(), Resection())
+SOURCES = TREE_ALONE + (SecondSearch(), Resection())
 
 
-def run_strategy(frame: Frame, sources=SOURCES) -> Answer:
+def run_strategy(problem: Problem, sources=SOURCES) -> Answer:
     """The answer after each source of ``sources`` that the answer so far
     calls for has run, stage 2 after each that added hypotheses.
     ``times``: the first source's milliseconds under its name, each later
     one's (with its stage 2) under its own, and ``verify`` from the end of
     the first source to the end."""
-    answer, tol = Answer(), frame.tol
+    answer, tol = Answer(), problem.tol
     t_first = None
     for source in sources:
         if not source.applies(answer, tol):
             continue
-        if source.needs_time and not frame.deadlines.may_search():
+        if source.needs_time and not problem.deadlines.may_search():
             answer.spent = True
             continue
         t = time.perf_counter()
-        new = source.run(answer, frame)
+        new = source.run(answer, problem)
         t_run = time.perf_counter()
         if new is not None:
             answer.hyps = new
-            answer.ranked = (verify_hypotheses(frame.camera, frame.img, frame.cands, new, frame.prior, tol)
+            answer.ranked = (verify_hypotheses(problem.camera, problem.lines, problem.cands, new, problem.prior, tol)
                              if new.sets else None)
         if t_first is None:
             answer.times[source.name] = (t_run - t) * 1e3
@@ -157,21 +165,21 @@ def run_strategy(frame: Frame, sources=SOURCES) -> Answer:
     return answer
 
 
-def with_resection(hyps: Hypotheses, held: list[int], frame: Frame) -> Hypotheses:
+def with_resection(hyps: Hypotheses, held: list[int], problem: Problem) -> Hypotheses:
     """The sets ``held`` (indices) of ``hyps`` followed by those of
     :mod:`matcher.stage1.resection` (poses resected from triples of vertical
     edges), at most ``max_hypotheses`` in all; ``counts["resection"]`` says
     how many the resection gave."""
-    tol = frame.tol
+    tol = problem.tol
     counts = dict(hyps.counts)
     counts["resection"] = 0
     inp = hyps.tree_input
     if inp is None:
         return replace(hyps, counts=counts)
-    sets, inits = vertical_hypotheses(frame.cands.reps[hyps.segment, 0, :2], hyps.segment, hyps.line, inp.vertical,
-                                      inp.compat, frame.img.alpha, frame.img.alpha_eps, frame.prior,
-                                      frame.cands.free, tol, tol.max_hypotheses - len(held),
-                                      min_lines=tol.min_matches + 1, deadline=frame.deadlines.search)
+    edges = EdgeCorrespondences(problem.cands.reps[hyps.segment, 0, :2], hyps.segment, hyps.line, inp.vertical,
+                                inp.compat, problem.lines.alpha, problem.lines.alpha_eps)
+    sets, inits = vertical_hypotheses(edges, problem.prior, problem.cands.free, tol, tol.max_hypotheses - len(held),
+                                      min_lines=tol.min_matches + 1, deadline=problem.deadlines.search)
     counts["resection"] = len(sets)
     init = hyps.init.reshape(-1, 3)[held]
     return replace(hyps, sets=[hyps.sets[h] for h in held] + sets, init=np.concatenate([init, inits]),
@@ -189,7 +197,7 @@ def doubtful(ranked: Ranked, hyps: Hypotheses, tol: Tolerances) -> bool:
     if hyps.truncated:  # a second search would run out of budget too
         return False
     best = int(ranked.order[0])
-    if not ranked.score[best] <= tol.e_accept:
+    if not score_accepted(ranked.score[best], tol):
         return True
-    short = max(len(x) for x in hyps.sets) - int((ranked.hyp == best).sum())
+    short = max(len(x) for x in hyps.sets) - int((ranked.matches.hyp == best).sum())
     return short >= 2 or (short == 1 and ranked.score[best] > tol.e_doubt)

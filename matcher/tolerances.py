@@ -467,7 +467,7 @@ class Tolerances:
     #: second search, the resection) stop at 70 % of it, keeping what they
     #: found, and the final tests of their sets at 100 %; stage 2 then runs
     #: on what passed (at most ``max_hypotheses``: a few milliseconds).
-    #: ``result.stage1["out_of_time"]`` says when it cut anything, and a
+    #: ``result.stage1.out_of_time`` says when it cut anything, and a
     #: failure's reason says so. The work before the tree is not cut (a few
     #: milliseconds, 40 on the largest views of the benchmark). A frame that
     #: runs out ends not localised far more often than wrong (the table in

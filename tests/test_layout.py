@@ -134,27 +134,6 @@ def test_old_import_paths_still_work():
 MAX_FUNCTION_LINES = 80
 MAX_PARAMETERS = 8
 
-#: Functions of matcher/ past those limits today, (path, name) -> what is
-#: past. The matcher's verdict refactor splits them and empties this list;
-#: no entry may be added (a new long function is split, or its parameters
-#: grouped in a small dataclass), and an entry that no longer fails is
-#: removed (test_shape_allow_list_is_current).
-SHAPE_ALLOWED = {
-    ("matcher/attitude.py", "localize_with_attitude"): "lines",
-    ("matcher/stage1/resection.py", "vertical_hypotheses"): "lines and parameters",
-    ("matcher/stage2/rank.py", "verify_hypotheses"): "lines",
-    ("matcher/from_prior.py", "localize_lines"): "parameters",
-    ("matcher/from_prior.py", "localize_prepared"): "parameters",
-    ("matcher/stage1/correspondences.py", "_vertical_sight"): "parameters",
-    ("matcher/stage1/correspondences.py", "_strips"): "parameters",
-    ("matcher/stage1/correspondences.py", "_half_planes"): "parameters",
-    ("matcher/stage1/posegrid.py", "halfplane_reachable"): "parameters",
-    ("matcher/stage2/extend.py", "extend_all"): "parameters",
-    ("matcher/stage2/rank.py", "_refit"): "parameters",
-    ("matcher/stage2/refine.py", "residuals"): "parameters",
-    ("matcher/stage2/refine.py", "refine"): "parameters",
-    ("matcher/stage2/slide.py", "slide_to_fit"): "parameters",
-}
 SHAPED_PACKAGES = ("linemap", "mapkit", "matcher")
 
 
@@ -181,24 +160,15 @@ def _parameters(node) -> int:
 @pytest.mark.parametrize("package", SHAPED_PACKAGES)
 def test_no_function_over_80_lines(package):
     long = [f"{rel}:{node.lineno} {node.name} ({_lines(node)} lines)" for rel, node in _functions(package)
-            if _lines(node) > MAX_FUNCTION_LINES and (rel, node.name) not in SHAPE_ALLOWED]
+            if _lines(node) > MAX_FUNCTION_LINES]
     assert not long
 
 
 @pytest.mark.parametrize("package", SHAPED_PACKAGES)
 def test_no_function_over_8_parameters(package):
     wide = [f"{rel}:{node.lineno} {node.name} ({_parameters(node)} parameters)" for rel, node in _functions(package)
-            if _parameters(node) > MAX_PARAMETERS and (rel, node.name) not in SHAPE_ALLOWED]
+            if _parameters(node) > MAX_PARAMETERS]
     assert not wide
-
-
-def test_shape_allow_list_is_current():
-    """Every allowed function exists and is still past a limit: the list
-    only shrinks."""
-    failing = {(rel, node.name) for package in SHAPED_PACKAGES for rel, node in _functions(package)
-               if _lines(node) > MAX_FUNCTION_LINES or _parameters(node) > MAX_PARAMETERS}
-    assert all(rel.startswith("matcher/") for rel, _ in SHAPE_ALLOWED)
-    assert not set(SHAPE_ALLOWED) - failing, sorted(set(SHAPE_ALLOWED) - failing)
 
 
 def _numeric(node: ast.AST) -> bool:

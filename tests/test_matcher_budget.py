@@ -41,7 +41,7 @@ def test_spent_budget_is_a_reason_not_a_guess(small_map, cam):
     res = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, SPENT)
     assert not res
     assert "(time budget of 1e-09 ms spent; --budget-ms" in res.reason
-    assert res.stage1["out_of_time"] is True
+    assert res.stage1.out_of_time is True
 
 
 def test_budget_never_reached_changes_nothing(small_map, cam):
@@ -53,7 +53,7 @@ def test_budget_never_reached_changes_nothing(small_map, cam):
         b = matcher.localize(small_map, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, roomy)
         assert (bool(a), a.pose, a.matches, a.score, a.hypotheses) == (bool(b), b.pose, b.matches, b.score,
                                                                         b.hypotheses)
-        assert b.stage1["out_of_time"] is False
+        assert b.stage1.out_of_time is False
 
 
 @pytest.mark.slow
@@ -68,8 +68,8 @@ def test_budget_stops_a_long_search(cam):
     fr = frames[29]
     tol = replace(matcher.Tolerances(), time_budget_ms=50.0)
     res = matcher.localize(linemap, cam, fr.lines, fr.prior, fr.dt, fr.dyaw, tol)
-    assert res.stage1["out_of_time"] is True
-    assert res.stage1["tree_nodes"] < 1000
+    assert res.stage1.out_of_time is True
+    assert res.stage1.tree_nodes < 1000
     assert "second_search" not in res.time_ms
 
 
@@ -122,8 +122,8 @@ def test_lost_mode_tries_the_largest_regions_first(cam, monkeypatch):
     linemap = matcher.load_map(ROOT / "maps" / "flat.lmap")
     centres, seen = linemap.region_centres(), []
 
-    def spy(linemap, camera, img, px, *args, **kwargs):
-        if kwargs.get("candidate_ids") is not None:  # a region's search, not a voted place's
+    def spy(linemap, camera, img, px, tol, t0, deadlines, scope):
+        if scope.candidate_ids is not None:  # a region's search, not a voted place's
             seen.append(int(np.argmin(np.hypot(*(centres - px[:2]).T))))
         return LocalizeResult(False, "not searched")
 

@@ -277,11 +277,13 @@ def test_budget_from_the_command_line(files, capsys):
 
 
 def test_human_output_says_when_the_budget_cut_the_search():
+    from dataclasses import replace
+
     from matcher.cli import _human
-    from matcher.result import LocalizeResult
+    from matcher.result import LocalizeResult, SearchStats, Timings
 
     res = LocalizeResult(True, pose=(1.0, 2.0, 30.0), score=1e-4, matches=[[1, 0], [2, 1], [3, 2]],
-                         time_ms={"total": 50.2}, stage1={"out_of_time": True})
+                         time_ms=Timings(total=50.2), stage1=SearchStats(out_of_time=True))
     assert _human(res, 4).endswith("time ms: total 50.2 (search stopped at the time budget)")
-    res.stage1["out_of_time"] = False
+    res = replace(res, stage1=SearchStats(out_of_time=False))
     assert _human(res, 4).endswith("time ms: total 50.2")

@@ -170,7 +170,8 @@ def test_second_search_rule():
     from matcher.tolerances import DEFAULT
 
     def case(kept, largest, E, truncated=False):
-        ranked = SimpleNamespace(order=np.array([0]), score=np.array([E]), hyp=np.zeros(kept, dtype=int))
+        matches = SimpleNamespace(hyp=np.zeros(kept, dtype=int))
+        ranked = SimpleNamespace(order=np.array([0]), score=np.array([E]), matches=matches)
         hyps = SimpleNamespace(truncated=truncated, sets=[np.arange(largest)])
         return doubtful(ranked, hyps, DEFAULT)
 

@@ -112,7 +112,8 @@ def test_halfplane_reachable_hand_worked():
     # One strip x = 0 (|x| <= 0.1): its feasible set is the chord x ~ 0, y in [-1, 1].
     q = posegrid.strip_quadratics(np.array([1.0, 0.0]), np.array(0.0), np.array(0.1))
     val, zx, zy = posegrid.minimise(q, dt)
-    reach = lambda c, b: bool(posegrid.halfplane_reachable(q, val, zx, zy, 1, 1.5, dt, np.array(c), np.array(b)))  # noqa: E731
+    low = (val, zx, zy)
+    reach = lambda c, b: bool(posegrid.halfplane_reachable(q, low, 1, 1.5, dt, np.array(c), np.array(b)))  # noqa: E731
     assert reach([0.0, 1.0], -0.9)  # y <= -0.9: the chord's end
     assert not reach([0.0, 1.0], -1.1)  # beyond the disk
     assert reach([1.0, 0.0], 0.0)  # x <= 0 on the strip
@@ -163,7 +164,7 @@ def test_feasible_ellipse_reaches_equals_halfplane_reachable():
     # Sampled points of each strip's feasible chord that satisfy c . z <= b
     # exist only where the test says so (it is a necessary condition).
     reach = posegrid.ellipse_reaches(ell, c, b, 1.0)
-    assert (reach == posegrid.halfplane_reachable(q, val, zx, zy, 1, 1.5, 1.0, c, b)).all()
+    assert (reach == posegrid.halfplane_reachable(q, (val, zx, zy), 1, 1.5, 1.0, c, b)).all()
     g = rng.uniform(-1, 1, (4000, 2))
     g = g[(g**2).sum(axis=1) <= 1]
     feas = posegrid.evaluate(q[:, None], g[None, :, 0], g[None, :, 1]) <= 1.5  # (40, P)
@@ -191,7 +192,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     pass for any image line at some yaw: its bearing line runs through the
     disk, on both sides of the edge. The camera must stand behind the edge
     on the ray towards it."""
-    from matcher.stage1.correspondences import _half_planes
+    from matcher.stage1.correspondences import ModelLines, Pairs, YawGrid, _half_planes
 
     class _Img:
         alpha = np.array([0.0])  # the line is straight ahead
@@ -199,8 +200,9 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     yaws = np.array([0.0])
     ce = np.array([0.0, 0.0, 1.2])
     near = np.array([[1.0, 0.0, 0.0], [-0.5, 0.0, 0.0]])  # one ahead (+x), one behind
-    c, b = _half_planes(_Img, None, near, np.array([0, 1]), np.array([0, 0]), np.array([True, True]), yaws, ce, None,
-                        DEFAULT.internals.front_slack_m)
+    grid = YawGrid(yaws, 0.0, None, None, ce, 1.0)
+    pairs = Pairs(np.array([0, 1]), np.array([0, 0]), np.array([True, True]))
+    c, b = _half_planes(_Img, ModelLines(None, None, near), pairs, grid, None, DEFAULT.internals.front_slack_m)
     # At the disk centre (z = 0): c . z <= b holds for the edge ahead only.
     assert (0.0 <= b[0, 0]) and not (0.0 <= b[1, 0])
     assert np.allclose(c[:, 0], [[1.0, 0.0], [1.0, 0.0]])
@@ -311,7 +313,7 @@ def test_loose_sets_cut_by_the_region_test(flat):
                            replace(DEFAULT, max_nodes=3000, max_sets=10**6))
     assert res, res.reason
     assert {tuple(m) for m in res.matches} == truth
-    assert res.stage1["tree_nodes"] < 3000  # the search ended within its budget
+    assert res.stage1.tree_nodes < 3000  # the search ended within its budget
 
 
 @pytest.mark.slow

@@ -14,7 +14,7 @@ import matcher
 from linemap.geometry import wrap
 from matcher.tolerances import DEFAULT
 from matcher.stage1.resection import resect as _resect
-from matcher.stage1.resection import triples, vertical_hypotheses
+from matcher.stage1.resection import EdgeCorrespondences, triples, vertical_hypotheses
 from mapkit_harness.simulate import make_frame, paper_camera, pose_error
 
 WORK = DEFAULT.internals
@@ -92,16 +92,15 @@ def test_vertical_hypotheses_find_the_true_set_first():
     K = len(seg)
     compat = (seg[:, None] != seg[None, :]) & (line[:, None] != line[None, :])
     prior = (2.3, 0.8, math.radians(30.0), 0.5, math.radians(20.0))
-    sets, inits = vertical_hypotheses(edges[seg], seg, line, np.ones(K, bool), compat, lines_alpha,
-                                      np.full(6, 0.004), prior, None, DEFAULT, max_hypotheses=5, min_lines=4)
+    corr = EdgeCorrespondences(edges[seg], seg, line, np.ones(K, bool), compat, lines_alpha, np.full(6, 0.004))
+    sets, inits = vertical_hypotheses(corr, prior, None, DEFAULT, max_hypotheses=5, min_lines=4)
     assert sets
     best = sets[0]
     assert len(best) == 6 and (seg[best] == line[best]).all()
     assert np.hypot(*(inits[0, :2] - pose[:2])) < 0.05 and abs(wrap(inits[0, 2] - pose[2])) < 0.01
     # Outside the prior: nothing.
     far = (12.0, 9.0, 0.0, 0.5, math.radians(20.0))
-    assert vertical_hypotheses(edges[seg], seg, line, np.ones(K, bool), compat, lines_alpha,
-                               np.full(6, 0.004), far, None, DEFAULT, 25, 4)[0] == []
+    assert vertical_hypotheses(corr, far, None, DEFAULT, 25, 4)[0] == []
 
 
 @pytest.mark.slow
@@ -117,7 +116,7 @@ def test_view_along_door_jambs_is_localised():
         fr = make_frame(linemap, cam, rng, 5, 1.0, 1.0, clutter=3)
     res = matcher.localize(linemap, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
     assert res, res.reason
-    assert res.stage1["resection"] > 0
+    assert res.stage1.resection > 0
     assert res.hypotheses <= 25
     assert {tuple(m) for m in res.matches} == {tuple(m) for m in fr.true_matches()}
     pos, yaw = pose_error(res.pose, fr.pose)

@@ -48,7 +48,7 @@ def test_residuals_match_the_camera_frame_definition_and_finite_differences():
     seg_a, seg_b, ray_a, ray_b = _random_matches(rng, T)
     hyp = np.sort(rng.integers(0, H, T))
     poses = np.c_[rng.normal(0, 1, (H, 2)), rng.uniform(-3, 3, H)]
-    r, J = verify.residuals(poses, hyp, seg_a, seg_b, ray_a, ray_b, PITCH, HEIGHT, jacobian=True)
+    r, J = verify.residuals(poses, hyp, verify.MatchTerms(seg_a, seg_b, ray_a, ray_b, PITCH, HEIGHT), jacobian=True)
     want = np.concatenate([_camera_frame_residuals(poses[h], seg_a[hyp == h], seg_b[hyp == h], ray_a[hyp == h],
                                                    ray_b[hyp == h]) for h in range(H)])
     assert r == pytest.approx(want, abs=1e-12)
@@ -56,8 +56,8 @@ def test_residuals_match_the_camera_frame_definition_and_finite_differences():
     for k in range(3):
         step = np.zeros(3)
         step[k] = eps
-        up = verify.residuals(poses + step, hyp, seg_a, seg_b, ray_a, ray_b, PITCH, HEIGHT)
-        down = verify.residuals(poses - step, hyp, seg_a, seg_b, ray_a, ray_b, PITCH, HEIGHT)
+        up = verify.residuals(poses + step, hyp, verify.MatchTerms(seg_a, seg_b, ray_a, ray_b, PITCH, HEIGHT))
+        down = verify.residuals(poses - step, hyp, verify.MatchTerms(seg_a, seg_b, ray_a, ray_b, PITCH, HEIGHT))
         assert J[..., k] == pytest.approx((up - down) / (2 * eps), abs=1e-7)
 
 
@@ -82,8 +82,8 @@ def test_refine_recovers_each_pose_from_exact_rays():
             ray_b.append(R @ (pb - C) / np.linalg.norm(pb - C))
             hyp.append(h)
     start = truth + np.array([0.2, -0.1, math.radians(3.0)])
-    got = verify.refine(start, np.array(hyp), np.array(seg_a), np.array(seg_b), np.array(ray_a), np.array(ray_b),
-                        PITCH, HEIGHT, _TOL.internals)
+    terms = verify.MatchTerms(np.array(seg_a), np.array(seg_b), np.array(ray_a), np.array(ray_b), PITCH, HEIGHT)
+    got = verify.refine(start, np.array(hyp), terms, _TOL.internals)
     assert got == pytest.approx(truth, abs=1e-7)
 
 
@@ -166,6 +166,7 @@ def test_reprojection_cost_sums_end_point_errors_over_noise():
     2 (1 / s)^2 with s its noise bound; a segment behind the camera, inf."""
     from types import SimpleNamespace
 
+    from matcher.stage2.matches import Matches
     from matcher.stage2.rank import reprojection_cost
     from matcher.tolerances import Tolerances
 
@@ -181,17 +182,18 @@ def test_reprojection_cost_sums_end_point_errors_over_noise():
     uv, ok = project_segments(cam, poses[hyp], segs)
     assert ok.all()
     img = SimpleNamespace(lines=uv)
-    exact = reprojection_cost(cam, img, poses, hyp, segs, np.arange(6), tol, 2)
+    m = Matches(hyp, np.arange(6), np.arange(6))
+    exact = reprojection_cost(cam, img, poses, m, segs, tol, 2)
     assert np.allclose(exact, 0.0, atol=1e-12)
     d = uv[:, 1] - uv[:, 0]
     normal = np.c_[-d[:, 1], d[:, 0]] / np.linalg.norm(d, axis=1, keepdims=True)
     img.lines = uv + normal[:, None, :]  # every end point 1 px off
     s = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * np.linalg.norm(d, axis=1)
     want = np.bincount(hyp, 2.0 / s**2)
-    assert np.allclose(reprojection_cost(cam, img, poses, hyp, segs, np.arange(6), tol, 2), want)
+    assert np.allclose(reprojection_cost(cam, img, poses, m, segs, tol, 2), want)
     behind = poses.copy()
     behind[0, 2] += math.pi
-    assert np.isinf(reprojection_cost(cam, img, behind, hyp, segs, np.arange(6), tol, 2)[0])
+    assert np.isinf(reprojection_cost(cam, img, behind, m, segs, tol, 2)[0])
 
 
 def test_three_vertical_edges_alone_are_not_accepted():
@@ -233,6 +235,7 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
     from mapkit_harness.simulate import add_noise, visible_lines
 
     from matcher.stage2.covariance import pose_covariance, pose_spread
+    from matcher.stage2.matches import Matches
     from matcher.stage2.fit import unit_rays
     from matcher.tolerances import DEFAULT
 
@@ -246,14 +249,14 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
     hyp, segs = np.zeros(len(ids), dtype=np.int64), linemap.segments
     tol = replace(DEFAULT, line_px=1.0, line_deg=1.0)
     img = SimpleNamespace(lines=ideal, normals=cam.interpretation_normals(ideal))
-    predicted = pose_spread(pose_covariance(cam, img, segs, truth[None], hyp, ids,
-                                            np.arange(len(ids)), tol))[0]
+    predicted = pose_spread(pose_covariance(cam, img, segs, truth[None], Matches(hyp, ids, np.arange(len(ids))),
+                                            tol))[0]
     rng = np.random.default_rng(4)
     errors = []
     for _ in range(300):
         rays = unit_rays(cam, add_noise(ideal, rng, 1.0, 1.0, 0.0, cam))
-        fit = verify.refine(truth[None], hyp, segs[ids, 0], segs[ids, 1], rays[:, 0], rays[:, 1], cam.pitch,
-                            cam.height_m, tol.internals)[0]
+        terms = verify.MatchTerms(segs[ids, 0], segs[ids, 1], rays[:, 0], rays[:, 1], cam.pitch, cam.height_m)
+        fit = verify.refine(truth[None], hyp, terms, tol.internals)[0]
         errors.append(fit - truth)
     errors = np.array(errors)
     scatter_m = math.sqrt(np.linalg.eigvalsh(np.cov(errors[:, :2].T))[1])

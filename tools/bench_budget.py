@@ -77,7 +77,7 @@ def run(args) -> int:
             for fr, equiv, (res, _) in zip(frames, same, rows):
                 truth = {tuple(m) for m in fr.true_matches()}
                 first += bool(res.ranked) and is_correct(res.ranked[0][1], truth, equivalent=equiv)
-                cut += bool(res.stage1.get("out_of_time"))
+                cut += bool(res.stage1.out_of_time)
                 accepted += bool(res)
                 wrong += bool(res) and not is_correct(res.matches, truth, equivalent=equiv)
             ms = np.array([t for _, t in rows])

@@ -102,7 +102,7 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
             "n_lines": len(fr.lines),
             "hypotheses": res.hypotheses,
             "sets_found": res.sets_found,
-            "tree_nodes": res.stage1.get("tree_nodes"),
+            "tree_nodes": res.stage1.tree_nodes,
             "ok": bool(res),
             "correct": bool(res) and is_correct(res.matches, truth, equivalent=equiv),
             "correct_strict": bool(res) and is_correct(res.matches, truth),

@@ -93,6 +93,6 @@ def _even_odd_raster(points, offsets, origin, cell, nx, ny, block: int) -> np.nd
 
 def free_space(linemap) -> FreeSpace:
     """The map's :class:`FreeSpace`, built on first use and kept with the map."""
-    from matcher.map_index import MapIndex
+    from matcher.map_index import index_of
 
-    return linemap.derived(MapIndex).free
+    return index_of(linemap).free()

@@ -65,10 +65,47 @@ class Correspondences:
                                self.yaws, self.near, self.centre, self.forward)
 
 
-def find_correspondences(segments: np.ndarray, camera: Camera, img: ImageLines, prior, tol: Tolerances,
+@dataclass(frozen=True)
+class YawGrid:
+    """The prior's grid of yaws and what each gives: ``yaws`` (Y,) radians,
+    ``spacing`` (radians) between them, ``R`` (Y, 3, 3) the world-to-camera
+    rotations, ``W`` (M, Y, 3) the image lines' world normals ``R^T n``;
+    the prior's disk: ``centre`` (3,) (its camera centre, the camera height
+    in z) and radius ``dt``."""
+
+    yaws: np.ndarray
+    spacing: float
+    R: np.ndarray
+    W: np.ndarray
+    centre: np.ndarray
+    dt: float
+
+
+@dataclass(frozen=True)
+class ModelLines:
+    """The candidate ``segments`` (N, 2, 3) as lines: ``v`` (N, 3) unit
+    directions, ``near`` (N, 3) the point of each line nearest the prior's
+    centre."""
+
+    segments: np.ndarray
+    v: np.ndarray
+    near: np.ndarray
+
+
+@dataclass(frozen=True)
+class Pairs:
+    """Candidate correspondences k (K,): ``seg_k`` segment index, ``line_k``
+    image line, ``is_v`` whether a vertical edge."""
+
+    seg_k: np.ndarray
+    line_k: np.ndarray
+    is_v: np.ndarray
+
+
+def find_correspondences(segments: np.ndarray, camera: Camera, image_lines: ImageLines, prior, tol: Tolerances,
                          sight=None, faces: np.ndarray | None = None, counts: dict | None = None):
     """The correspondences of candidate ``segments`` (N, 2, 3) and the
-    frame's lines ``img`` under ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``
+    frame's lines ``image_lines`` under ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``
     (radians): a :class:`Correspondences`, or ``(seg_k, line_k)`` of the
     survivors when fewer than ``min_matches`` of them, or of their lines,
     have a feasible grid pose. ``sight`` the walls' :class:`~matcher.scene.occlusion.SightRays`
@@ -81,7 +118,7 @@ def find_correspondences(segments: np.ndarray, camera: Camera, img: ImageLines, 
     ce = np.array([xe, ye, camera.height_m])
     yaws = yaw_grid(yaw_e, dyaw, step)
     Rg = world2cam_rotation(yaws, camera.pitch)  # (Y, 3, 3)
-    W = np.einsum("gki,mk->mgi", Rg, img.normals)  # (M, Y, 3) world normals R^T n
+    W = np.einsum("gki,mk->mgi", Rg, image_lines.normals)  # (M, Y, 3) world normals R^T n
     fwd = Rg[:, 2, :]  # (Y, 3) optical axis
 
     vert_seg = segment_is_vertical(segments, tol.internals.vertical_axis_deg)
@@ -89,35 +126,36 @@ def find_correspondences(segments: np.ndarray, camera: Camera, img: ImageLines, 
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
     tpar = np.einsum("nk,nk->n", ce - segments[:, 0], v)
     near = segments[:, 0] + tpar[:, None] * v  # point of each line nearest the prior centre
-    usable = img.searched  # the longest usable lines (Tolerances.search_lines)
+    usable = image_lines.searched  # the longest usable lines (Tolerances.search_lines)
 
     ih = np.nonzero(~vert_seg)[0]
-    uh, _ = unary_constraint(camera, img.normals, img.eps, segments[ih], (xe, ye, yaw_e), dt, dyaw, tol.model_m)
+    uh, _ = unary_constraint(camera, image_lines.normals, image_lines.eps, segments[ih], (xe, ye, yaw_e), dt, dyaw,
+                             tol.model_m)
     uh &= usable[None, :]
-    uh &= horizon_side_ok(camera, img.lines, segments[ih], tol)
+    uh &= horizon_side_ok(camera, image_lines.lines, segments[ih], tol)
     hi_, hj = np.nonzero(uh)
     hi_ = ih[hi_]
     iv = np.nonzero(vert_seg)[0]
-    jv = np.nonzero(img.vertical & usable)[0]
-    vv = horizon_side_ok(camera, img.lines[jv], segments[iv], tol)  # (Nv, Mv)
+    jv = np.nonzero(image_lines.vertical & usable)[0]
+    vv = horizon_side_ok(camera, image_lines.lines[jv], segments[iv], tol)  # (Nv, Mv)
     vi_, vj = np.nonzero(vv)
     vi_, vj = iv[vi_], jv[vj]
     seg_k = np.concatenate([hi_, vi_]).astype(np.int64)
     line_k = np.concatenate([hj, vj]).astype(np.int64)
     is_v = np.concatenate([np.zeros(len(hi_), bool), np.ones(len(vi_), bool)])
     counts.update({"segments": int(len(segments)), "vertical_segments": int(vert_seg.sum()),
-                   "lines": int(len(img.lines)), "vertical_lines": int(len(jv)),
+                   "lines": int(len(image_lines.lines)), "vertical_lines": int(len(jv)),
                    "unary_pairs": int(len(hi_)), "vertical_pairs": int(len(vi_))})
     if len(seg_k) < tol.min_matches:
         return seg_k, line_k
 
-    mask, quad = _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce, dt, step,
-                         tol, sight)
+    grid = YawGrid(yaws, step, Rg, W, ce, dt)
+    model, pairs = ModelLines(segments, v, near), Pairs(seg_k, line_k, is_v)
+    mask, quad = _strips(camera, image_lines, model, pairs, grid, tol, sight)
     val, zx, zy = posegrid.minimise(quad, dt)
     mask &= val <= tol.internals.single_fit_max
-    front_c, front_b = _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces,
-                                    tol.internals.front_slack_m)
-    mask &= posegrid.halfplane_reachable(quad, val, zx, zy, 1, tol.q_max, dt, front_c, front_b)
+    front_c, front_b = _half_planes(image_lines, model, pairs, grid, faces, tol.internals.front_slack_m)
+    mask &= posegrid.halfplane_reachable(quad, (val, zx, zy), 1, tol.q_max, dt, front_c, front_b)
     keep = mask.any(axis=1)
     # Each correspondence alone as the tree's root tests it (its own term
     # within q_max at the minimiser too), from the arrays at hand.
@@ -191,16 +229,17 @@ def vertical_extent_bound(camera: Camera, lines: np.ndarray, segments: np.ndarra
     return np.minimum(down, up).min(axis=1)
 
 
-def _vertical_sight(points, rows, alpha, yaw, centre, dt, width, step, sight, extent) -> np.ndarray:
+def _vertical_sight(points, rows, alpha, yaw, grid: YawGrid, width, sight, extent) -> np.ndarray:
     """(E,) bool per entry e: a vertical edge at floor point
     ``points[rows[e]]`` (points (U, 2)) seen at bearing ``alpha[e]`` (right
     of the axis) with heading ``yaw[e]``: the camera lies on the ray back
     from the edge at world bearing ``yaw - alpha``, up to the first wall that
     would hide the edge. True where that stretch comes within ``dt +
-    width[e]`` of the disk centre; the stretch is also cut at
+    width[e]`` of the centre of the ``grid``'s disk; the stretch is also cut at
     ``extent[rows[e]]``, the farthest the edge can be for its image line to
     fit inside its projection (:func:`vertical_extent_bound`). The stretches
     come from the map's :class:`~matcher.scene.occlusion.SightRays` table."""
+    centre, dt, step = grid.centre[:2], grid.dt, grid.spacing
     first, inv = distinct_points(points)  # edges shared by several correspondences: looked up once
     # For each entry: the bearing from camera to edge, and how far the ray
     # back from the edge runs.
@@ -217,28 +256,28 @@ def _vertical_sight(points, rows, alpha, yaw, centre, dt, width, step, sight, ex
     return gap <= dt + slack
 
 
-def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce, dt, step, tol, sight):
-    """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of correspondences
-    ``(seg_k, line_k)`` (K,); ``W`` (M, Y, 3) the image lines' world normals
-    at each grid yaw, ``Rg`` (Y, 3, 3) the world-to-camera rotations at the
-    grid yaws ``yaws`` (Y,), ``v`` (N, 3) unit directions, ``near`` (N, 3)
-    points of the segments' lines nearest the prior centre ``ce`` (the
-    camera centre of the prior: ``ce[2]`` is the camera height). Strips are
-    computed only where the yaw mask holds (zeros elsewhere): a third of
-    the entries or fewer."""
+def _strips(camera, image_lines, model: ModelLines, pairs: Pairs, grid: YawGrid, tol, sight):
+    """Yaw masks (K, Y) and strip quadratics (K, Y, 6) of the correspondences
+    ``pairs`` (K,) of the ``model`` lines at each yaw of the ``grid``
+    (relative to its disk centre). Strips are computed only where the yaw
+    mask holds (zeros elsewhere): a third of the entries or fewer."""
+    segments, v, near = model.segments, model.v, model.near
+    seg_k, line_k, is_v = pairs.seg_k, pairs.line_k, pairs.is_v
+    W, Rg, yaws, ce, dt, step = grid.W, grid.R, grid.yaws, grid.centre, grid.dt, grid.spacing
     K, Y = len(seg_k), len(yaws)
     # Yaw masks: direction constraint for non-vertical, bearing range for vertical.
     mask = np.empty((K, Y), dtype=bool)
     ih = np.nonzero(~is_v)[0]
     dir_res = np.abs(np.einsum("kgi,ki->kg", W[line_k[ih]], v[seg_k[ih]]))
-    mask[ih] = dir_res <= img.eps[line_k[ih]][:, None] + 0.5 * step
+    mask[ih] = dir_res <= image_lines.eps[line_k[ih]][:, None] + 0.5 * step
     if is_v.any():
         pv = near[seg_k[is_v], :2] - ce[:2]
         dist = np.linalg.norm(pv, axis=1)
         beta = np.arctan2(pv[:, 1], pv[:, 0])
         half = np.arcsin(np.clip(dt / np.maximum(dist, 1e-9), 0, 1))
-        half = np.where(dist <= dt, np.pi, half) + img.alpha_eps[line_k[is_v]] + 0.5 * step
-        mask[is_v] = np.abs(wrap(yaws[None, :] - img.alpha[line_k[is_v]][:, None] - beta[:, None])) <= half[:, None]
+        half = np.where(dist <= dt, np.pi, half) + image_lines.alpha_eps[line_k[is_v]] + 0.5 * step
+        turn = wrap(yaws[None, :] - image_lines.alpha[line_k[is_v]][:, None] - beta[:, None])
+        mask[is_v] = np.abs(turn) <= half[:, None]
     # The entries (correspondence k, grid yaw g) left.
     at = np.flatnonzero(mask)  # flat (correspondence, yaw) indices: cheaper than 2-D ones here
     k, g = np.divmod(at, Y)
@@ -251,7 +290,7 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce
     # that point moves by the turn times the lever arm: how far the true ray
     # can pass from the point (the camera's offset in the disk, the yaw step,
     # the offset noise), not the distance to the whole segment.
-    U = np.einsum("eki,ek->ei", Rg[g], img.mid_rays[lk])  # (E, 3) world direction of the midpoint ray
+    U = np.einsum("eki,ek->ei", Rg[g], image_lines.mid_rays[lk])  # (E, 3) world direction of the midpoint ray
     P0, vk = segments[sk, 0], v[sk]
     w0 = ce - P0  # (E, 3)
     b_ = np.einsum("ei,ei->e", U, vk)
@@ -270,36 +309,38 @@ def _strips(camera, img, segments, v, near, seg_k, line_k, is_v, W, Rg, yaws, ce
     # a . c = d for camera positions c (relative to ce) with the plane
     # through the camera containing P*: W . (P* - C) = 0.
     d = np.einsum("ei,ei->e", Wk, rel)
-    e_rot, e_off = img.eps_rot[lk], img.eps_off[lk]
+    e_rot, e_off = image_lines.eps_rot[lk], image_lines.eps_off[lk]
     # Between grid yaws the residual moves at d r / d yaw = (-w_y, w_x) . (P - C).
     dr_dyaw = np.abs(Wk[:, 0] * rel[:, 1] - Wk[:, 1] * rel[:, 0]) + a_len * dt
     t = e_rot * (dt + (0.5 * step + e_off) * D) + e_off * D + 0.5 * step * dr_dyaw + tol.model_m
     quad = np.zeros((K, Y, 6))
     quad.reshape(-1, 6)[at] = posegrid.strip_quadratics(Wk[:, :2], d, t)
     if is_v.any() and sight is not None:
-        ext = vertical_extent_bound(camera, img.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
+        ext = vertical_extent_bound(camera, image_lines.lines[line_k[is_v]], segments[seg_k[is_v]], tol)
         ev = np.nonzero(is_v[k])[0]
         # Rows into the vertical correspondences (their edges' floor points).
         row = np.cumsum(is_v) - 1
-        seen = _vertical_sight(near[seg_k[is_v], :2], row[k[ev]], img.alpha[lk[ev]], yaws[g[ev]], ce[:2], dt,
-                               t[ev] / np.maximum(a_len[ev], 1e-9), step, sight, ext)
+        seen = _vertical_sight(near[seg_k[is_v], :2], row[k[ev]], image_lines.alpha[lk[ev]], yaws[g[ev]], grid,
+                               t[ev] / np.maximum(a_len[ev], 1e-9), sight, ext)
         mask.reshape(-1)[at[ev[~seen]]] = False
     return mask, quad
 
 
-def _half_planes(img, segments, near, seg_k, line_k, is_v, yaws, ce, faces, slack: float):
+def _half_planes(image_lines, model: ModelLines, pairs: Pairs, grid: YawGrid, faces, slack: float):
     """Half-planes ``c . z <= b`` (c (K, Y, 2), b (K, Y)) on the camera
-    position z (relative to the disk centre) at each grid yaw, one per
-    correspondence (c = 0, b = inf: none). A strip alone is a whole line,
+    position z (relative to the disk centre) at each yaw of the ``grid``,
+    one per correspondence of ``pairs`` (c = 0, b = inf: none). A strip alone is a whole line,
     both sides of the segment; but
     - a vertical edge seen at bearing alpha lies ahead along the world
       bearing ``yaw - alpha``: the camera stands behind it on that ray;
     - a segment on a wall face (``faces``) is seen from the room side only."""
+    segments, near, yaws, ce = model.segments, model.near, grid.yaws, grid.centre
+    seg_k, line_k, is_v = pairs.seg_k, pairs.line_k, pairs.is_v
     K, Y = len(seg_k), len(yaws)
     c = np.zeros((K, Y, 2))
     b = np.full((K, Y), np.inf)
     if is_v.any():
-        beta = yaws[None, :] - img.alpha[line_k[is_v]][:, None]  # (Kv, Y)
+        beta = yaws[None, :] - image_lines.alpha[line_k[is_v]][:, None]  # (Kv, Y)
         u = np.stack([np.cos(beta), np.sin(beta)], axis=-1)
         rel = near[seg_k[is_v], :2] - ce[:2]  # (Kv, 2)
         c[is_v] = u

@@ -57,7 +57,7 @@ class Hypotheses:
     tree_input: TreeInput | None = None
 
 
-def generate(cands: Candidates, camera: Camera, img: ImageLines, prior, tol: Tolerances,
+def generate(cands: Candidates, camera: Camera, image_lines: ImageLines, prior, tol: Tolerances,
              deadlines: Deadlines = NO_LIMIT) -> Hypotheses:
     """Stage 1 on the collinear groups of ``cands`` (their spans ``reps``) under ``prior`` ``(xe, ye,
     yaw_e, dt, dyaw)`` (radians). ``deadlines`` the call's time budget
@@ -70,14 +70,14 @@ def generate(cands: Candidates, camera: Camera, img: ImageLines, prior, tol: Tol
     if sight is None and cands.walls is not None:
         sight = SightRays(cands.walls, tol.internals)
     counts: dict = {}
-    corr = find_correspondences(segments, camera, img, prior, tol, sight, cands.faces, counts)
+    corr = find_correspondences(segments, camera, image_lines, prior, tol, sight, cands.faces, counts)
     if not isinstance(corr, Correspondences):  # too few: the unary survivors, for the counts
         seg_k, line_k = corr
         return Hypotheses(seg_k.astype(np.int64), line_k, [], np.zeros((0, 3)), len(segments),
                           int(counts.get("correspondences", 0)), False, counts)
 
     t_pairs = time.perf_counter()
-    compat = pair_compatibility(img, corr, dt, tol, deadlines)
+    compat = pair_compatibility(image_lines, corr, dt, tol, deadlines)
     if compat is None:  # out of time before the tree could start
         counts.update(out_of_time=True, tree_nodes=0, sets_found=0)
         return Hypotheses(corr.seg_k, corr.line_k, [], np.zeros((0, 3)), len(segments), len(corr), True, counts)
@@ -88,7 +88,7 @@ def generate(cands: Candidates, camera: Camera, img: ImageLines, prior, tol: Tol
     inp = TreeInput(corr.quad, corr.mask, corr.yaws, compat, segments[seg_k], corr.centre, dt, corr.forward,
                     cands.walls, vertical=corr.is_v, line=line_k, free=cands.free, free_m=tol.free_space_m,
                     front_c=corr.front_c, front_b=corr.front_b, single_fit=corr.single_fit, sight=sight,
-                    shown=ShownSpans(camera, segments[seg_k], img.lines[line_k]), deadlines=deadlines)
+                    shown=ShownSpans(camera, segments[seg_k], image_lines.lines[line_k]), deadlines=deadlines)
     sets, init, truncated, nodes, found = search(inp, tol)
     counts["out_of_time"] = bool(truncated and not deadlines.may_search())
     counts["tree_nodes"] = int(nodes)

@@ -20,10 +20,10 @@ from matcher.stage1.correspondences import Correspondences
 from matcher.tolerances import Tolerances
 
 
-def pair_compatibility(img: ImageLines, corr: Correspondences, dt: float, tol: Tolerances,
+def pair_compatibility(image_lines: ImageLines, corr: Correspondences, dt: float, tol: Tolerances,
                        deadlines: Deadlines = NO_LIMIT) -> np.ndarray | None:
     """(K, K) bool pairwise compatibility: one-to-one (two lines share a
-    segment only if they may be pieces of one line, ``img.pieces``), a
+    segment only if they may be pieces of one line, ``image_lines.pieces``), a
     common pose of the two in the prior set at one grid yaw (within both
     half-planes, see :func:`_half_planes`), and the paper's binary
     constraint for two vertical correspondences. ``None`` when the search
@@ -34,8 +34,8 @@ def pair_compatibility(img: ImageLines, corr: Correspondences, dt: float, tol: T
     K = len(seg_k)
     iu, ju = np.triu_indices(K, 1)
     distinct = seg_k[iu] != seg_k[ju]
-    if img.pieces is not None:
-        distinct |= img.pieces[line_k[iu], line_k[ju]]
+    if image_lines.pieces is not None:
+        distinct |= image_lines.pieces[line_k[iu], line_k[ju]]
     distinct &= line_k[iu] != line_k[ju]
     iu, ju = iu[distinct], ju[distinct]
     # In chunks of pairs, so that a huge prior (lost mode, a large dt with
@@ -50,9 +50,9 @@ def pair_compatibility(img: ImageLines, corr: Correspondences, dt: float, tol: T
     sel = np.nonzero(is_v[iu] & is_v[ju] & pair_ok)[0]
     if len(sel):
         a_i, a_j = iu[sel], ju[sel]
-        tol_ab = img.alpha_eps[line_k[a_i]] + img.alpha_eps[line_k[a_j]]
-        pair_ok[sel] = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], img.alpha[line_k[a_i]],
-                                         img.alpha[line_k[a_j]], centre, dt, tol_ab)
+        tol_ab = image_lines.alpha_eps[line_k[a_i]] + image_lines.alpha_eps[line_k[a_j]]
+        pair_ok[sel] = binary_constraint(near[seg_k[a_i], :2], near[seg_k[a_j], :2], image_lines.alpha[line_k[a_i]],
+                                         image_lines.alpha[line_k[a_j]], centre, dt, tol_ab)
     compat = np.zeros((K, K), dtype=bool)
     compat[iu[pair_ok], ju[pair_ok]] = True
     return compat | compat.T

@@ -116,18 +116,19 @@ def weak_axes(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ex, ey
 
 
-def halfplane_reachable(q: np.ndarray, val: np.ndarray, zx: np.ndarray, zy: np.ndarray, n_terms,
-                        q_max: float, dt: float, c: np.ndarray, b: np.ndarray) -> np.ndarray:
+def halfplane_reachable(q: np.ndarray, minimum: tuple, n_terms, q_max: float, dt: float, c: np.ndarray,
+                        b: np.ndarray) -> np.ndarray:
     """(...) bool: can a point of the feasible set of summed quadratics ``q``
     (..., 6) satisfy ``c . z <= b`` (c (..., 2), b (...))? A necessary test.
 
-    ``val, zx, zy`` are :func:`minimise`'s output for ``q`` and ``n_terms``
+    ``minimum`` is :func:`minimise`'s output ``(val, zx, zy)`` for ``q`` and ``n_terms``
     the number of strips summed. Every feasible point keeps each strip's term
     <= ``q_max`` and lies in the disk, so ``F(z) = q(z) + |z|^2/dt^2 <=
     n_terms q_max + 1``: an ellipse around the minimiser, on which the
     smallest ``c . z`` is ``c . z* - sqrt(rho c^T A^-1 c)`` (A the Hessian
     half, rho the level above the minimum). The disk gives ``-|c| dt``; the
     larger of the two lower bounds holds."""
+    val, zx, zy = minimum
     return ellipse_reaches(feasible_ellipse(q, val, zx, zy, n_terms, q_max, dt), c, b, dt)
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -97,17 +98,29 @@ def triples(compat: np.ndarray, corr: np.ndarray, line: np.ndarray, most: int) -
     return np.concatenate(out) if out else np.zeros((0, 3), dtype=np.int64)
 
 
-def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray, vertical: np.ndarray,
-                        compat: np.ndarray, alpha: np.ndarray, alpha_eps: np.ndarray, prior, free,
-                        tol: Tolerances, max_hypotheses: int, min_lines: int, deadline: float = math.inf):
-    """Sets of correspondences from resected poses.
+@dataclass(frozen=True)
+class EdgeCorrespondences:
+    """Stage 1's correspondences as the resection takes them. Per
+    correspondence k (K,): ``points`` (K, 2) the floor point of its segment
+    (used for the vertical ones), ``segment`` that segment's id, ``line``
+    its image line, ``vertical`` whether it pairs a vertical edge with a
+    vertical line; ``compat`` (K, K) stage 1's pairwise compatibility. Per
+    image line: ``alpha``, ``alpha_eps`` (M,) bearing and its noise bound,
+    radians."""
 
-    Per correspondence k (K,): ``points`` (K, 2) the floor point of its
-    segment (used for the vertical ones), ``corr_seg`` that segment's id,
-    ``corr_line`` its image line, ``vertical`` whether it pairs a vertical
-    edge with a vertical line;
-    ``compat`` (K, K) stage 1's pairwise compatibility. Per image line:
-    ``alpha``, ``alpha_eps`` (M,) bearing and its noise bound, radians.
+    points: np.ndarray
+    segment: np.ndarray
+    line: np.ndarray
+    vertical: np.ndarray
+    compat: np.ndarray
+    alpha: np.ndarray
+    alpha_eps: np.ndarray
+
+
+def vertical_hypotheses(corr: EdgeCorrespondences, prior, free, tol: Tolerances, max_hypotheses: int,
+                        min_lines: int, deadline: float = math.inf):
+    """Sets of correspondences ``corr`` from resected poses.
+
     ``prior`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians), ``free`` the map's
     free space or None. Triples are solved in batches of
     ``resection_chunk``; none is started once ``time.perf_counter()`` is
@@ -123,54 +136,31 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
     most ``max_hypotheses`` index arrays into the correspondences and
     (H, 3) poses ``(x, y, yaw)``."""
     work = tol.internals
-    slack, chunk = work.resection_bearing_slack, work.resection_chunk
-    corr = np.nonzero(vertical)[0]
+    vert = np.nonzero(corr.vertical)[0]
     empty = ([], np.zeros((0, 3)))
-    if len(np.unique(corr_line[corr])) < max(3, min_lines):
+    if len(np.unique(corr.line[vert])) < max(3, min_lines):
         return empty
-    tri = triples(compat, corr, corr_line, work.resection_max_triples)
+    tri = triples(corr.compat, vert, corr.line, work.resection_max_triples)
     if not len(tri):
         return empty
     # Vertical correspondences sorted by line, so that a line's best edge
     # is a minimum over one run of columns.
-    corr = corr[np.argsort(corr_line[corr], kind="stable")]
-    starts = np.unique(corr_line[corr], return_index=True)[1]
+    vert = vert[np.argsort(corr.line[vert], kind="stable")]
     keys, kept_poses, kept_err = [], [], []
-    for c0 in range(0, len(tri), chunk):
+    for c0 in range(0, len(tri), work.resection_chunk):
         if c0 and time.perf_counter() > deadline:
             break
-        t = tri[c0:c0 + chunk]
-        poses, ok = resect(points[t], alpha[corr_line[t]], work.resection_min_range_m)
-        poses = poses[ok]
-        poses = poses[within_prior(poses, prior, free, tol)]
-        if not len(poses):
-            continue
-        # Bearing of every vertical correspondence's edge at every pose,
-        # against its line's: (P, Kv) normalised error, inf behind.
-        rel = points[corr][None, :, :] - poses[:, None, :2]
-        seen = wrap(poses[:, None, 2] - np.arctan2(rel[..., 1], rel[..., 0]))
-        err = np.abs(wrap(seen - alpha[corr_line[corr]][None, :])) / alpha_eps[corr_line[corr]][None, :]
-        err = np.where(np.abs(seen) < 0.5 * math.pi, err, np.inf)
-        # Per pose and line: the best edge's error (inf if none).
-        per_line = np.minimum.reduceat(err, starts, axis=1)  # (P, V)
-        hit = per_line <= slack
-        n = hit.sum(axis=1)
-        good = np.nonzero(n >= min_lines)[0]
-        if not len(good):
-            continue
-        cost = np.where(hit[good], per_line[good] ** 2, 0.0).sum(axis=1)
-        # Only the best few of a chunk can be among the best overall.
-        best = np.lexsort((cost, -n[good]))[:work.resection_keep]
-        top = good[best]
-        keys += list(zip((-n[top]).tolist(), cost[best].tolist()))
-        kept_poses.append(poses[top])
-        kept_err.append(err[top])
+        best = _best_of_chunk(corr, vert, tri[c0:c0 + work.resection_chunk], prior, free, tol, min_lines)
+        if best is not None:
+            keys += best[0]
+            kept_poses.append(best[1])
+            kept_err.append(best[2])
     if not keys:
         return empty
     kept_poses, kept_err = np.concatenate(kept_poses), np.concatenate(kept_err)
     sets, inits, seen_sets = [], [], set()
     for i in sorted(range(len(keys)), key=keys.__getitem__):
-        s = _explained(kept_err[i], corr, corr_seg, corr_line, slack)
+        s = _explained(kept_err[i], vert, corr.segment, corr.line, work.resection_bearing_slack)
         key = s.tobytes()
         if len(s) < min_lines or key in seen_sets:
             continue
@@ -180,6 +170,42 @@ def vertical_hypotheses(points: np.ndarray, corr_seg: np.ndarray, corr_line: np.
         if len(sets) >= max_hypotheses:
             break
     return sets, np.array(inits).reshape(-1, 3)
+
+
+def _best_of_chunk(corr: EdgeCorrespondences, vert: np.ndarray, t: np.ndarray, prior, free, tol: Tolerances,
+                   min_lines: int):
+    """The triples ``t`` (T, 3) resected: of the poses inside the prior (and
+    free space) explaining at least ``min_lines`` lines, the best
+    ``resection_keep`` as ``(keys, poses (P, 3), err (P, Kv))``: sort keys
+    (minus the lines explained, the summed squared normalised bearing
+    error) and each vertical correspondence's (``vert``, sorted by line)
+    normalised bearing error at the pose; None when there is none."""
+    work = tol.internals
+    poses, ok = resect(corr.points[t], corr.alpha[corr.line[t]], work.resection_min_range_m)
+    poses = poses[ok]
+    poses = poses[within_prior(poses, prior, free, tol)]
+    if not len(poses):
+        return None
+    # Bearing of every vertical correspondence's edge at every pose,
+    # against its line's: (P, Kv) normalised error, inf behind.
+    rel = corr.points[vert][None, :, :] - poses[:, None, :2]
+    seen = wrap(poses[:, None, 2] - np.arctan2(rel[..., 1], rel[..., 0]))
+    lines = corr.line[vert]
+    err = np.abs(wrap(seen - corr.alpha[lines][None, :])) / corr.alpha_eps[lines][None, :]
+    err = np.where(np.abs(seen) < 0.5 * math.pi, err, np.inf)
+    # Per pose and line: the best edge's error (inf if none).
+    starts = np.unique(lines, return_index=True)[1]
+    per_line = np.minimum.reduceat(err, starts, axis=1)  # (P, V)
+    hit = per_line <= work.resection_bearing_slack
+    n = hit.sum(axis=1)
+    good = np.nonzero(n >= min_lines)[0]
+    if not len(good):
+        return None
+    cost = np.where(hit[good], per_line[good] ** 2, 0.0).sum(axis=1)
+    # Only the best few of a chunk can be among the best overall.
+    best = np.lexsort((cost, -n[good]))[:work.resection_keep]
+    top = good[best]
+    return list(zip((-n[top]).tolist(), cost[best].tolist())), poses[top], err[top]
 
 
 def _explained(err: np.ndarray, corr: np.ndarray, corr_seg: np.ndarray, corr_line: np.ndarray,

@@ -1,6 +1,7 @@
 """Stage 2 of the method: verification (method.md section 8).
 
-For every hypothesis of stage 1, in order:
+For every hypothesis of stage 1, in order, on their matches held as one
+structure (:mod:`~matcher.stage2.matches`):
 
 - :mod:`~matcher.stage2.refine`: the least-squares pose (Gauss-Newton, robust
   first) and the paper's score E;

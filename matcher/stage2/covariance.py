@@ -14,15 +14,14 @@ import math
 import numpy as np
 
 from matcher.stage2 import refine
+from matcher.stage2.matches import Matches
 
 
-def pose_std_of(camera, img, segs, ranked, h: int, tol):
+def pose_std_of(camera, image_lines, segs, ranked, h: int, tol):
     """``(x, y, yaw_deg)`` standard deviations of hypothesis ``h``'s pose
     (metres, degrees; :func:`pose_covariance`), or None where its matches do
     not fix it."""
-    sel = ranked.hyp == h
-    cov = pose_covariance(camera, img, segs, ranked.poses[h:h + 1], np.zeros(int(sel.sum()), dtype=np.int64),
-                          ranked.local[sel], ranked.line[sel], tol)[0]
+    cov = pose_covariance(camera, image_lines, segs, ranked.poses[h:h + 1], ranked.matches.of_one(h), tol)[0]
     if not np.isfinite(cov).all():
         return None
     return float(math.sqrt(cov[0, 0])), float(math.sqrt(cov[1, 1])), float(math.degrees(math.sqrt(cov[2, 2])))
@@ -40,7 +39,7 @@ def pose_spread(cov: np.ndarray) -> np.ndarray:
     return out
 
 
-def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.ndarray:
+def pose_covariance(camera, image_lines, segs, poses, m: Matches, tol) -> np.ndarray:
     """(H, 3, 3) per hypothesis the covariance of its least-squares pose
     ``(x, y, yaw)`` (metres, radians) that image noise leaves. First order:
     the inverse of J^T J, J the derivatives of the residuals
@@ -55,10 +54,10 @@ def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.n
     the line moves both ends alike (``line_px``), a turn about its middle
     moves them apart (``line_deg`` over half its length); each bound is
     taken as that of a uniform variable (standard deviation bound /
-    sqrt 3). Matches ``hyp, local, line_ids`` (T,) as for
-    :func:`reprojection_cost`. A hypothesis whose matches do not fix its
-    pose gets inf."""
-    A = pose_information(camera, img, segs, poses, hyp, local, line_ids, tol)
+    sqrt 3). ``m`` the matches (:class:`~matcher.stage2.matches.Matches`,
+    their segments indices into ``segs``). A hypothesis whose matches do
+    not fix its pose gets inf."""
+    A = pose_information(camera, image_lines, segs, poses, m, tol)
     out = np.full(A.shape, np.inf)
     fixed = np.linalg.det(A) > 1e-12 * np.maximum(np.abs(A).max(axis=(1, 2)), 1e-300) ** 3
     if fixed.any():
@@ -66,25 +65,26 @@ def pose_covariance(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.n
     return out
 
 
-def pose_information(camera, img, segs, poses, hyp, local, line_ids, tol) -> np.ndarray:
+def pose_information(camera, image_lines, segs, poses, m: Matches, tol) -> np.ndarray:
     """(H, 3, 3) per hypothesis ``J^T J``, the inverse of
     :func:`pose_covariance` (singular where the matches leave a direction of
     the pose free)."""
     n_h = len(poses)
     A = np.zeros((n_h, 3, 3))
+    hyp, local, line_ids = m.hyp, m.local, m.line
     if not len(hyp):
         return A
-    lines = img.lines[line_ids]  # (T, 2, 2)
+    lines = image_lines.lines[line_ids]  # (T, 2, 2)
     p = camera.pixel_rays(lines)  # (T, 2, 3)
     p_len = np.linalg.norm(p, axis=2)  # (T, 2)
     rays = p / p_len[..., None]
-    _, J = refine.residuals(poses, hyp, segs[local, 0], segs[local, 1], rays[:, 0], rays[:, 1], camera.pitch,
-                            camera.height_m, jacobian=True)  # (T, 2, 3)
+    terms = refine.MatchTerms(segs[local, 0], segs[local, 1], rays[:, 0], rays[:, 1], camera.pitch, camera.height_m)
+    _, J = refine.residuals(poses, hyp, terms, jacobian=True)  # (T, 2, 3)
     d = lines[:, 1] - lines[:, 0]
     length = np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-9)
     # d(ray)/d(pixel across the line): (-d_v / fx, d_u / fy, 0) / length.
     dp_x, dp_y = -d[:, 1] / (length * camera.fx), d[:, 0] / (length * camera.fy)
-    n = img.normals[line_ids]  # (T, 3) unit
+    n = image_lines.normals[line_ids]  # (T, 3) unit
     per_px = (n[:, 0] * dp_x + n[:, 1] * dp_y)[:, None] / p_len  # (T, 2)
     per_px = np.where(np.abs(per_px) > 1e-12, per_px, 1e-12)
     Jpx = J / per_px[..., None]  # (T, 2, 3): pixels across the line per unit of pose

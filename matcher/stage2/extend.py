@@ -9,9 +9,10 @@ import numpy as np
 
 from linemap.geometry import project_segments
 from matcher.stage2.fit import fits_projected, visible
+from matcher.stage2.matches import Matches
 
 
-def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls):
+def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -> Matches:
     """For each hypothesis h of ``hyps``: the (segment, line) pairs that fit
     at its pose ``poses[h]`` among its unmatched usable lines (see
     :func:`fits`; the segment visible too), closest first, each line once.
@@ -22,13 +23,13 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     while one-to-one matching would leave all but one unexplained (and a
     wrong pose that spreads the pieces over several segments would explain
     more lines). All hypotheses' pairs are tested in one batch. Returns
-    ``(hyp, line, local)`` (A,) of the pairs to add; matches are given as
-    ``hyp, local, line_ids`` (T,)."""
-    usable = np.nonzero(img.usable)[0]
+    the pairs to add; ``m`` the matches so far."""
+    usable = np.nonzero(image_lines.usable)[0]
     N = len(segs)
+    hyp, local, line_ids = m.hyp, m.local, m.line
     empty = np.zeros(0, dtype=np.int64)
     if not len(hyps):
-        return empty, empty, empty
+        return Matches(empty, empty, empty)
     # Every candidate segment projected once per hypothesis (C, N, 2, 2),
     # then each (hypothesis, free line, segment) pair looks it up.
     uv, in_front = project_segments(camera, poses[hyps][:, None, :], np.broadcast_to(segs, (len(hyps),) + segs.shape),
@@ -37,7 +38,7 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
     matched = {}  # (contender, segment) -> the lines on it
     for c, h in enumerate(hyps.tolist()):
         sel = np.nonzero(hyp == h)[0]
-        lines_free = np.ones(len(img.usable), dtype=bool)
+        lines_free = np.ones(len(image_lines.usable), dtype=bool)
         lines_free[line_ids[sel]] = False
         fl = usable[lines_free[usable]]
         ph.append(np.full(len(fl) * N, c))
@@ -47,12 +48,12 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
             matched.setdefault((c, s_), []).append(l_)
     pc, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
     if not len(pc):  # no usable line left free
-        return empty, empty, empty
+        return Matches(empty, empty, empty)
     ph = hyps[pc]
-    ok, dist = fits_projected(img, uv[pc, si], in_front[pc, si], li, tol)
+    ok, dist = fits_projected(image_lines, uv[pc, si], in_front[pc, si], li, tol)
     if ok.any():
         sel = np.nonzero(ok)[0]
-        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], img.lines[li[sel]], walls, tol.internals)
+        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], image_lines.lines[li[sel]], walls, tol.internals)
     out_h, out_l, out_s = [], [], []
     lines_taken = set()  # (hypothesis, line)
     # Closest first within each hypothesis; a line is added once, a segment
@@ -64,7 +65,7 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
             continue
         on_it = matched.setdefault((c, s_), [])
         if on_it:
-            spans = _spans_along(np.broadcast_to(uv[c, s_], (len(on_it) + 1, 2, 2)), img.lines[on_it + [l_]])
+            spans = _spans_along(np.broadcast_to(uv[c, s_], (len(on_it) + 1, 2, 2)), image_lines.lines[on_it + [l_]])
             overlap = np.minimum(spans[:-1, 1], spans[-1, 1]) - np.maximum(spans[:-1, 0], spans[-1, 0])
             if (overlap > 2.0 * tol.line_end_px).any():
                 continue
@@ -73,7 +74,7 @@ def extend_all(camera, img, segs, poses, hyp, local, line_ids, hyps, tol, walls)
         out_h.append(h)
         out_s.append(s_)
         out_l.append(l_)
-    return (np.array(out_h, dtype=np.int64), np.array(out_l, dtype=np.int64), np.array(out_s, dtype=np.int64))
+    return Matches(np.array(out_h, dtype=np.int64), np.array(out_s, dtype=np.int64), np.array(out_l, dtype=np.int64))
 
 
 def _spans_along(uv: np.ndarray, lines: np.ndarray) -> np.ndarray:

@@ -20,7 +20,7 @@ from matcher.scene.occlusion import sight_clear
 from matcher.tolerances import Internals
 
 
-def fits(camera, img, poses, segments, line_ids, tol, end_px=None):
+def fits(camera, image_lines, poses, segments, line_ids, tol, end_px=None):
     """The fit test of a line to its segment at a pose: ``(ok (T,) bool,
     dist (T,) pixels)`` for matches t of segments (T, 2, 3) and image lines
     ``line_ids`` (T,) at poses (T, 3). A line fits when it lies within its
@@ -34,13 +34,13 @@ def fits(camera, img, poses, segments, line_ids, tol, end_px=None):
     segments). ``dist`` is the lines' larger end-point distance to the
     projected segment's line."""
     uv, in_front = project_segments(camera, poses, segments, tol.internals.near_plane_m)
-    return fits_projected(img, uv, in_front, line_ids, tol, end_px)
+    return fits_projected(image_lines, uv, in_front, line_ids, tol, end_px)
 
 
-def fits_projected(img, uv, in_front, line_ids, tol, end_px=None):
+def fits_projected(image_lines, uv, in_front, line_ids, tol, end_px=None):
     """:func:`fits` on segments already projected
     (:func:`linemap.geometry.project_segments`' ``uv`` (T, 2, 2), ``in_front`` (T,))."""
-    lines = img.lines[line_ids]
+    lines = image_lines.lines[line_ids]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = projected_distance_and_overlap(uv, in_front, lines)
     end_px = 2 * tol.line_end_px + tol.internals.fit_pose_px if end_px is None else end_px

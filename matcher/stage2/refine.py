@@ -63,15 +63,11 @@ class MatchTerms:
         self.w_z = w[..., 2]
 
 
-def residuals(params, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, jacobian=False):
+def residuals(params, hyp, terms: MatchTerms, jacobian=False):
     """(T, 2) image-side residuals (and with ``jacobian`` their derivatives
     (T, 2, 3) in (x, y, yaw)) of matches t at poses ``params`` (H, 3); ``hyp``
-    (T,) the pose of each match, the rest as for :class:`MatchTerms`."""
-    return _residuals(params, hyp, MatchTerms(seg_a, seg_b, ray_a, ray_b, pitch, height), jacobian)
-
-
-def _residuals(params, hyp, terms: MatchTerms, jacobian=False):
-    """:func:`residuals` on precomputed :class:`MatchTerms`.
+    (T,) the pose of each match; ``terms`` the matches' segments and rays
+    (:class:`MatchTerms`).
 
     The derivatives, with ``N = m . u`` and ``n = |m|``: ``dr = (dN - r (m .
     dm) / n) / n``. In x and y (as ``d/dx + i d/dy``): ``dN = i (D w_z - d_z
@@ -97,13 +93,12 @@ def _residuals(params, hyp, terms: MatchTerms, jacobian=False):
     return r, J
 
 
-def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, work: Internals, robust_scale=None,
-           iterations: int | None = None):
+def refine(init, hyp, terms: MatchTerms, work: Internals, robust_scale=None, iterations: int | None = None):
     """Gauss-Newton on all hypotheses together.
 
-    ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,), model segment
-    end points ``seg_a, seg_b`` (T, 3) world, unit rays of the image line end
-    points ``ray_a, ray_b`` (T, 3) camera frame. With ``robust_scale`` (T,)
+    ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,) and its
+    residuals' constants ``terms`` (:class:`MatchTerms`: the model segment's
+    end points, the unit rays of the image line's). With ``robust_scale`` (T,)
     (radians), residuals are weighted by Tukey's biweight (zero beyond twice
     the scale; iteratively reweighted), so that a wrong match does not drag
     the pose of the others away. ``work`` gives the iterations (``refine_iterations``
@@ -111,14 +106,13 @@ def refine(init, hyp, seg_a, seg_b, ray_a, ray_b, pitch, height, work: Internals
     convergence step. Returns poses (H, 3)."""
     params = np.array(init, dtype=float)
     H = len(params)
-    terms = MatchTerms(seg_a, seg_b, ray_a, ray_b, pitch, height)
     # Sums over each hypothesis's matches as one product: (H, 2T) one-hot of
     # each residual's hypothesis (np.add.at costs more on these short arrays).
     onehot = (np.repeat(hyp, 2)[None, :] == np.arange(H)[:, None]).astype(float)
     plain_first, converged = work.refine_plain_first, work.refine_converged
     diag_at = np.arange(3)
     for it in range(work.refine_iterations if iterations is None else iterations):
-        r0, J = _residuals(params, hyp, terms, jacobian=True)
+        r0, J = residuals(params, hyp, terms, jacobian=True)
         if robust_scale is None or it < plain_first:
             Jw = J
         else:  # Tukey's biweight: residuals beyond twice the scale get no say

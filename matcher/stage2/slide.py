@@ -21,6 +21,7 @@ import numpy as np
 from linemap.geometry import segment_is_vertical
 from matcher.stage2.covariance import pose_information
 from matcher.stage2.fit import fits
+from matcher.stage2.matches import Matches
 from matcher.tolerances import DEFAULT_INTERNALS, Internals
 
 #: ``count(p)``: for poses ``p`` (W, N, 3) of W hypotheses, (W, N) how many
@@ -77,10 +78,10 @@ def _nearest_keeping(good: np.ndarray, towards: np.ndarray, count: Counter, need
     return np.where(ok_end[:, None], towards, good + lo[:, None] * way)
 
 
-def slide_to_fit(camera, img, segs, poses, hyp, local, line_ids, tol, inl, stuck_out=None):
+def slide_to_fit(camera, image_lines, segs, poses, m: Matches, tol, inl, stuck_out=None):
     """Poses (H, 3), those of loosely fixed hypotheses with a line that does
-    not fit (``inl`` (T,) False) moved to where more of their lines fit
-    (:func:`slide_poses`); and (H,) bool, which moved.
+    not fit (``inl`` (T,) False, per match of ``m``) moved to where more of
+    their lines fit (:func:`slide_poses`); and (H,) bool, which moved.
     Tried are the hypotheses with lines enough to be a contender if all
     fitted, matching fewer than ``slide_max_horizontal`` horizontal segments
     and, with ``stuck_out`` (T,) bool, with a line that lies along its
@@ -88,22 +89,22 @@ def slide_to_fit(camera, img, segs, poses, hyp, local, line_ids, tol, inl, stuck
     says the match is wrong, not the distance)."""
     n_h = len(poses)
     slid = np.zeros(n_h, dtype=bool)
-    n_all = np.bincount(hyp, minlength=n_h)
-    n_fit = np.bincount(hyp, inl, minlength=n_h)
+    n_all = np.bincount(m.hyp, minlength=n_h)
+    n_fit = np.bincount(m.hyp, inl, minlength=n_h)
     worth = (n_fit < n_all) & (n_all >= max(tol.min_matches, int(n_fit.max(initial=0)) - 1))
     # Bearings are what leave a position loose: two horizontal segments' lines
     # fix it (each puts the camera on a line of the floor at a given yaw).
     work = tol.internals
-    worth &= np.bincount(hyp, ~segment_is_vertical(segs[local], work.vertical_axis_deg), minlength=n_h) < work.slide_max_horizontal
+    worth &= np.bincount(m.hyp, ~segment_is_vertical(segs[m.local], work.vertical_axis_deg),
+                         minlength=n_h) < work.slide_max_horizontal
     if stuck_out is not None:
-        worth &= np.bincount(hyp, stuck_out, minlength=n_h) > 0
+        worth &= np.bincount(m.hyp, stuck_out, minlength=n_h) > 0
     cand = np.nonzero(worth)[0]
     if not len(cand):
         return poses, slid
-    sel = np.isin(hyp, cand)
-    info = pose_information(camera, img, segs, poses[cand], np.searchsorted(cand, hyp[sel]), local[sel],
-                            line_ids[sel], tol)
-    count = _fit_counter(camera, img, segs, hyp, local, line_ids, tol, cand)
+    mine = m.of(cand)
+    info = pose_information(camera, image_lines, segs, poses[cand], mine, tol)
+    count = _fit_counter(camera, image_lines, segs, mine, tol)
     moved, move = slide_poses(poses[cand], info, count, n_fit[cand], work)
     poses = poses.copy()
     poses[cand[move]] = moved[move]
@@ -111,22 +112,21 @@ def slide_to_fit(camera, img, segs, poses, hyp, local, line_ids, tol, inl, stuck
     return poses, slid
 
 
-def _fit_counter(camera, img, segs, hyp, local, line_ids, tol, which):
-    """``count(p)``: for poses ``p`` (W, N, 3) of the hypotheses ``which``
-    (W,), (W, N) how many of their lines fit there, allowing only the end
-    points' noise beyond the projected ends (a pose that passes sits where
-    the lines lie inside their segments, not at the edge of the plain fit
-    test)."""
-    sel = np.nonzero(np.isin(hyp, which))[0]
-    w_of = np.searchsorted(which, hyp[sel])
-    seg_sel, line_sel = segs[local[sel]], line_ids[sel]
+def _fit_counter(camera, image_lines, segs, mine: Matches, tol):
+    """``count(p)``: for poses ``p`` (W, N, 3) of W hypotheses whose
+    matches are ``mine`` (numbered 0 to W-1), (W, N) how many of their
+    lines fit there, allowing only the end points' noise beyond the
+    projected ends (a pose that passes sits where the lines lie inside
+    their segments, not at the edge of the plain fit test)."""
+    w_of = mine.hyp
+    seg_sel, line_sel = segs[mine.local], mine.line
 
     def count(p: np.ndarray) -> np.ndarray:
         n = p.shape[1]
-        good = fits(camera, img, p[w_of].reshape(-1, 3), np.repeat(seg_sel, n, axis=0), np.repeat(line_sel, n), tol,
-                    end_px=tol.line_end_px)[0]
-        out = np.zeros((len(which), n))
-        np.add.at(out, (np.repeat(w_of, n), np.tile(np.arange(n), len(sel))), good)
+        good = fits(camera, image_lines, p[w_of].reshape(-1, 3), np.repeat(seg_sel, n, axis=0), np.repeat(line_sel, n),
+                    tol, end_px=tol.line_end_px)[0]
+        out = np.zeros((len(p), n))
+        np.add.at(out, (np.repeat(w_of, n), np.tile(np.arange(n), len(w_of))), good)
         return out
 
     return count
