@@ -345,6 +345,11 @@ IFC_LEVEL = 0.02
 #: elevation, metres (floor finishes and screeds sit on or just under it).
 IFC_SLAB_REACH = 0.5
 
+#: Two openings whose footprints overlap by this fraction of the smaller
+#: one are stacked in one gap (windows over windows, a fanlight over a
+#: door): the scene takes them as one opening.
+IFC_STACKED_OVERLAP = 0.5
+
 #: At most this many distinct heights are probed for hidden edges; edges at
 #: other heights are kept unchecked (a warning says so).
 MESH_HIDDEN_MAX_LEVELS = 64

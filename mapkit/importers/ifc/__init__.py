@@ -47,10 +47,11 @@ class IfcBuilding:
 
     def scene(self, index: int, options: BuildOptions) -> Scene:
         """The scene of storey number ``index`` (its walls must have been read)."""
-        from mapkit.importers.ifc.storey import storey_scene
+        from mapkit.importers.ifc.storey import standing_walls, storey_scene
 
         storey = self.storeys[index]
-        return storey_scene(storey, self.meshes, obstacles_in(self.connections, index), options, self.info)
+        standing = standing_walls(storey, self.model.all_of("wall"), self.meshes)
+        return storey_scene(storey, self.meshes, standing, obstacles_in(self.connections, index), options, self.info)
 
 
 def load_scene(path: Path, options: BuildOptions) -> Scene:
@@ -78,13 +79,15 @@ def load_building(path: Path, options: BuildOptions) -> IfcBuilding:
 
 
 def read_building(model: Model, path: Path, options: BuildOptions, wanted) -> IfcBuilding:
-    """The bodies of the elements of storeys ``wanted`` (indices) and of the
-    top storey's walls (its height is theirs), the connections; storey heights set."""
+    """The bodies of the elements of storeys ``wanted`` (indices), of every
+    wall (a wall may stand in a storey other than the one holding it; the
+    top storey's height is its walls'), the connections; storey heights set."""
     storeys = model.storeys
     top = len(storeys) - 1
-    elements = [e for k in sorted(set(wanted)) for role in _SCENE_ROLES for e in storeys[k].of(role)]
-    elements += [e for e in storeys[top].of("wall") if top not in wanted]
-    connection_elements = [e for s in storeys for e in s.of("connection")] + model.unplaced.get("connection", [])
+    wanted = sorted(set(wanted))
+    elements = [e for k in wanted for role in _SCENE_ROLES if role != "wall" for e in storeys[k].of(role)]
+    elements += model.all_of("wall")
+    connection_elements = model.all_of("connection")
     meshes = element_meshes(model.file, elements + connection_elements, threads=options.jobs)
     for k, s in enumerate(storeys[:-1]):
         s.height = storeys[k + 1].elevation - s.elevation

@@ -87,6 +87,10 @@ class Model:
     unplaced: dict[str, list] = field(default_factory=dict, repr=False)
     class_counts: dict[str, int] = field(default_factory=dict)
 
+    def all_of(self, role: str) -> list:
+        """Every element of ``role``, storey by storey, then those in no storey."""
+        return [e for s in self.storeys for e in s.of(role)] + self.unplaced.get(role, [])
+
 
 def open_model(path: Path) -> Model:
     """Open ``path`` and sort its elements; MapkitError if it is not an IFC

@@ -1,7 +1,8 @@
 """One storey of an IFC model -> :class:`~mapkit.scene.Scene`, z from the storey's floor.
 
-- walls: the footprints of its walls and columns seen from above, less the
-  gaps of their doors, windows and unfilled openings;
+- walls: the footprints of the walls and columns standing on its floor
+  (whichever storey holds them: a wall may rise through two) seen from
+  above, less the gaps of their doors, windows and unfilled openings;
 - openings: each door's and window's gap: its opening element's footprint
   within its host wall, between the heights of that opening (its real sill
   and head; an element filling no opening: its own extent);
@@ -28,24 +29,26 @@ from mapkit.importers.ifc.read import Storey, count_roles
 from mapkit.options import BuildOptions
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import IFC_GRID, IFC_LEVEL, IFC_SLAB_REACH, MIN_FREE_AREA, ZERO
+from mapkit.tolerances import IFC_GRID, IFC_LEVEL, IFC_SLAB_REACH, IFC_STACKED_OVERLAP, MIN_FREE_AREA, ZERO
 
 
-def storey_scene(storey: Storey, meshes: dict[int, Mesh], obstacles, options: BuildOptions, info: dict) -> Scene:
-    """The scene of ``storey``; ``obstacles`` (MultiPolygon) are the
-    footprints of the vertical connections within it; ``info`` (source,
-    schema) is completed and stored in the scene."""
+def storey_scene(storey: Storey, meshes: dict[int, Mesh], standing: list, obstacles, options: BuildOptions,
+                 info: dict) -> Scene:
+    """The scene of ``storey``; ``standing`` are the walls and columns
+    standing on its floor (:func:`standing_walls`), ``obstacles``
+    (MultiPolygon) the footprints of the vertical connections within it;
+    ``info`` (source, schema) is completed and stored in the scene."""
     info = dict(info) | {"storey": storey.name, "elevation_m": round(storey.elevation, 4),
                          "height_m": round(storey.height, 4)}
     warnings = info["warnings"] = list(info.get("warnings", []))  # this storey's own
     warn = partial(warn_decision, warnings)
     where = f"storey '{storey.name}'"
-    walls_by_id = {e.id(): meshes[e.id()].footprint() for e in storey.of("wall") if e.id() in meshes}
+    walls_by_id = {e.id(): meshes[e.id()].footprint() for e in standing}
     solid = MultiPolygon(polygon_parts(shapely.union_all(list(walls_by_id.values()) or [MultiPolygon()])))
     if solid.is_empty:
         raise NoWallsError(f"{where} has no walls or columns with a body; check it with 'mapkit layers'")
-    wall_height = _wall_height(storey, meshes, warn)
-    openings = _openings(storey, meshes, walls_by_id, solid, warn)
+    wall_height = _wall_height(storey, [meshes[e.id()] for e in standing], warn)
+    openings = _merge_stacked(_openings(storey, meshes, walls_by_id, solid, warn), where, warn)
     gaps = shapely.union_all([o.footprint for o in openings] or [MultiPolygon()])
     walls = MultiPolygon(polygon_parts(solid.difference(gaps)))
 
@@ -65,7 +68,7 @@ def storey_scene(storey: Storey, meshes: dict[int, Mesh], obstacles, options: Bu
         warn(f"{where}: camera height {cam_h:g} m is not below its walls' {wall_height:g} m")
     info["free_space"] = source
     info["counts"] = {k: v for k, v in count_roles([e for v in storey.elements.values() for e in v]).items()}
-    info["layers"] = {"walls": sorted({e.is_a() for e in storey.of("wall")}),
+    info["layers"] = {"walls": sorted({e.is_a() for e in standing}),
                       "doors": ["IfcDoor"] if storey.of("door") else [], "windows": ["IfcWindow"] if storey.of("window") else []}
     info["areas_m2"] = {"walls": round(walls.area, 3), "free_space": round(free.area, 3)}
     scene = Scene(walls=walls, openings=openings, free_space=free, wall_height=wall_height,
@@ -76,11 +79,21 @@ def storey_scene(storey: Storey, meshes: dict[int, Mesh], obstacles, options: Bu
     return scene
 
 
-def _wall_height(storey: Storey, meshes: dict[int, Mesh], warn) -> float:
+def standing_walls(storey: Storey, walls: list, meshes: dict[int, Mesh]) -> list:
+    """The walls and columns among ``walls`` (of any storey) standing on
+    ``storey``'s floor: from at most ``IFC_LEVEL`` above it to more than
+    that above it. A wall of two storeys stands in the lower one and in the
+    upper one if it starts below that floor; a wall on the floor below
+    (foundations) or hanging from the ceiling (a bulkhead) does not."""
+    floor = storey.elevation + IFC_LEVEL
+    return [e for e in walls if e.id() in meshes and meshes[e.id()].z_range[0] <= floor < meshes[e.id()].z_range[1]]
+
+
+def _wall_height(storey: Storey, walls: list[Mesh], warn) -> float:
     """The walls' most common top above the storey's floor (rounded to
     ``IFC_LEVEL``), at most the storey's height; a warning when the walls
     reach several heights."""
-    tops = [meshes[e.id()].z_range[1] - storey.elevation for e in storey.of("wall") if e.id() in meshes]
+    tops = [m.z_range[1] - storey.elevation for m in walls]
     tops = [min(t, storey.height) for t in tops if t > IFC_LEVEL]
     if not tops:
         return storey.height
@@ -116,6 +129,31 @@ def _openings(storey: Storey, meshes: dict[int, Mesh], walls_by_id: dict, solid,
         opening = _gap(element, meshes, walls_by_id, solid, storey.elevation, "door" if z0 <= IFC_LEVEL else "window")
         if opening is not None:
             out.append(opening)
+    return out
+
+
+def _merge_stacked(openings: list[Opening], where: str, warn) -> list[Opening]:
+    """Openings over one another in the same gap (a window stacked on a
+    window, a fanlight over a door) as one, from the lowest sill to the
+    highest head: a scene's opening is closed wherever another opening's
+    footprint is, so stacked ones would close each other. The transoms
+    between them are left out of the map (a warning says how many)."""
+    out: list[Opening] = []
+    merged = 0
+    for o in sorted(openings, key=lambda o: (o.kind != "door", o.sill)):
+        same = next((k for k, p in enumerate(out)
+                     if p.footprint.intersection(o.footprint).area >= IFC_STACKED_OVERLAP * min(p.footprint.area,
+                                                                                               o.footprint.area)), None)
+        if same is None:
+            out.append(o)
+            continue
+        p = out[same]
+        out[same] = Opening(shapely.union_all([p.footprint, o.footprint]), p.kind, min(p.sill, o.sill),
+                            max(p.head, o.head))
+        merged += 1
+    if merged:
+        warn(f"{where}: {merged} openings stacked over others in the same gap taken as one with them, from the "
+             "lowest sill to the highest head (the transoms between are not in the map)")
     return out
 
 
