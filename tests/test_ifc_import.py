@@ -42,7 +42,9 @@ def _box(f, body, product, origin, size):
     ifcopenshell.api.run("geometry.edit_object_placement", f, product=product, matrix=m)
 
 
-def write_model(path: Path) -> Path:
+def write_model(path: Path, partition_height: float | None = None) -> Path:
+    """The module's model; with ``partition_height``, a low wall (x 2.4 to 2.6,
+    from the south wall to y 1.4) of that height on the ground floor too."""
     run_api = ifcopenshell.api.run
     f = run_api("project.create_file", version="IFC4")
     project = run_api("root.create_entity", f, ifc_class="IfcProject", name="Test")
@@ -67,6 +69,10 @@ def write_model(path: Path) -> Path:
                              ((0, T, z), (T, d - 2 * T, height)), ((w - T, T, z), (T, d - 2 * T, height))]:
             wall = run_api("root.create_entity", f, ifc_class="IfcWall", name=f"wall {len(walls)}")
             _box(f, body, wall, origin, size)
+            walls.append(wall)
+        if partition_height is not None and k == 0:
+            wall = run_api("root.create_entity", f, ifc_class="IfcWall", name="partition")
+            _box(f, body, wall, (2.4, T, z), (0.2, 1.4 - T, partition_height))
             walls.append(wall)
         run_api("spatial.assign_container", f, relating_structure=storey, products=walls)
         for cls, host, origin, size in [("IfcDoor", walls[0], (DOOR[0], -0.1, z), (DOOR[1] - DOOR[0], T + 0.2, DOOR[2])),
@@ -171,6 +177,20 @@ def test_the_same_building_drawn_as_dxf_gives_the_same_segments_per_storey(model
         from_ifc, _ = extract_edges(load_scene(model, ifc_options), ifc_options)
         assert len(from_dxf) == len(from_ifc), name
         assert all(_holds(from_dxf, s) for s in from_ifc), name
+
+
+def test_each_wall_rises_to_its_own_height(tmp_path):
+    model = write_model(tmp_path / "partition.ifc", partition_height=1.1)
+    options = BuildOptions(floor_name="Ground floor")
+    scene = load_scene(model, options)
+    assert sorted(z.height for z in scene.height_zones) == pytest.approx([1.1, 2.8], abs=0.01)
+    segments, _ = extract_edges(scene, options)
+    face = np.array([[2.4, T, 1.1], [2.4, 1.4, 1.1]])  # the partition's top, west face
+    assert _holds(segments, face)
+    on_face = np.isclose(segments[:, :, 0], 2.4, atol=0.01).all(axis=1) & (segments[:, :, 1] < 1.45).all(axis=1)
+    assert segments[on_face][:, :, 2].max() == pytest.approx(1.1, abs=0.01)  # nothing of it at the room's 2.8 m
+    for what, seg in _expected_edges(2.8, 0.9, 2.1):
+        assert _holds(segments, seg), what
 
 
 def test_the_manifest_lists_storeys_maps_source_and_the_stair(model, building):

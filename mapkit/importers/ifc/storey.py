@@ -6,8 +6,9 @@
 - openings: each door's and window's gap: its opening element's footprint
   within its host wall, between the heights of that opening (its real sill
   and head; an element filling no opening: its own extent);
-- wall height: the walls' most common top above the floor, at most the
-  storey's height;
+- wall heights: each wall's top above the floor, at most the storey's
+  height (walls of several heights: a height zone per height, over its
+  walls, so each wall face rises to its own wall's top);
 - free space: its spaces (``IfcSpace``) and door gaps, else its floor
   slabs, else what its walls enclose; less walls and the stairs, ramps and
   lifts standing in it; shrunk by the robot radius.
@@ -15,7 +16,6 @@
 
 from __future__ import annotations
 
-from collections import Counter
 from functools import partial
 
 import numpy as np
@@ -27,7 +27,7 @@ from mapkit.importers import warn_decision
 from mapkit.importers.ifc.geometry import Mesh
 from mapkit.importers.ifc.read import Storey, count_roles
 from mapkit.options import BuildOptions
-from mapkit.scene import Opening, Scene
+from mapkit.scene import HeightZone, Opening, Scene
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import IFC_GRID, IFC_LEVEL, IFC_SLAB_REACH, IFC_STACKED_OVERLAP, MIN_FREE_AREA, ZERO
 
@@ -47,7 +47,7 @@ def storey_scene(storey: Storey, meshes: dict[int, Mesh], standing: list, obstac
     solid = MultiPolygon(polygon_parts(shapely.union_all(list(walls_by_id.values()) or [MultiPolygon()])))
     if solid.is_empty:
         raise NoWallsError(f"{where} has no walls or columns with a body; check it with 'mapkit layers'")
-    wall_height = _wall_height(storey, [meshes[e.id()] for e in standing], warn)
+    wall_height, zones = _wall_heights(storey, [meshes[e.id()] for e in standing], list(walls_by_id.values()), warn)
     openings = _merge_stacked(_openings(storey, meshes, walls_by_id, solid, warn), where, warn)
     gaps = shapely.union_all([o.footprint for o in openings] or [MultiPolygon()])
     walls = MultiPolygon(polygon_parts(solid.difference(gaps)))
@@ -71,7 +71,7 @@ def storey_scene(storey: Storey, meshes: dict[int, Mesh], standing: list, obstac
     info["layers"] = {"walls": sorted({e.is_a() for e in standing}),
                       "doors": ["IfcDoor"] if storey.of("door") else [], "windows": ["IfcWindow"] if storey.of("window") else []}
     info["areas_m2"] = {"walls": round(walls.area, 3), "free_space": round(free.area, 3)}
-    scene = Scene(walls=walls, openings=openings, free_space=free, wall_height=wall_height,
+    scene = Scene(walls=walls, openings=openings, free_space=free, wall_height=wall_height, height_zones=zones,
                   obstacles=MultiPolygon(polygon_parts(obstacles)), info=info)
     if free.is_empty:
         raise NoFreeSpaceError(f"{where}: no free space left inside its walls after keeping {options.robot_radius:g} m "
@@ -89,22 +89,26 @@ def standing_walls(storey: Storey, walls: list, meshes: dict[int, Mesh]) -> list
     return [e for e in walls if e.id() in meshes and meshes[e.id()].z_range[0] <= floor < meshes[e.id()].z_range[1]]
 
 
-def _wall_height(storey: Storey, walls: list[Mesh], warn) -> float:
-    """The walls' most common top above the storey's floor (rounded to
-    ``IFC_LEVEL``), at most the storey's height; a warning when the walls
-    reach several heights."""
-    tops = [m.z_range[1] - storey.elevation for m in walls]
-    tops = [min(t, storey.height) for t in tops if t > IFC_LEVEL]
-    if not tops:
-        return storey.height
-    levels = Counter(round(t / IFC_LEVEL) for t in tops)
-    common = max(levels.items(), key=lambda kv: (kv[1], kv[0]))[0]
-    height = max(t for t in tops if round(t / IFC_LEVEL) == common)
-    if len(levels) > 1:
-        others = sorted({round(t, 2) for t in tops if round(t / IFC_LEVEL) != common})
-        warn(f"storey '{storey.name}': walls reach {len(levels)} heights; the map's walls are {height:.3g} m high "
-             f"(most of them), not {', '.join(f'{h:g}' for h in others[:6])} m")
-    return float(height)
+def _wall_heights(storey: Storey, walls: list[Mesh], footprints: list, warn) -> tuple[float, list[HeightZone]]:
+    """Each wall's own height: its top above the storey's floor, at most
+    the storey's height, walls within ``IFC_LEVEL`` of one another one
+    height. One height: it, and no zones. Several: the tallest, and a
+    height zone per height over the footprints of its walls, so that each
+    wall face rises to its own wall's top (:mod:`mapkit.edges`: a face
+    takes the height of the zone nearest it)."""
+    tops = [min(m.z_range[1] - storey.elevation, storey.height) for m in walls]
+    by_level: dict[int, list] = {}
+    for top, fp in zip(tops, footprints):
+        by_level.setdefault(round(top / IFC_LEVEL), []).append((top, fp))
+    if len(by_level) <= 1:
+        return (max(tops) if tops else storey.height), []
+    zones = [HeightZone(MultiPolygon(polygon_parts(shapely.union_all([fp for _, fp in group]))),
+                        float(max(t for t, _ in group)))
+             for _, group in sorted(by_level.items())]
+    heights = ", ".join(f"{z.height:.3g}" for z in zones)
+    warn(f"storey '{storey.name}': walls of {len(zones)} heights ({heights} m): each wall face rises to its own "
+         "wall's top, taken level (a sloping top at its highest point)")
+    return max(z.height for z in zones), zones
 
 
 def _openings(storey: Storey, meshes: dict[int, Mesh], walls_by_id: dict, solid, warn) -> list[Opening]:
