@@ -7,6 +7,9 @@ from the one before (no module imports a later stage)::
                        importers/dxf/: read, units, layers, entities,
                          reconstruct (walls, openings, enclosure)
                        importers/mesh/: load, section, edges, hidden
+                       importers/ifc/: read, geometry, connections,
+                         storey (a Scene per storey; mapkit.building
+                         builds each and writes the manifest)
     mapkit.edges       Scene  ->  3D segments (N, 2, 3) + kinds
                        (a mesh importer gives its own segments instead)
     mapkit.visibility  segments + walls  ->  where each segment is seen from

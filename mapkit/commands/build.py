@@ -1,4 +1,5 @@
-"""``mapkit build PLAN -o OUT.lmap``: the main job, plan, mesh or ZInD annotations in, map out."""
+"""``mapkit build PLAN -o OUT.lmap``: the main job, plan, mesh, ZInD annotations or IFC model in, map out
+(an IFC model of several storeys: ``-o DIR``, a map per storey and the building manifest)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import sys
 
 from mapkit.errors import MapkitError
 
-HELP = "build a .lmap map from a DXF floor plan, a 3D mesh or ZInD annotations"
+HELP = "build a .lmap map from a DXF floor plan, a 3D mesh, ZInD annotations or an IFC model (a map per storey)"
 
 
 def add_arguments(p) -> None:
