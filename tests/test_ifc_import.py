@@ -15,15 +15,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import ezdxf
+import ifcopenshell  # the ifc extra, which the test extra includes
+import ifcopenshell.api
+
 from cli_helpers import assert_one_line_error, run
-
-ifcopenshell = pytest.importorskip("ifcopenshell")  # the ifc extra; the test extra installs it
-import ifcopenshell.api  # noqa: E402
-
-from linemap.lmap import SegmentKind, load_map  # noqa: E402
-from mapkit.edges import extract_edges  # noqa: E402
-from mapkit.importers import load_scene  # noqa: E402
-from mapkit.options import BuildOptions  # noqa: E402
+from linemap.lmap import SegmentKind, load_map
+from mapkit.edges import extract_edges
+from mapkit.importers import load_scene
+from mapkit.options import BuildOptions
 
 #: name, elevation, wall height, window sill and head, metres.
 STOREYS = [("Ground floor", 0.0, 2.8, 0.9, 2.1), ("Upper floor", 3.0, 2.5, 1.0, 1.8)]
@@ -154,7 +154,6 @@ def test_every_wall_edge_jamb_lintel_and_sill_is_in_its_storeys_map_at_the_model
 
 
 def test_the_same_building_drawn_as_dxf_gives_the_same_segments_per_storey(model, tmp_path):
-    ezdxf = pytest.importorskip("ezdxf")
     w, d = SIZE
     for name, z, height, sill, head in STOREYS:
         doc = ezdxf.new()
