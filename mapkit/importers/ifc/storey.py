@@ -129,6 +129,9 @@ def _openings(storey: Storey, meshes: dict[int, Mesh], walls_by_id: dict, solid,
     for element in storey.of("opening"):
         if element.id() in filled or getattr(element, "HasFillings", None):
             continue
+        hosts = [rel.RelatingBuildingElement for rel in (getattr(element, "VoidsElements", None) or [])]
+        if not any(h.id() in walls_by_id for h in hosts):
+            continue  # a hole in a slab (a stairwell) or a roof: no gap in a wall
         z0 = meshes[element.id()].z_range[0] - storey.elevation if element.id() in meshes else 0.0
         opening = _gap(element, meshes, walls_by_id, solid, storey.elevation, "door" if z0 <= IFC_LEVEL else "window")
         if opening is not None:
