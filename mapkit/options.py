@@ -125,8 +125,9 @@ class BuildOptions:
         help="mesh up axis (default {default}: glTF's y-up, z for the other formats; a glTF stored z-up is told by "
              "its faces)")
     floor_name: str | None = option(
-        None, group="import", metavar="NAME",
-        help="floor to build of a tour with several (ZInD: floor_01, ...; default the first, with a warning)")
+        None, group="import", metavar="NAME", flag=("--floor-name", "--storey"),
+        help="floor to build of a source with several: a ZInD tour's floor (floor_01, ...; default the first, with "
+             "a warning), an IFC model's storey (its name; default every storey, with -o DIR)")
     plan_number: int | None = option(
         None, group="import", flag="--plan", metavar="N", allowed=Range(1),
         help="plan to build of a sheet with several side by side (DXF: numbered by wall length, largest first, "

@@ -7,6 +7,9 @@ from the one before (no module imports a later stage)::
                        importers/dxf/: read, units, layers, entities,
                          reconstruct (walls, openings, enclosure)
                        importers/mesh/: load, section, edges, hidden
+                       importers/ifc/: read, geometry, connections,
+                         storey (a Scene per storey; mapkit.building
+                         builds each and writes the manifest)
     mapkit.edges       Scene  ->  3D segments (N, 2, 3) + kinds
                        (a mesh importer gives its own segments instead)
     mapkit.visibility  segments + walls  ->  where each segment is seen from
@@ -54,22 +57,33 @@ class BuildReport:
 
 def build_map(plan: str | Path, options: BuildOptions | None = None, progress: bool = False) -> tuple[LineMap, BuildReport]:
     """Run the whole pipeline on a DXF plan or a mesh; nothing is written."""
-    from linemap.camera import Camera
-
-    from mapkit.edges import extract_edges
     from mapkit.importers import load_scene
-    from mapkit.vir import RegionSettings, build_regions
 
     options = options or BuildOptions()
     options.validate()  # again: fields may have been set since construction
-    camera = Camera.from_dict(options.camera)
-    report = BuildReport()
     plan = Path(plan)
-
     t = time.perf_counter()
     with step("import", progress):
         scene = load_scene(plan, options)
-    report.seconds["import"] = time.perf_counter() - t
+    return build_map_of_scene(scene, plan, options, progress, import_seconds=time.perf_counter() - t)
+
+
+def build_map_of_scene(scene, plan: str | Path, options: BuildOptions | None = None, progress: bool = False,
+                       import_seconds: float = 0.0) -> tuple[LineMap, BuildReport]:
+    """The pipeline from an imported ``scene`` of the file ``plan`` (named
+    and hashed in the map's META): edges, regions, the map; nothing is
+    written. One scene of a file with several (a building's storeys)."""
+    from linemap.camera import Camera
+
+    from mapkit.edges import extract_edges
+    from mapkit.vir import RegionSettings, build_regions
+
+    options = options or BuildOptions()
+    options.validate()
+    camera = Camera.from_dict(options.camera)
+    report = BuildReport()
+    plan = Path(plan)
+    report.seconds["import"] = import_seconds
     if scene.camera_height is not None and options.camera_from_source:
         camera = Camera.from_dict({**camera.to_dict(), "height_m": round(float(scene.camera_height), 4)})
 

@@ -371,6 +371,28 @@ MESH_HIDDEN_REACH = 4 * MERGE
 #: The hidden-edge quadrant test looks this far to either side of an edge, metres.
 MESH_HIDDEN_SIDE = 3 * MESH_HIDDEN_REACH
 
+# ---- IFC models (mapkit.importers.ifc) ----------------------------------------
+
+#: Projected triangles of an IFC element are unioned on a grid this fine,
+#: metres: the faces of one solid share vertices up to float noise, and an
+#: exact union of thousands of triangles leaves hairline seams.
+IFC_GRID = 1e-4
+
+#: Heights within this of each other are one level, metres: a door whose
+#: opening starts this close to the storey's floor has no sill, walls whose
+#: tops differ by less are one height, a stair's tread this close to a
+#: storey's floor is on it.
+IFC_LEVEL = 0.02
+
+#: A slab is a storey's floor when its top is within this of the storey's
+#: elevation, metres (floor finishes and screeds sit on or just under it).
+IFC_SLAB_REACH = 0.5
+
+#: Two openings whose footprints overlap by this fraction of the smaller
+#: one are stacked in one gap (windows over windows, a fanlight over a
+#: door): the scene takes them as one opening.
+IFC_STACKED_OVERLAP = 0.5
+
 #: At most this many distinct heights are probed for hidden edges; edges at
 #: other heights are kept unchecked (a warning says so).
 MESH_HIDDEN_MAX_LEVELS = 64

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-AUTHORING = ("mapkit", "ezdxf", "trimesh", "shapely", "viser")
+AUTHORING = ("mapkit", "ezdxf", "trimesh", "shapely", "viser", "ifcopenshell")
 
 #: Module-level numeric constants in matcher/ and linemap/ that are not
 #: thresholds, with the reason. Anything else numeric at module level

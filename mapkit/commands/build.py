@@ -1,4 +1,5 @@
-"""``mapkit build PLAN -o OUT.lmap``: the main job, plan, mesh or ZInD annotations in, map out."""
+"""``mapkit build PLAN -o OUT.lmap``: the main job, plan, mesh, ZInD annotations or IFC model in, map out
+(an IFC model of several storeys: ``-o DIR``, a map per storey and the building manifest)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import sys
 
 from mapkit.errors import MapkitError
 
-HELP = "build a .lmap map from a DXF floor plan, a 3D mesh, 3D segments (.csv, .json) or ZInD annotations"
+HELP = "build a .lmap map from a DXF floor plan, a 3D mesh, 3D segments (.csv, .json), ZInD annotations or an IFC model (a map per storey)"
 
 
 def add_arguments(p) -> None:
@@ -15,8 +16,10 @@ def add_arguments(p) -> None:
 
     p.add_argument("plan", metavar="PLAN",
                    help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off), 3D segments (.csv, or .json with "
-                        "\"segments\") or ZInD zind_data.json")
-    p.add_argument("-o", "--output", required=True, metavar="OUT.lmap", help="map file to write")
+                        "\"segments\"), ZInD zind_data.json or IFC model (.ifc)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.lmap",
+                   help="map file to write; for an IFC model of several storeys a folder: DIR/<storey>.lmap and "
+                        "DIR/building.json (--storey NAME with OUT.lmap: that storey)")
     add_import_arguments(p)
     cam = default_camera()
     g = p.add_argument_group("camera (what 'visible' means)")
@@ -82,6 +85,8 @@ def run(args) -> int:
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)
+    if _is_building(args):
+        return _run_building(args, options)
     out = output_file(args.output, (".lmap",), [args.plan])
     linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty())
     size = save_map(out, linemap)
@@ -92,4 +97,36 @@ def run(args) -> int:
             f"wrote {out}: {c['segments']} segments, {c['regions']} regions, "
             f"mean list {c['mean_list_length']:.1f}, {size / 1024:.1f} KiB  ({t})"
         )
+    return 0
+
+
+def _is_building(args) -> bool:
+    """An IFC model built into a folder: every storey's map and the manifest."""
+    from pathlib import Path
+
+    return Path(args.plan).suffix.lower() == ".ifc" and Path(args.output).suffix.lower() != ".lmap"
+
+
+def _run_building(args, options) -> int:
+    from pathlib import Path
+
+    from mapkit.building import build_building, write_building
+
+    if options.floor_name is not None:
+        raise MapkitError(f"--storey builds one storey into one map: give -o OUT.lmap, not the folder '{args.output}'")
+    plan = Path(args.plan)
+    if not plan.is_file():
+        raise MapkitError(f"{plan}: no such file; check the path")
+    result = build_building(plan, options, progress=not args.quiet and sys.stderr.isatty())
+    manifest = write_building(result, args.output)
+    if not args.quiet:
+        print(f"read {plan.name} in {result.import_seconds:.2f}s")
+        for o in result.storeys:
+            if o.map is None:
+                print(f"  {o.name}: no map ({o.why})")
+                continue
+            c = o.report.counts
+            print(f"  {o.name}: {o.file_name}: {c['segments']} segments, {c['regions']} regions, "
+                  f"mean list {c['mean_list_length']:.1f}  ({o.seconds:.2f}s)")
+        print(f"wrote {manifest}")
     return 0

@@ -8,7 +8,7 @@ HELP = "summarise a .lmap map (counts, kinds, extent, build parameters)"
 
 
 def add_arguments(p) -> None:
-    p.add_argument("map", metavar="MAP", help=".lmap file")
+    p.add_argument("map", metavar="MAP", help=".lmap file, or a building manifest (building.json)")
     p.add_argument("--json", action="store_true", help="print one JSON object for scripts")
 
 
@@ -57,6 +57,8 @@ def summary(path) -> dict:
 
 
 def run(args) -> int:
+    if str(args.map).lower().endswith(".json"):
+        return _building_info(args)
     s = summary(args.map)
     if args.json:
         print(json.dumps(s))
@@ -89,5 +91,26 @@ def run(args) -> int:
         lines.append(
             f"  visibility range {build.get('max_range')} m, min visible length {build.get('min_visible_length')} m, eps {build.get('eps')} m"
         )
+    print("\n".join(lines))
+    return 0
+
+
+def _building_info(args) -> int:
+    """Summary of a building manifest: its source, storeys and their maps, connections."""
+    from mapkit.building import load_manifest
+
+    doc = load_manifest(args.map)
+    if args.json:
+        print(json.dumps(doc))
+        return 0
+    src = doc["source"]
+    lines = [f"{args.map}: building of {len(doc['storeys'])} storeys from {src['name']} ({src.get('schema', '?')}, "
+             f"sha256 {src['sha256'][:12]}...)"]
+    for s in doc["storeys"]:
+        what = (f"{s['map']}: {s['segments']} segments, {s['regions']} regions, walls {s['wall_height_m']:g} m"
+                if s["map"] else f"no map ({s.get('why')})")
+        lines.append(f"  {s['name']:<16} floor {s['elevation_m']:>7.3f} m, height {s['height_m']:.3f} m  {what}")
+    for c in doc["connections"]:
+        lines.append(f"  {c['kind']:<6} {c['name'] or c['guid']}: {' <-> '.join(c['storeys'])}")
     print("\n".join(lines))
     return 0

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import json
 
-HELP = "list the layers of a DXF plan with entity counts and the role each is given"
+HELP = ("list the layers of a DXF plan with entity counts and the role each is given (an IFC model: its storeys and "
+        "element classes)")
 
 
 def add_arguments(p) -> None:
     from mapkit.commands._import_args import add_import_arguments
 
-    p.add_argument("plan", metavar="PLAN", help="DXF floor plan")
+    p.add_argument("plan", metavar="PLAN", help="DXF floor plan, or IFC model (.ifc)")
     p.add_argument("--json", action="store_true", help="one JSON object on stdout")
     add_import_arguments(p)
 
@@ -30,6 +31,8 @@ def run(args) -> int:
         raise MapkitError(f"{path}: is a directory, expected a DXF file")
     if not path.is_file():
         raise MapkitError(f"{path}: no such file; check the path")
+    if path.suffix.lower() == ".ifc":
+        return _ifc_layers(path, args.json)
     if path.suffix.lower() != ".dxf":
         raise MapkitError(f"{path.name}: 'mapkit layers' reads DXF plans (.dxf), got a '{path.suffix}' file")
     doc, warnings = read_dxf(path)
@@ -114,3 +117,41 @@ def _table(rows: list[dict]) -> str:
     for row in [header, *body]:
         lines.append(f"{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:>{widths[2]}}  {row[3]:<{widths[3]}}  {row[4]}")
     return "\n".join(lines)
+
+
+#: What each role of :data:`mapkit.importers.ifc.read.ROLES` becomes in a storey's map.
+IFC_BECOMES = {
+    "wall": "walls (footprint seen from above)",
+    "door": "door gap in its wall, at its opening's heights",
+    "window": "window gap in its wall, at its opening's sill and head",
+    "opening": "the gap of a door or window (unfilled: a passage or hole)",
+    "space": "free space",
+    "slab": "free space where a storey has no spaces",
+    "connection": "manifest connection; kept out of the free space",
+}
+
+
+def _ifc_layers(path, as_json: bool) -> int:
+    """The storeys of an IFC model and the element classes of each, with what each becomes."""
+    from mapkit.importers.ifc.read import LISTED_UNUSED, ROLES, count_roles, open_model
+
+    model = open_model(path)
+    storeys = []
+    for s in model.storeys:
+        counts = count_roles([e for v in s.elements.values() for e in v])
+        storeys.append({"name": s.name, "elevation_m": round(s.elevation, 3),
+                        "classes": {cls: counts[cls] for cls in ROLES if counts[cls]}})
+    unused = {cls: model.class_counts[cls] for cls in LISTED_UNUSED if model.class_counts.get(cls)}
+    becomes = {cls: IFC_BECOMES[role] for cls, role in ROLES.items()} | {cls: "not used" for cls in unused}
+    if as_json:
+        print(json.dumps({"file": path.name, "schema": model.schema, "storeys": storeys, "unused": unused,
+                          "becomes": becomes}))
+        return 0
+    print(f"{path.name}: {model.schema}, {len(storeys)} storeys")
+    for s in storeys:
+        print(f"storey '{s['name']}' at {s['elevation_m']:g} m")
+        for cls, n in s["classes"].items():
+            print(f"  {cls:<20} {n:>4}  {becomes[cls]}")
+    if unused:
+        print("not used: " + ", ".join(f"{cls} {n}" for cls, n in unused.items()))
+    return 0

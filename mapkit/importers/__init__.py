@@ -32,6 +32,7 @@ REGISTRY = {
     ".gltf": "mapkit.importers.mesh",
     ".off": "mapkit.importers.mesh",
     ".csv": "mapkit.importers.segments",
+    ".ifc": "mapkit.importers.ifc",
     ".json": "json",  # by content: JSON_FORMATS
 }
 
