@@ -1,7 +1,7 @@
 """Benchmark ``mapkit build`` on real IFC models: time, memory and counts per storey,
 and whether every door and window of the model is in its storey's map.
 
-    python tools/bench_ifc.py /path/to/AC20-FZK-Haus.ifc /path/to/duplex.ifc
+    python tools/bench_ifc.py /path/to/AC20-FZK-Haus.ifc /path/to/duplex.ifc [--report docs/benchmarks/ifc.md]
 
 The models are not in the repository (see docs/building.md for where to get
 them). Each storey is built on its own (``--storey NAME``, a fresh process:
@@ -22,6 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from mapkit_harness.tables import add_report_option, markdown_table, reported
+
 ROOT = Path(__file__).resolve().parent.parent
 
 #: A door or window is found when an opening edge of its storey's map is this close to it, metres.
@@ -40,12 +42,6 @@ def timed(argv: list[str]) -> tuple[float, float]:
     if proc.returncode != 0:
         sys.exit(f"{' '.join(argv)} failed: {err.strip()}")
     return seconds, usage.ru_maxrss / 1024.0
-
-
-def table(columns: list[str], rows: list[list]) -> str:
-    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
 
 
 def openings_in_maps(model: Path, out: Path, manifest: dict) -> list[list]:
@@ -98,22 +94,28 @@ def bench(model: Path, work: Path) -> None:
     rows.append(["whole building (-o DIR)", "", "", "", sum(s.get("segments", 0) for s in manifest["storeys"]),
                  sum(s.get("regions", 0) for s in manifest["storeys"]), f"{seconds:.1f}", f"{mib:.0f}"])
     print(f"\n### {model.name} ({manifest['source']['schema']})\n")
-    print(table(["storey", "floor (m)", "height (m)", "walls (m)", "segments", "regions", "time (s)",
+    print(markdown_table(["storey", "floor (m)", "height (m)", "walls (m)", "segments", "regions", "time (s)",
                  "peak RSS (MiB)"], rows))
     print(f"\nconnections: " + ("; ".join(f"{c['kind']} '{c['name']}' {' <-> '.join(c['storeys'])}"
                                           for c in manifest["connections"]) or "none"))
     print()
-    print(table(["storey", "doors", "windows", "in the map", "missing"], openings_in_maps(model, out, manifest)))
+    print(markdown_table(["storey", "doors", "windows", "in the map", "missing"], openings_in_maps(model, out, manifest)))
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("models", nargs="+", type=Path, help="IFC models")
-    args = p.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        for model in args.models:
-            bench(model, Path(tmp))
+    add_report_option(p)
+    args = p.parse_args(argv)
+
+    def run() -> int:
+        with tempfile.TemporaryDirectory() as tmp:
+            for model in args.models:
+                bench(model, Path(tmp))
+        return 0
+
+    return reported(args.report, run, __file__, argv)
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
