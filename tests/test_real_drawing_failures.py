@@ -75,6 +75,7 @@ FOREIGN_LAYERS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("language", sorted(FOREIGN_LAYERS))
 def test_layer_names_in_other_languages_build_as_the_english_ones(tmp_path, capsys, language):
     """The flat drawn with its layers named in another language builds with
@@ -123,6 +124,7 @@ def _translated(plan, by_m, path):
     return path
 
 
+@pytest.mark.slow
 def test_a_georeferenced_drawing_is_moved_to_a_local_origin(tmp_path, capsys):
     """A facility-management plan 1758 km from its file's origin (a national
     grid) was refused ('coordinates exceed the format's range'); it builds
@@ -238,6 +240,7 @@ def _sheet(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_a_sheet_of_two_plans_builds_one_and_names_the_other(tmp_path, capsys):
     """Two storeys side by side on one sheet were built as one floor twice
     as wide; the plans are found, the largest built with a warning naming
@@ -261,3 +264,37 @@ def test_a_sheet_of_two_plans_builds_one_and_names_the_other(tmp_path, capsys):
     assert not (tmp_path / "three.lmap").exists()
     code, out, _ = run(capsys, "layers", sheet)
     assert code == 0 and "plans: 2 separate plans" in out and "#2  11.0 x 9.1 m at (30.0, -0.6)" in out
+
+
+def _zoned_rooms(path):
+    """Two 4 x 4 m rooms in double-line walls 0.2 m thick (A-WALL), each
+    also drawn as a room polygon on a room layer (a facility-management
+    plan's room fills), the shared wall at x 3.9-4.1 broken for a door
+    (y 1-1.9, A-DOOR: a leaf and its swing)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, room, leaf = {"layer": "A-WALL"}, {"layer": "Rooms"}, {"layer": "A-DOOR"}
+    msp.add_lwpolyline([(0, 0), (8.2, 0), (8.2, 4.2), (0, 4.2)], close=True, dxfattribs=wall)
+    for x0, x1 in ((0.2, 3.9), (4.1, 8.0)):
+        msp.add_lwpolyline([(x0, 0.2), (x1, 0.2), (x1, 4.0), (x0, 4.0)], close=True, dxfattribs=room)
+    msp.add_lwpolyline([(0.2, 0.2), (3.9, 0.2), (3.9, 1.0), (4.1, 1.0), (4.1, 0.2), (8.0, 0.2), (8.0, 4.0),
+                        (4.1, 4.0), (4.1, 1.9), (3.9, 1.9), (3.9, 4.0), (0.2, 4.0)], close=True, dxfattribs=wall)
+    # The hinge on the right room's side of the wall, the leaf open square.
+    msp.add_line((4.1, 1.0), (5.0, 1.0), dxfattribs=leaf)
+    msp.add_arc((4.1, 1.0), 0.9, 0, 90, dxfattribs=leaf)
+    doc.saveas(path)
+    return path
+
+
+def test_room_fills_do_not_wall_up_the_doorways(tmp_path):
+    """A plan with a room polygon per room took the strips between them for
+    walls, the door gaps among them (a university floor: 4 of 36 door
+    drawings found); where a door sits in a gap of the walls as drawn, the
+    strip is the door's gap."""
+    from mapkit.importers import load_scene
+    from mapkit.shapes import polygon_parts
+
+    scene = load_scene(_zoned_rooms(tmp_path / "zoned.dxf"))
+    assert [o.kind for o in scene.openings] == ["door"]
+    assert len(polygon_parts(scene.free_space)) == 1

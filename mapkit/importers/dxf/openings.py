@@ -14,7 +14,8 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import nearest_points, unary_union
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH, THIN_WALL, ZERO
+from mapkit.tolerances import (CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH,
+                                THIN_WALL, ZERO)
 
 
 def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:

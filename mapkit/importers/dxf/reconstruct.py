@@ -53,6 +53,13 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if not zones.is_empty:
         between = _between_zones(walls, zones, options.max_wall_thickness)
         if not between.is_empty:
+            # Room fills stop short of the doorways too: where a door sits in
+            # a gap of the walls as drawn, the strip is its gap, not a wall.
+            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
+                                                options.max_wall_thickness) if g is not None]
+            if gaps:
+                between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
+        if not between.is_empty:
             walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
             info["zone_walls_m2"] = round(between.area, 3)
 
