@@ -187,6 +187,11 @@ SHEET_MIN_PLAN_SHARE = 0.2
 #: annex beside a building does not).
 SHEET_MIN_PLAN_AREA_SHARE = 0.5
 
+#: A plan whose walls span less than this, metres, and leave no free space
+#: is probably read in the wrong units (a gallery drawn at 1:10 in metres
+#: spans 4.6 m): the refusal names --units and --scale.
+SMALL_PLAN_M = 10.0
+
 #: Plausible building extent, metres (largest side); outside it the drawing
 #: units are probably wrong.
 PLAUSIBLE_EXTENT = (1.0, 2000.0)

@@ -298,3 +298,23 @@ def test_room_fills_do_not_wall_up_the_doorways(tmp_path):
     scene = load_scene(_zoned_rooms(tmp_path / "zoned.dxf"))
     assert [o.kind for o in scene.openings] == ["door"]
     assert len(polygon_parts(scene.free_space)) == 1
+
+
+@pytest.mark.slow
+def test_a_plan_too_small_for_free_space_names_the_units(tmp_path, capsys):
+    """A gallery drawn at a tenth of its size (depthmapX's test plan, 4.6 m
+    across in metres) was refused naming only the wall layers and the robot
+    radius; the refusal names --units and --scale, and with --scale it builds."""
+    doc = ezdxf.readfile(FLAT)
+    for e in doc.modelspace():
+        try:
+            e.scale_uniform(0.1)
+        except (NotImplementedError, AttributeError, TypeError):
+            pass
+    small = tmp_path / "small.dxf"
+    doc.saveas(small)
+    code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap")
+    assert code == 2 and "the walls span only 1.2 x 1.0 m read in mm: if the drawing is in other units" in err
+    assert not (tmp_path / "small.lmap").exists()
+    code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap", "--scale", "10", "-q")
+    assert code == 0, err

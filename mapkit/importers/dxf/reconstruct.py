@@ -28,7 +28,7 @@ from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SNAP_GAP, ZERO
+from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -100,9 +100,14 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     )
     if free.is_empty:
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
+        x0, y0, x1, y1 = walls.bounds
+        small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
+        hint = (f"; the walls span only {x1 - x0:.1f} x {y1 - y0:.1f} m read in {info.get('units', 'm')}: if the "
+                f"drawing is in other units, give them with --units or --scale" if small else "")
         raise NoFreeSpaceError(
             f"no free space left inside the walls (layers {layers}) after keeping {options.robot_radius:g} m "
-            f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius",
+            f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius"
+            + hint,
             scene,
         )
     return scene
