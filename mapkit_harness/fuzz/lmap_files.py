@@ -14,7 +14,7 @@ import random
 
 from .cases import FOLLOW_UPS, ROOT, Case, source_bytes
 from .matcher_inputs import base_camera, base_frame
-from .mutations import mutate_bytes
+from .mutations import json_paths, mutate_bytes
 
 
 def lmap_chunks(blob: bytes) -> list[list]:
@@ -34,20 +34,7 @@ def lmap_encode(chunks) -> bytes:
 def _mutate_meta(payload: bytes, rng: random.Random) -> tuple[bytes, str]:
     """META's JSON with one value replaced by something hostile."""
     meta = json.loads(payload)
-    paths = []
-
-    def walk(node, path):
-        if isinstance(node, dict):
-            for k, v in node.items():
-                paths.append(path + [k])
-                walk(v, path + [k])
-        elif isinstance(node, list):
-            for i, v in enumerate(node[:20]):
-                paths.append(path + [i])
-                walk(v, path + [i])
-
-    walk(meta, [])
-    path = rng.choice(paths)
+    path = rng.choice(json_paths(meta))
     parent = meta
     for k in path[:-1]:
         parent = parent[k]

@@ -126,7 +126,7 @@ HOSTILE_JSON_VALUES = (math.nan, math.inf, -math.inf, 1e308, -1e308, 1e30, -1e30
                        {"x": 1})
 
 
-def _json_paths(doc) -> list[list]:
+def json_paths(doc) -> list[list]:
     """Every path (keys and indices) into ``doc``, the first 20 items of each list."""
     paths = []
 
@@ -148,7 +148,7 @@ def mutate_json_doc(doc, rng: random.Random) -> tuple[str, str]:
     doc = json.loads(json.dumps(doc))
     done, nests = [], {}
     for _ in range(rng.choice((1, 1, 2, 3))):
-        paths = _json_paths(doc)
+        paths = json_paths(doc)
         if not paths:
             break
         path = rng.choice(paths)
