@@ -54,6 +54,8 @@ def main(argv=None) -> int:
                     help="start no case after this many minutes (the table counts the cases run)")
     ap.add_argument("--replay", type=Path, metavar="CASE_DIR", help="run one saved case and print its outcome")
     args = ap.parse_args(argv)
+    if args.replay and not (args.replay / "case.json").is_file():
+        ap.error(f"--replay {args.replay}: no case.json there; give a folder --save wrote (or tests/data/fuzz/NAME)")
     with tempfile.TemporaryDirectory(prefix="fuzz-") as scratch:
         if args.replay:
             out = run_bounded(load_case(args.replay), Path(scratch) / "case", args.bound_s, args.mem_gb)
