@@ -13,6 +13,8 @@ Ground truth and simulated input, one concept per module:
 - :mod:`.panorama`: perspective views cut from an equirectangular panorama;
 - :mod:`.visibility_oracle`: brute-force visibility, the reference;
 - :mod:`.crafted_maps`: ``.lmap`` files with valid checksums and hostile contents;
+- :mod:`.fuzz`: the fuzz families (damaged and hostile inputs for every entry
+  point), the bounded run of a case, the classifier and the campaign;
 - :mod:`.baseline`: the classic interpretation tree the paper sets out to beat;
 - :mod:`.scoring`: whether a matcher's answer is right, for the benchmarks;
 - :mod:`.browser`: headless chromium over the DevTools protocol, and a

@@ -1,7 +1,8 @@
 """Grey images of a map seen from a pose, for testing the image path end to end.
 
-The scene: the map's wall outlines extruded from the floor (z = 0) to
-``meta["wall_height"]`` (the simulator's occluders, :mod:`mapkit_harness.simulate`), a flat
+What a camera sees (:class:`VisibleSurfaces`): the map's wall outlines
+extruded from the floor (z = 0) to ``meta["wall_height"]`` (the simulator's
+occluders, :mod:`mapkit_harness.simulate`), a flat
 floor and a flat ceiling, and across the door and window openings the walls
 above their heads and below their sills, with the slabs between the wall's
 two faces (from the map's LINTEL and WINDOW segments). Each pixel's ray is
@@ -90,7 +91,7 @@ def shade_rays(linemap, camera: Camera, pose, uv: np.ndarray) -> np.ndarray:
     rays = camera.pixel_rays(uv) @ R  # (P, 3) world directions (R^T ray)
     h = camera.height_m
     top = float(linemap.meta.get("wall_height", 2.5))
-    scene = Scene(linemap, camera, pose)
+    surfaces = VisibleSurfaces(linemap, camera, pose)
     free = free_space(linemap)
     origin = np.array([x, y])
     out = np.empty(len(uv), dtype=np.float32)
@@ -101,12 +102,12 @@ def shade_rays(linemap, camera: Camera, pose, uv: np.ndarray) -> np.ndarray:
         with np.errstate(divide="ignore"):
             s_plane = np.where(d[:, 2] < 0, -h / d[:, 2], np.where(d[:, 2] > 0, (top - h) / d[:, 2], np.inf))
         grey = np.where(d[:, 2] < 0, FLOOR_GREY, CEILING_GREY).astype(np.float32)
-        s_panel, panel = scene.first_panel(origin, h, d)
-        s_slab, slab = scene.first_slab(origin, h, d)
+        s_panel, panel = surfaces.first_panel(origin, h, d)
+        s_slab, slab = surfaces.first_slab(origin, h, d)
         hit = (s_panel < s_plane) & (s_panel <= s_slab)
-        grey[hit] = scene.panel_grey[panel[hit]]
+        grey[hit] = surfaces.panel_grey[panel[hit]]
         on_slab = (s_slab < s_plane) & (s_slab < s_panel)
-        grey[on_slab] = scene.slab_grey[slab[on_slab]]
+        grey[on_slab] = surfaces.slab_grey[slab[on_slab]]
         # Nothing ahead but the floor or ceiling planes: the point seen is
         # past an opening unless it lies by the map's regions.
         out_of = np.isinf(s_panel) & np.isinf(s_slab)
@@ -120,7 +121,7 @@ def shade_rays(linemap, camera: Camera, pose, uv: np.ndarray) -> np.ndarray:
     return out
 
 
-class Scene:
+class VisibleSurfaces:
     """The surfaces a camera at ``pose`` can see, in the floor plane.
 
     ``panels``: vertical faces along 2D edges ``a, b`` (E, 2) between

@@ -2,18 +2,43 @@
 the harness makes frames and synthetic maps from and checks the builder
 against.
 
-Three questions, one sight test each, kept as they were written because
-the frames and maps made from them are pinned by tests and benchmarks (a
-change of the test's edge cases would change them):
+Three questions, two sight tests. :func:`crosses_an_edge` (a proper
+crossing of an occluder edge: touching an edge or a corner, or running
+along one, does not block) is the one test of the simulator and of the
+region builder's reference; they differ in their occluders, each for a
+reason below. The synthetic buildings' region lists keep shapely's test:
 
-- :func:`sight_blocked`: do sight lines from one floor point to points on
-  wall faces cross a wall edge? (the simulator's frames,
-  :func:`mapkit_harness.simulate.visible_lines`);
-- :func:`visible_lists`: per region, the segments seen from some sample
-  point of it (the synthetic buildings' lists, shapely);
-- :class:`VisibilityOracle`: the segments visible from a floor point under
-  the builder's own definition, below (the region builder's tests and
-  ``tools/bench_vir.py``).
+- :func:`sight_blocked`, the reference for **what a camera sees** in the
+  simulator (:func:`mapkit_harness.simulate.visible_lines`, hence every
+  frame of ``simulate.make_frame`` and ``runs.simulate_run``, the tests'
+  and benchmarks' seeded frames). Occluders are the map's wall outlines
+  exactly (``simulate.wall_edges``), unshrunk: a camera must not see
+  through a wall by a tolerance. The targets lie on wall faces, so each
+  sight line is shortened by 2 mm at its far end instead.
+- :class:`VisibilityOracle`, the reference for **the region builder**
+  (``tests/test_visibility.py``, ``tests/test_vir.py``,
+  ``tools/bench_vir.py``): the segments visible from a floor point under
+  the builder's own definition (docs/visibility.md), below. Occluders are
+  shrunk by twice the builder's ``OCCLUSION_SHRINK`` with mitred corners
+  (``occluder_edges``), so the reference sees slightly more than the
+  builder assumes: a stricter check of the builder's superset guarantee;
+  nothing is shortened, since the shrink already leaves targets on wall
+  faces clear.
+- :func:`visible_lists`, the reference for **the synthetic buildings'
+  region lists** (``plans.buildings``: ``make_flat_map``,
+  ``make_small_flat``), written into their maps: the bytes of those maps
+  depend on it, so it stays as written. Per region, a segment is listed if
+  ``min_seen`` metres of its ``samples`` mid-sample points are unoccluded
+  from some sample point of the region (a grid inside and points along its
+  outline). Occluders are the wall polygons shrunk by 2 mm with round
+  corners (shapely's default buffer), and a sight line is blocked if it
+  meets them at all (``shapely.intersects``: touching counts). It is not
+  :func:`crosses_an_edge` on the edges of those shrunk walls because that
+  changes a map: measured, ``make_small_flat``'s bytes stayed the same but
+  ``make_flat_map``'s changed (round corners, touching lines; a list is
+  asked of every sample point of a region against every sample of every
+  segment, so a grazing case does turn up), and it was no faster (262 s
+  against shapely's 202 s for ``make_flat_map``).
 
 :class:`VisibilityOracle`, straight from the definition in
 docs/visibility.md, point by point: every segment is sampled every ``step``
@@ -21,9 +46,7 @@ metres; a sample is seen from the floor point q if its distance and
 elevation suit the camera and the open 2D sight line from q to it crosses
 no occluder edge; a segment is visible if a run of
 consecutive seen samples spans at least ``min_visible_length`` (a segment
-shorter than that: every sample). Occluders are shrunk by twice the
-builder's ``OCCLUSION_SHRINK``, so the reference sees slightly more than the
-builder assumes: a stricter check of the builder's superset guarantee.
+shorter than that: every sample).
 """
 
 from __future__ import annotations
@@ -37,22 +60,35 @@ from mapkit.shapes import rings_of
 from mapkit.tolerances import OCCLUSION_SHRINK
 
 
+def crosses_an_edge(origin: np.ndarray, targets: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """(M,) bool: the open segment from ``origin`` (2,) to each of ``targets``
+    (M, 2) properly crosses one of the edges ``ea`` -> ``eb`` (E, 2): both
+    orientation tests strict, so touching an edge or a corner, or running
+    along an edge, does not count. The one sight test of the simulator and
+    of :class:`VisibilityOracle` (their occluders differ, not the test)."""
+    q = np.asarray(origin, dtype=float)
+    out = np.empty(len(targets), dtype=bool)
+    for i in range(0, len(targets), 2000):
+        s = targets[i : i + 2000, None, :]
+
+        def cross(u, v):
+            return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+        o1 = cross(s - q, ea - q)
+        o2 = cross(s - q, eb - q)
+        o3 = cross(eb - ea, q - ea)
+        o4 = cross(eb - ea, s - ea)
+        out[i : i + 2000] = ((o1 * o2 < 0) & (o3 * o4 < 0)).any(axis=1)
+    return out
+
+
 def sight_blocked(c: np.ndarray, q: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
     """(S,) bool: sight lines from c (2,) to points q (S, 2) cross a wall edge.
 
     Sight lines are shortened by 2 mm at q, which lies on a wall face."""
     d = q - c
     ln = np.linalg.norm(d, axis=1, keepdims=True)
-    q2 = c + d * np.maximum(ln - 2e-3, 0) / np.maximum(ln, 1e-12)
-    r = q2 - c  # (S, 2)
-    s = eb - ea  # (E, 2)
-    denom = r[:, None, 0] * s[None, :, 1] - r[:, None, 1] * s[None, :, 0]
-    w = ea[None] - c[None, None]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / denom
-        u = (w[..., 0] * r[:, None, 1] - w[..., 1] * r[:, None, 0]) / denom
-    hit = (np.abs(denom) > 1e-12) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
-    return hit.any(axis=1)
+    return crosses_an_edge(c, c + d * np.maximum(ln - 2e-3, 0) / np.maximum(ln, 1e-12), ea, eb)
 
 
 def _sample_points(reg, spacing: float) -> np.ndarray:
@@ -149,21 +185,7 @@ class VisibilityOracle:
 
     def _clear(self, q, targets) -> np.ndarray:
         """(M,) bool: the open segment q -> target crosses no occluder edge."""
-        a, b = self.edges[:, 0], self.edges[:, 1]
-        out = np.empty(len(targets), dtype=bool)
-        for i in range(0, len(targets), 2000):
-            s = targets[i : i + 2000, None, :]
-
-            def cross(u, v):
-                return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-
-            o1 = cross(s - q, a - q)
-            o2 = cross(s - q, b - q)
-            o3 = cross(b - a, q - a)
-            o4 = cross(b - a, s - a)
-            blocked = (o1 * o2 < 0) & (o3 * o4 < 0)
-            out[i : i + 2000] = ~blocked.any(axis=1)
-        return out
+        return ~crosses_an_edge(q, targets, self.edges[:, 0], self.edges[:, 1])
 
     def visible(self, q) -> np.ndarray:
         """Sorted int64 ids of the segments visible from q."""

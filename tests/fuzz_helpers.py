@@ -1,5 +1,5 @@
 """Shared by the fuzz tests: hypothesis settings and the bounded run of a
-case from tools/fuzz.py.
+case of mapkit_harness.fuzz.
 
 Each case runs in a forked child under a time bound and an address-space
 limit; the bound catches hangs (a case that would run for minutes), it is
@@ -11,11 +11,11 @@ off for the same reason: a slow machine must not make the suite red.
 
 from __future__ import annotations
 
-import fuzz
 from hypothesis import HealthCheck, settings
 
-#: Outcomes a case may end in.
-ACCEPTED = (fuzz.ERROR, fuzz.VALID, fuzz.FALSY)
+from mapkit_harness.fuzz.cases import Case, Outcome
+from mapkit_harness.fuzz.classify import ACCEPTED
+from mapkit_harness.fuzz.run import run_bounded
 
 #: Hang bound of a case that builds a map, and of one that does not, seconds.
 BUILD_BOUND_S = 120.0
@@ -28,9 +28,9 @@ def fuzz_settings(examples: int):
                                            HealthCheck.data_too_large])
 
 
-def check_case(case: fuzz.Case, folder, bound_s: float) -> fuzz.Outcome:
+def check_case(case: Case, folder, bound_s: float) -> Outcome:
     """Run ``case`` bounded; fail with its note and detail unless it ended
     in a clean error, a falsy result with its reason or a valid result."""
-    out = fuzz.run_bounded(case, folder, bound_s)
+    out = run_bounded(case, folder, bound_s)
     assert out.kind in ACCEPTED, f"{case.name} ({case.note}) call {case.call}: {out.kind}: {out.detail}"
     return out

@@ -5,22 +5,25 @@ bound."""
 
 from __future__ import annotations
 
-import fuzz
 import pytest
 from fuzz_helpers import CALL_BOUND_S, check_case, fuzz_settings
 from hypothesis import given
 from hypothesis import strategies as st
 
+from mapkit_harness.fuzz.campaign import preload
+from mapkit_harness.fuzz.cases import ROOT
+from mapkit_harness.fuzz.lmap_files import lmap_case, lmap_chunks, lmap_encode
+
 
 @pytest.fixture(scope="module", autouse=True)
 def _warm():
-    fuzz.preload()
+    preload()
 
 
 @fuzz_settings(examples=25)
 @given(rng=st.randoms(use_true_random=False))
 def test_a_damaged_map_is_refused_in_one_line_or_read(tmp_path_factory, rng):
-    case = fuzz.lmap_case(rng)
+    case = lmap_case(rng)
     check_case(case, tmp_path_factory.mktemp("case"), CALL_BOUND_S)
 
 
@@ -31,6 +34,6 @@ def test_crafted_maps_keep_valid_checksums():
 
     from linemap.lmap import decode
 
-    original = (fuzz.ROOT / "maps" / "flat.lmap").read_bytes()
-    assert fuzz._lmap_encode(fuzz._lmap_chunks(original)) == original
-    decode(fuzz._lmap_encode(fuzz._lmap_chunks(original)))
+    original = (ROOT / "maps" / "flat.lmap").read_bytes()
+    assert lmap_encode(lmap_chunks(original)) == original
+    decode(lmap_encode(lmap_chunks(original)))

@@ -7,9 +7,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import fuzz
 import pytest
 from fuzz_helpers import BUILD_BOUND_S
+
+from mapkit_harness.fuzz.cases import ROOT, load_case
+from mapkit_harness.fuzz.run import run_bounded
 
 CASES = sorted(p for p in (Path(__file__).parent / "data" / "fuzz").iterdir() if (p / "case.json").is_file())
 
@@ -22,7 +24,7 @@ SLOW_CASES = {"dxf_polyline_vertex_without_location", "mesh_section_topology_con
                                     for p in CASES], ids=[p.name for p in CASES])
 def test_a_found_failure_stays_fixed(tmp_path, folder):
     expect = json.loads((folder / "case.json").read_text())
-    out = fuzz.run_bounded(fuzz.load_case(folder), tmp_path, BUILD_BOUND_S)
+    out = run_bounded(load_case(folder), tmp_path, BUILD_BOUND_S)
     assert out.kind == expect["expect"], (out.kind, out.detail)
     assert expect["contains"].lower() in out.detail.lower(), out.detail
     assert "\n" not in out.detail.strip()
@@ -36,7 +38,7 @@ def test_a_value_read_as_an_entity_type_is_left_out_with_a_warning(tmp_path, cap
     'entity' is left out, named, and the plan builds."""
     from cli_helpers import run
 
-    text = (fuzz.ROOT / "maps" / "flat.dxf").read_text()
+    text = (ROOT / "maps" / "flat.dxf").read_text()
     marker = "DOOR_900\n 10\n10700.0\n"
     assert marker in text
     plan = tmp_path / "plan.dxf"

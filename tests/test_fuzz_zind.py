@@ -1,26 +1,32 @@
-"""Damaged and random ZInD annotations (tools/fuzz.py's mutations of a
+"""Damaged and random ZInD annotations (mapkit_harness.fuzz's mutations of a
 ZInD-shaped floor, and floors of random rooms): ``mapkit build`` ends in a
 one-line error (exit 2) or a map, within its bound; never a traceback or a
 hang."""
 
 from __future__ import annotations
 
-import fuzz
 import pytest
 from fuzz_helpers import BUILD_BOUND_S, check_case, fuzz_settings
 from hypothesis import given
 from hypothesis import strategies as st
 
+from mapkit_harness.fuzz.campaign import preload
+from mapkit_harness.fuzz.cases import Case
+from mapkit_harness.fuzz.classify import VALID
+from mapkit_harness.fuzz.mutations import mutate_json_doc
+from mapkit_harness.fuzz.run import run_bounded
+from mapkit_harness.fuzz.zind import base_zind, zind_case
+
 
 @pytest.fixture(scope="module", autouse=True)
 def _warm():
-    fuzz.preload()
+    preload()
 
 
 @fuzz_settings(examples=8)
 @given(rng=st.randoms(use_true_random=False))
 def test_damaged_zind_ends_in_a_clean_error_or_a_map(tmp_path_factory, rng):
-    case = fuzz.zind_case(rng)
+    case = zind_case(rng)
     check_case(case, tmp_path_factory.mktemp("case"), BUILD_BOUND_S)
 
 
@@ -32,22 +38,22 @@ def test_the_undamaged_floor_builds_with_its_rooms_and_gaps(tmp_path):
     from mapkit.importers import load_scene
 
     path = tmp_path / "zind_data.json"
-    path.write_text(json.dumps(fuzz.base_zind()))
+    path.write_text(json.dumps(base_zind()))
     scene = load_scene(path)
     assert scene.info["counts"] == {"rooms": 3, "panoramas": 5, "doors": 2, "windows": 1, "openings": 1}
     assert scene.camera_height == pytest.approx(1.25)
-    case = fuzz.Case("zind", "base", {"zind_data.json": path.read_bytes()},
+    case = Case("zind", "base", {"zind_data.json": path.read_bytes()},
                      ["mapkit", "build", "zind_data.json", "-o", "out.lmap"])
-    assert fuzz.run_bounded(case, tmp_path / "run", BUILD_BOUND_S).kind == fuzz.VALID
+    assert run_bounded(case, tmp_path / "run", BUILD_BOUND_S).kind == VALID
 
 
 def test_the_mutations_change_the_document():
     import json
     import random
 
-    original = json.dumps(fuzz.base_zind())
-    texts = [fuzz.mutate_json_doc(fuzz.base_zind(), random.Random(i))[0] for i in range(20)]
+    original = json.dumps(base_zind())
+    texts = [mutate_json_doc(base_zind(), random.Random(i))[0] for i in range(20)]
     assert sum(t != original for t in texts) >= 18
-    nested = [fuzz.mutate_json_doc({"a": [1, 2], "b": {"c": 3}}, random.Random(i)) for i in range(200)]
+    nested = [mutate_json_doc({"a": [1, 2], "b": {"c": 3}}, random.Random(i)) for i in range(200)]
     deep = [text for text, note in nested if "nest@" in note]
     assert deep and any("[" * 50 in text for text in deep)  # nested past what json.dumps could write

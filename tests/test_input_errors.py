@@ -14,7 +14,6 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
-import fuzz
 import numpy as np
 import pytest
 
@@ -25,6 +24,11 @@ from linemap.camera import Camera, CameraError
 from linemap.errors import EXIT_BUG, InputError
 from linemap.lmap import LmapError, load_map
 from mapkit.errors import MapkitError, NoFreeSpaceError, NoWallsError
+from mapkit_harness.fuzz.cases import Case
+from mapkit_harness.fuzz.classify import BUG, ERROR, VALID, classify_cli
+from mapkit_harness.fuzz.matcher_inputs import base_camera, base_frame, base_run
+from mapkit_harness.fuzz.run import run_case_here
+from mapkit_harness.fuzz.segments import base_segments_csv, segments_case
 
 ROOT = Path(__file__).resolve().parents[1]
 #: What numpy says when shapes do not match: a ValueError, and a bug when it escapes.
@@ -52,7 +56,7 @@ def test_the_matchers_input_checks_raise_input_errors():
     from matcher.tolerances import LineDetection, Tolerances, Tracking
 
     m = load_map(ROOT / "maps" / "flat.lmap")
-    cam = Camera.from_dict(fuzz.base_camera())
+    cam = Camera.from_dict(base_camera())
     good = [[10.0, 10.0, 100.0, 100.0], [200.0, 50.0, 200.0, 300.0]]
     bad_calls = [
         lambda: matcher.localize(m, cam, [[1, 2, 3]], (2.0, 6.6, 0.0), 0.3, 10),  # lines of a wrong shape
@@ -115,9 +119,9 @@ def test_bad_input_still_exits_2_in_one_line(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def localize_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("localize")
-    (d / "camera.json").write_text(json.dumps(fuzz.base_camera()))
-    (d / "lines.json").write_text(json.dumps({"lines": fuzz.base_frame()["lines"]}))
-    f = fuzz.base_frame()
+    (d / "camera.json").write_text(json.dumps(base_camera()))
+    (d / "lines.json").write_text(json.dumps({"lines": base_frame()["lines"]}))
+    f = base_frame()
     return d, ["localize", "--map", str(ROOT / "maps" / "flat.lmap"), "--camera", str(d / "camera.json"),
                "--lines", str(d / "lines.json"), "--prior", ",".join(map(str, f["prior"])), "--dt", str(f["dt"]),
                "--dyaw", str(f["dyaw"])]
@@ -148,7 +152,7 @@ def test_a_bug_while_tracking_is_not_a_skipped_frame(localize_files, capsys, mon
     from matcher.cli import main
 
     d, _ = localize_files
-    run, start = fuzz.base_run()
+    run, start = base_run()
     (d / "run.jsonl").write_bytes(run)
     monkeypatch.setattr(matcher.from_prior, "select_candidates", _numpy_slip)
     code = main(["track", "--map", str(ROOT / "maps" / "flat.lmap"), "--camera", str(d / "camera.json"),
@@ -166,27 +170,27 @@ def test_the_fuzz_classifier_calls_an_injected_bug_a_bug(tmp_path, monkeypatch):
     import matcher.from_prior
 
     monkeypatch.chdir(tmp_path)
-    build = fuzz.Case("dxf", "bug", {"plan.dxf": (ROOT / "maps" / "flat.dxf").read_bytes()},
+    build = Case("dxf", "bug", {"plan.dxf": (ROOT / "maps" / "flat.dxf").read_bytes()},
                       ["mapkit", "build", "plan.dxf", "-o", "out.lmap"])
-    f = fuzz.base_frame()
+    f = base_frame()
     np.save(tmp_path / "lines.npy", np.array(f["lines"]))
-    api = fuzz.Case("matcher", "bug", {}, ["api", "localize", {"lines": "lines.npy", "camera": fuzz.base_camera(),
+    api = Case("matcher", "bug", {}, ["api", "localize", {"lines": "lines.npy", "camera": base_camera(),
                                                                "prior": f["prior"], "dt": f["dt"], "dyaw": f["dyaw"]}])
     monkeypatch.setattr(mapkit.edges, "extract_edges", _numpy_slip)
     monkeypatch.setattr(matcher.from_prior, "select_candidates", _numpy_slip)
     for case in (build, api):
-        kind, detail = fuzz.run_case_here(case)
-        assert kind == fuzz.BUG and NUMPY_SLIP in detail, (case.call[0], kind, detail)
+        kind, detail = run_case_here(case)
+        assert kind == BUG and NUMPY_SLIP in detail, (case.call[0], kind, detail)
     # The same call with bad input instead is a clean error: only InputError counts as one.
     api.call[2]["dt"] = -1.0
-    assert fuzz.run_case_here(api)[0] == fuzz.ERROR
+    assert run_case_here(api)[0] == ERROR
 
 
 def test_the_fuzz_classifier_reads_exit_codes():
-    assert fuzz._classify_cli("mapkit", 2, "", "mapkit: error: plan.dxf: not a DXF file\n")[0] == fuzz.ERROR
-    assert fuzz._classify_cli("mapkit", 3, "", "mapkit: internal error: ValueError: x -- this is a bug, please "
-                                               "report it\n")[0] == fuzz.BUG
-    assert fuzz._classify_cli("matcher", 2, "", "matcher: error: a\nmatcher: error: b\n")[0] == fuzz.BUG
+    assert classify_cli("mapkit", 2, "", "mapkit: error: plan.dxf: not a DXF file\n")[0] == ERROR
+    assert classify_cli("mapkit", 3, "", "mapkit: internal error: ValueError: x -- this is a bug, please "
+                                               "report it\n")[0] == BUG
+    assert classify_cli("matcher", 2, "", "matcher: error: a\nmatcher: error: b\n")[0] == BUG
 
 
 def test_a_built_map_is_read_by_every_command_that_reads_maps(tmp_path, monkeypatch):
@@ -196,22 +200,22 @@ def test_a_built_map_is_read_by_every_command_that_reads_maps(tmp_path, monkeypa
     import mapkit.commands.export
 
     monkeypatch.chdir(tmp_path)
-    case = fuzz.segments_case(__import__("random").Random(0))
-    case = replace(case, files={"segments.csv": fuzz.base_segments_csv().encode()},
+    case = segments_case(__import__("random").Random(0))
+    case = replace(case, files={"segments.csv": base_segments_csv().encode()},
                    call=["mapkit", "build", "segments.csv", "-o", "out.lmap"])
     assert [c[1] for c in case.then] == ["info", "info", "view", "export"]
-    assert fuzz.run_case_here(case) == (fuzz.VALID, "")
+    assert run_case_here(case) == (VALID, "")
     assert (tmp_path / "out.html").stat().st_size > 0 and json.loads((tmp_path / "out.geojson").read_text())
     monkeypatch.setattr(mapkit.commands.export, "to_geojson", _numpy_slip)
-    kind, detail = fuzz.run_case_here(case)
-    assert kind == fuzz.BUG and detail.startswith("then mapkit export out.lmap")
+    kind, detail = run_case_here(case)
+    assert kind == BUG and detail.startswith("then mapkit export out.lmap")
 
     def refuse(m, *args):
         raise MapkitError("this map is refused")
 
     monkeypatch.setattr(mapkit.commands.export, "to_geojson", refuse)
-    kind, detail = fuzz.run_case_here(case)
-    assert kind == fuzz.BUG and "a map the case wrote is refused: mapkit: error: this map is refused" in detail
+    kind, detail = run_case_here(case)
+    assert kind == BUG and "a map the case wrote is refused: mapkit: error: this map is refused" in detail
 
 
 # ---- what the commands read of a map ------------------------------------------------

@@ -1,18 +1,11 @@
 #!/usr/bin/env python3
 """Simulate a robot run through a map: route, odometry, frames, truth.
 
-The route goes from a random free pose through random waypoints in other
-regions, along shortest paths in the map's free space (through the doors)
-kept ``clearance`` metres off the walls; the robot drives ``step`` metres a
-frame and turns in place at most ``max_turn`` degrees a frame at corners.
-The odometry integrates the true increments with a scale error and a
-heading drift drawn once per run (the systematic part wheel odometry has)
-plus per-step noise. Frames are the visible map lines at the true pose
-(:func:`mapkit_harness.simulate.visible_lines`) with noise and clutter lines, or
-images rendered by :mod:`mapkit_harness.render` (the run itself:
-:mod:`mapkit_harness.runs`). ``--kidnap K`` carries the robot to a random
-distant pose that shows at least 6 map lines before frame K, with no
-odometry for it.
+The run itself (the route through the map's free space, the odometry with
+its scale error and heading drift, the frames of visible map lines with
+noise and clutter, ``--kidnap``) is :mod:`mapkit_harness.runs`, whose
+docstring says how it is drawn; this writes it as files, the frames as
+lines or as images rendered by :mod:`mapkit_harness.render`.
 
     python tools/simulate_run.py --map maps/flat.lmap --frames 150 -o run.jsonl --truth truth.txt
     python tools/simulate_run.py --frames 120 --kidnap 60 -o run.jsonl --truth truth.txt

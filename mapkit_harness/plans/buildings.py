@@ -144,7 +144,9 @@ def room_or_near_lists(regions, segments, room_size: tuple[float, float], rooms_
 @dataclass
 class SyntheticScene:
     """``segments`` (N, 2, 3), ``kinds`` (N,) uint8, ``walls`` and
-    ``free_space`` shapely geometries, ``wall_height`` metres."""
+    ``free_space`` shapely geometries, ``wall_height`` metres: the fields of
+    a :class:`mapkit.scene.Scene` the region builder reads, with the same
+    meaning (a building as the map builder sees it), made in code."""
 
     segments: np.ndarray
     kinds: np.ndarray

@@ -148,35 +148,31 @@ def office_grid(path: str | Path, n: int = 10, room: float = 5.0, thickness: flo
     side = n * room
     h = thickness / 2.0
     walls, gaps, doors = [], [], 0
-    # Vertical walls x = i * room; the outer ones sit inside the grid.
-    for i in range(n + 1):
-        x = i * room
-        x0, x1 = (0.0, thickness) if i == 0 else (side - thickness, side) if i == n else (x - h, x + h)
-        holes = [] if i in (0, n) else [((j + 0.5) * room - door / 2, (j + 0.5) * room + door / 2) for j in range(n)]
-        for a, b in _pieces(0.0, side, holes):
-            walls.append(add_rect(msp, x0, a, x1, b, wall_layer))
-        for j, (a, b) in enumerate(holes):
-            # On the wall's west face, swinging west: hinge at either jamb (mirrored when at the top).
-            if (i + j) % 2:
-                add_door(msp, block, (x0, a), (x0, b), 1, door_layer)
-            else:
-                add_door(msp, block, (x0, b), (x0, a), -1, door_layer)
-            gaps.append(box(x0, a, x1, b))
-            doors += 1
-    for j in range(n + 1):
-        y = j * room
-        y0, y1 = (0.0, thickness) if j == 0 else (side - thickness, side) if j == n else (y - h, y + h)
-        holes = [] if j in (0, n) else [((i + 0.3) * room - door / 2, (i + 0.3) * room + door / 2) for i in range(n)]
-        for a, b in _pieces(0.0, side, holes):
-            walls.append(add_rect(msp, a, y0, b, y1, wall_layer))
-        for i, (a, b) in enumerate(holes):
-            # On the wall's north face, swinging north.
-            if (i + j) % 2:
-                add_door(msp, block, (a, y1), (b, y1), 1, door_layer)
-            else:
-                add_door(msp, block, (b, y1), (a, y1), -1, door_layer)
-            gaps.append(box(a, y0, b, y1))
-            doors += 1
+    # Walls between columns (x = i * room), then between rows (y = i * room);
+    # the outer ones sit inside the grid. Along a wall between columns its
+    # doors stand at the middle of each room, on its west face, swinging
+    # west; along one between rows at 0.3 of each room, on its north face,
+    # swinging north. A door's hinge alternates between its jambs.
+    for between_columns in (True, False):
+        def xy(along, across):
+            return (across, along) if between_columns else (along, across)
+
+        door_at = 0.5 if between_columns else 0.3
+        for i in range(n + 1):
+            c = i * room
+            c0, c1 = (0.0, thickness) if i == 0 else (side - thickness, side) if i == n else (c - h, c + h)
+            face = c0 if between_columns else c1
+            holes = [] if i in (0, n) else \
+                [((j + door_at) * room - door / 2, (j + door_at) * room + door / 2) for j in range(n)]
+            for a, b in _pieces(0.0, side, holes):
+                walls.append(add_rect(msp, *xy(a, c0), *xy(b, c1), wall_layer))
+            for j, (a, b) in enumerate(holes):
+                if (i + j) % 2:
+                    add_door(msp, block, xy(a, face), xy(b, face), 1, door_layer)
+                else:
+                    add_door(msp, block, xy(b, face), xy(a, face), -1, door_layer)
+                gaps.append(box(*xy(a, c0), *xy(b, c1)))
+                doors += 1
     doc.saveas(path)
     wall_geom = shapely.union_all(walls)
     interior = box(0, 0, side, side)
