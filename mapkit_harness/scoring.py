@@ -60,5 +60,5 @@ def indistinguishable(linemap, camera, frame) -> set:
     from matcher.scene.occlusion import wall_edges
 
     walls = wall_edges(linemap)
-    ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls, DEFAULT.internals)
+    ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls, DEFAULT.stage2, DEFAULT.shared)
     return {(int(a), int(b)) for a, b in zip(si[ok], li[ok])}

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import math
 
-from matcher.tolerances import Internals
+from matcher.tolerances import VerdictConstants
 
 
-def rivals(answers: list[tuple], work: Internals, spread: tuple[float, float, float] | None = None) -> list:
+def rivals(answers: list[tuple], work: VerdictConstants, spread: tuple[float, float, float] | None = None) -> list:
     """The answers of ``answers`` (each ``(pose (x, y, yaw_deg), matches,
     score E)``, or with a fourth item, the reprojection cost of stage 2's
     ranking; best first) that the first cannot be told from: as many

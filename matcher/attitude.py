@@ -103,7 +103,7 @@ def from_verticals(camera: Camera, lines: np.ndarray, tol: Tolerances) -> Attitu
     on ``n . v(pitch, roll)`` over the lines within the prior's reach, the
     file's values a Gaussian prior. The standard deviations are those of
     the estimate (the prior's where the lines fix nothing)."""
-    work = tol.internals
+    work = tol.attitude
     prior = of_file(camera)
     if not camera.attitude_free or len(lines) == 0:
         return replace(prior, pitch_std=0.0, roll_std=0.0) if not camera.attitude_free else prior
@@ -174,7 +174,7 @@ def fit_on_matches(camera: Camera, lines: np.ndarray, segments: np.ndarray, matc
     ``line_px`` at the focal length) and ``prior`` (the estimate from the
     vertical lines, with its standard deviations) as a Gaussian prior. The
     standard deviations are the fit's."""
-    work = tol.internals
+    work = tol.attitude
     seg_ids = np.array([s for s, _ in matches])
     line_ids = np.array([j for _, j in matches])
     rays = camera.pixel_rays(lines[line_ids])
@@ -293,7 +293,7 @@ def _band_runs(camera: Camera, arr: np.ndarray, tol: Tolerances, localiser: Loca
     estimate ``est``'s ``attitude_sigmas`` standard deviations, nearest
     first, each widened by half a band and what the vertical lines left of
     the roll. The first band's result and the fits (:func:`_fits`) of all."""
-    work = tol.internals
+    work = tol.attitude
     band = math.radians(work.attitude_band_deg)
     k_max = int(math.ceil(max(work.attitude_sigmas * est.pitch_std / band - 0.5, 0.0)))
     fits, first = [], None
@@ -321,7 +321,7 @@ def _second_runs(camera: Camera, arr: np.ndarray, tol: Tolerances, localiser: Lo
     by what its fit left; ``(result, attitude)`` of the run accepted with
     most matches, then the least E, with the attitude refitted on its
     matches; None when the budget left no time for any."""
-    work = tol.internals
+    work = tol.attitude
     band = math.radians(work.attitude_band_deg)
     best = None
     for *_, att, p in fits:
@@ -349,7 +349,7 @@ def _fits(camera: Camera, arr: np.ndarray, segments: np.ndarray, res, att: Attit
     """``(-matches, cost, attitude, pose)`` fitted on the matches of each of
     the best ranked hypotheses of ``res`` whose residual stays within
     ``attitude_fit_cost``."""
-    work = tol.internals
+    work = tol.attitude
     fits = []
     for E, matches, pose in res.ranked[: work.attitude_fit_keep]:
         if not math.isfinite(E) or len(matches) < tol.min_matches:

@@ -2,7 +2,7 @@
 
 The budget (``Tolerances.time_budget_ms``) is split: the searches (the
 interpretation tree, the second search, the resection) may take the first
-``Internals.search_share`` of it, the final visibility tests of the sets they found
+``SharedConstants.search_share`` of it, the final visibility tests of the sets they found
 the rest; stage 2 then runs on what passed, at most ``max_hypotheses``
 sets (a few milliseconds). The work before the tree (correspondences and
 their pairs, a few milliseconds, tens on the largest scenes) is not cut.

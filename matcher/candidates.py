@@ -57,7 +57,7 @@ def select_candidates(linemap: LineMap, camera: Camera, px, tol: Tolerances,
     ids = ids[fov]
     if len(ids) == 0:
         return "no candidate segment lies in the field of view for any heading of the prior interval"
-    work = tol.internals
+    work = tol.map_index
     index = index_of(linemap)
     segs = linemap.segments[ids]
     # Collinear groups: made once per map, spans per frame.

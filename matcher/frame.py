@@ -88,8 +88,8 @@ def longest(lines: np.ndarray, mask: np.ndarray, count: int) -> np.ndarray:
 def lines_needed(image_lines: ImageLines, tol: Tolerances) -> int:
     """How many lines an accepted pose must explain in this frame:
     ``min_matches`` and a share of the lines searched (a wrong pose among
-    clutter explains some by chance; ``Internals.chance_fit_share``)."""
-    return tol.min_matches + int(tol.internals.chance_fit_share * int(image_lines.searched.sum()))
+    clutter explains some by chance; ``VerdictConstants.chance_fit_share``)."""
+    return tol.min_matches + int(tol.verdict.chance_fit_share * int(image_lines.searched.sum()))
 
 
 def too_few_lines(image_lines: ImageLines, tol: Tolerances) -> str:

@@ -86,7 +86,7 @@ def _localize_checked(linemap, camera: Camera, image_lines: ImageLines, px, tol:
                       sources=SOURCES):
     """:func:`localize_prepared` on the checked prior ``px`` with the time
     budget of ``tol`` counted from ``t0``."""
-    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
+    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.shared.search_share)
     return localize_prepared(linemap, camera, image_lines, px, tol, t0, deadlines, Scope(sources))
 
 

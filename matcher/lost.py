@@ -30,7 +30,7 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
                     first_accepted: bool = False, progress=None, regions=None):
     """Lost mode (method.md section 3): first the places the frame's lines
     vote for (:mod:`matcher.lost_votes`), each a narrow prior; then, unless
-    one of them explains most of the image (``Internals.vote_trust_share``
+    one of them explains most of the image (``LostConstants.vote_trust_share``
     of the usable lines), one prior per region (its centre, ``dt`` its
     radius, any heading, the region's own visible list), looking only for
     answers that could beat the voted ones.
@@ -96,7 +96,7 @@ class Lost:
 def _localize_global(linemap, camera: Camera, image_lines, tol: Tolerances, t0: float, first_accepted: bool, progress,
                      regions) -> LocalizeResult:
     """:func:`localize_global` on prepared lines ``image_lines``."""
-    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.internals.search_share)
+    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.shared.search_share)
     # The same for every region:
     unsearched = "the map has no regions" if linemap.n_regions == 0 else too_few_lines(image_lines, tol)
     if unsearched:
@@ -105,14 +105,14 @@ def _localize_global(linemap, camera: Camera, image_lines, tol: Tolerances, t0: 
                               time_ms=Timings(total=total, regions_tried=0))
     # The robot is stopped: the whole strategy gets a larger search budget
     # per region than when tracking.
-    factor = tol.internals.lost_budget_factor
+    factor = tol.lost.lost_budget_factor
     wide = replace(tol, max_nodes=tol.max_nodes * factor, max_sets=tol.max_sets * factor)
     search = _RegionSearch(linemap, camera, image_lines, deadlines, progress)
     # The places the frame's lines vote for first (a few narrow priors,
     # milliseconds each); the sweep of every region only when none holds.
     voted = search.run_voted(tol) or search.run_voted(wide, SOURCES)
     best = max((a[1] for res in voted.values() for a in _answers(res)), default=0)
-    if voted and (first_accepted or trusted(best, int(image_lines.usable.sum()), tol.internals)):
+    if voted and (first_accepted or trusted(best, int(image_lines.usable.sum()), tol.lost)):
         # A voted place explains most of the image: no region can explain
         # much more, the sweep is not needed.
         if progress is not None:
@@ -155,12 +155,12 @@ class _RegionSearch:
         poses) of the places the lines vote for
         (:func:`~matcher.lost_votes.vote_places`), each a narrow prior searched
         with the strategy's ``sources``; ``only``: just those keys again."""
-        work = tol.internals
+        work = tol.lost
         if not self.deadlines.may_search():
             self.out_of_time = True
             return {}
         if self.places is None:
-            self.places = vote_places(self.linemap, self.camera, self.image_lines, work, work.vote_places)
+            self.places = vote_places(self.linemap, self.camera, self.image_lines, tol, work.vote_places)
         found: dict = {}
         dt, dyaw = work.vote_prior_m, math.radians(work.vote_prior_deg)
         for k, (x, y, yaw, _) in enumerate(self.places):

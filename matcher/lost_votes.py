@@ -27,7 +27,7 @@ from linemap.camera import Camera
 from linemap.geometry import segment_is_vertical, world_normals
 from matcher.frame import ImageLines, longest
 from matcher.map_index import index_of
-from matcher.tolerances import Internals
+from matcher.tolerances import LostConstants, Tolerances
 
 
 @dataclass
@@ -47,25 +47,27 @@ class Sightings:
     line: np.ndarray
 
 
-def vote_places(linemap, camera: Camera, image_lines: ImageLines, work: Internals, count: int) -> np.ndarray:
+def vote_places(linemap, camera: Camera, image_lines: ImageLines, tol: Tolerances, count: int) -> np.ndarray:
     """Up to ``count`` places (n, 4): x, y (metres), yaw (radians) and
     score (the image lines that voted for it), best first, no two closer
-    than ``work.vote_apart_m`` and ``work.vote_apart_deg``. Empty when the
-    lines give no vote."""
-    s = sightings(linemap, camera, image_lines, work)
-    votes = np.concatenate([meetings(s, work), edge_meetings(linemap, image_lines, s, work)])
+    than ``vote_apart_m`` and ``vote_apart_deg`` (``tol.lost``). Empty when
+    the lines give no vote."""
+    work = tol.lost
+    s = sightings(linemap, camera, image_lines, tol)
+    votes = np.concatenate([meetings(s, work), edge_meetings(linemap, image_lines, s, tol)])
     if len(votes):
-        free = index_of(linemap).free(work)
+        free = index_of(linemap).free(tol.map_index)
         votes = votes[free.distance(votes[:, :2]) <= work.vote_free_m]
     return _peaks(votes, work, count) if len(votes) else np.zeros((0, 4))
 
 
-def sightings(linemap, camera: Camera, image_lines: ImageLines, work: Internals) -> Sightings:
+def sightings(linemap, camera: Camera, image_lines: ImageLines, tol: Tolerances) -> Sightings:
     """The :class:`Sightings` of the frame's usable non-vertical lines on the
-    map's horizontal segments (see the module docstring)."""
-    index = index_of(linemap)
+    map's horizontal segments (see the module docstring); ``tol.lost``
+    bounds them."""
+    index, work = index_of(linemap), tol.lost
     segs = linemap.segments
-    horiz = ~segment_is_vertical(segs, work.vertical_axis_deg)
+    horiz = ~segment_is_vertical(segs, tol.shared.vertical_axis_deg)
     flat = np.abs(segs[:, 1, 2] - segs[:, 0, 2]) <= work.vote_flat_m
     sid = np.flatnonzero(horiz & flat)
     lid = longest(image_lines.lines, image_lines.usable & ~image_lines.vertical, work.vote_lines)
@@ -92,7 +94,7 @@ def sightings(linemap, camera: Camera, image_lines: ImageLines, work: Internals)
     u = d_seg / length[:, None]
     nrm = np.stack([-u[:, 1], u[:, 0]], axis=1)
     yaw0 = np.arctan2(u[:, 1], u[:, 0]) - np.arctan2(d_img[:, 1], d_img[:, 0])
-    faces = index.faces(work)[sid[sj]]
+    faces = index.faces(tol.map_index)[sid[sj]]
     slack = work.vote_slack_m + work.vote_slack_share * reach[li, h_of[sj]].max(axis=1)
     out = []
     for turn in (0.0, math.pi):
@@ -111,7 +113,7 @@ def sightings(linemap, camera: Camera, image_lines: ImageLines, work: Internals)
     return Sightings(*(np.concatenate(parts) for parts in zip(*out)))
 
 
-def meetings(s: Sightings, work: Internals) -> np.ndarray:
+def meetings(s: Sightings, work: LostConstants) -> np.ndarray:
     """(V, 3) poses x, y, yaw where two sightings of different lines, about
     the same heading (``work.vote_yaw_deg``) and segments at least
     ``work.vote_cross_deg`` apart in direction, put the camera in one place
@@ -147,12 +149,12 @@ def meetings(s: Sightings, work: Internals) -> np.ndarray:
     return np.column_stack([c, mean_yaw, s.line[i], s.line[j]])
 
 
-def edge_meetings(linemap, image_lines: ImageLines, s: Sightings, work: Internals) -> np.ndarray:
+def edge_meetings(linemap, image_lines: ImageLines, s: Sightings, tol: Tolerances) -> np.ndarray:
     """(V, 3) poses x, y, yaw where a sighting's camera line meets the ray
     back from a vertical map edge along a vertical image line's bearing at
     the sighting's heading (in front of the edge, within the stretch)."""
-    segs = linemap.segments
-    vid = np.flatnonzero(segment_is_vertical(segs, work.vertical_axis_deg))
+    segs, work = linemap.segments, tol.lost
+    vid = np.flatnonzero(segment_is_vertical(segs, tol.shared.vertical_axis_deg))
     lid = longest(image_lines.lines, image_lines.usable & image_lines.vertical, work.vote_lines)
     if len(vid) == 0 or len(lid) == 0 or len(s.yaw) == 0:
         return np.zeros((0, 5))
@@ -174,7 +176,7 @@ def edge_meetings(linemap, image_lines: ImageLines, s: Sightings, work: Internal
     return np.concatenate(out) if out else np.zeros((0, 5))
 
 
-def _peaks(votes: np.ndarray, work: Internals, count: int) -> np.ndarray:
+def _peaks(votes: np.ndarray, work: LostConstants, count: int) -> np.ndarray:
     """The ``count`` best places of ``votes`` (V, 5: x, y, yaw, the two
     image lines): a place's score is the number of distinct image lines
     whose votes fall in its cell (``vote_cell_m`` by ``vote_cell_deg``; two

@@ -3,10 +3,12 @@
 :class:`MapIndex` is made on the first :func:`~matcher.localize` call on a
 map (:func:`index_of`: one per map) and each of its parts on first use: a
 frame pays only for what it needs, and the next frame on the same map pays
-for none of it. A part depends on a few inner constants
-(:data:`PART_FIELDS`) and is kept per their values, so tolerances that
-differ elsewhere (another ``e_accept``, lost mode's wider search) share it.
-The map must not be mutated after.
+for none of it. A part depends on a few of the constants
+:class:`~matcher.tolerances.MapIndexConstants` (``Tolerances.map_index``,
+:data:`PART_FIELDS`) and is kept per their values, so tolerances that differ
+elsewhere (another ``e_accept``, lost mode's wider search) share it, and
+another ``free_cell_m`` rebuilds the free-space raster alone. The map must
+not be mutated after.
 """
 
 from __future__ import annotations
@@ -19,10 +21,11 @@ from linemap.lmap import LineMap
 from matcher.scene.collinear import collinear_labels
 from matcher.scene.freespace import FreeSpace
 from matcher.scene.occlusion import SightRays, WallEdges, face_normals, wall_edges
-from matcher.tolerances import DEFAULT_INTERNALS, Internals
+from matcher.tolerances import DEFAULT, MapIndexConstants
 
-#: The fields of :class:`~matcher.tolerances.Internals` each part is built
-#: with (tests/test_matcher_map_index.py checks that they read no other).
+#: The fields of :class:`~matcher.tolerances.MapIndexConstants` each part is
+#: built with (tests/test_matcher_map_index.py checks that they read no
+#: other, and that every field is some part's).
 PART_FIELDS = {
     "collinear": ("collinear_deg", "collinear_m"),
     "sight": ("sight_bins", "sight_skip_m", "ray_chunk"),
@@ -38,14 +41,14 @@ def index_of(linemap: LineMap) -> MapIndex:
 
 class MapIndex:
     """Per-map lookups of the matcher, each built on first use with the
-    inner constants ``work`` it is asked with, and kept per the values of
-    its :data:`PART_FIELDS`."""
+    constants ``work`` (:class:`~matcher.tolerances.MapIndexConstants`) it
+    is asked with, and kept per the values of its :data:`PART_FIELDS`."""
 
     def __init__(self, linemap: LineMap) -> None:
         self.linemap = linemap
         self._parts: dict[tuple, object] = {}
 
-    def _part(self, name: str, work: Internals, build):
+    def _part(self, name: str, work: MapIndexConstants, build):
         """Part ``name`` for ``work``: ``build()`` on the first call with
         these values of its fields, kept after."""
         key = (name, *(getattr(work, f) for f in PART_FIELDS[name]))
@@ -53,7 +56,7 @@ class MapIndex:
             self._parts[key] = build()
         return self._parts[key]
 
-    def collinear(self, work: Internals = DEFAULT_INTERNALS) -> np.ndarray:
+    def collinear(self, work: MapIndexConstants = DEFAULT.map_index) -> np.ndarray:
         """(N,) group id of each segment: segments on one 3D line
         (:func:`~matcher.scene.collinear.collinear_labels`)."""
         return self._part("collinear", work,
@@ -64,14 +67,14 @@ class MapIndex:
         """The wall outlines' edges, the occluders; None without walls."""
         return wall_edges(self.linemap)
 
-    def sight(self, work: Internals = DEFAULT_INTERNALS) -> SightRays | None:
+    def sight(self, work: MapIndexConstants = DEFAULT.map_index) -> SightRays | None:
         """How far one sees from each vertical edge, per bearing; None without walls."""
         return self._part("sight", work, lambda: SightRays(self.walls, work) if self.walls is not None else None)
 
-    def faces(self, work: Internals = DEFAULT_INTERNALS) -> np.ndarray:
+    def faces(self, work: MapIndexConstants = DEFAULT.map_index) -> np.ndarray:
         """(N, 2) room-side normal of the wall face each segment lies on (zeros: none)."""
         return self._part("faces", work, lambda: face_normals(self.linemap.segments, self.walls, work))
 
-    def free(self, work: Internals = DEFAULT_INTERNALS) -> FreeSpace:
+    def free(self, work: MapIndexConstants = DEFAULT.map_index) -> FreeSpace:
         """Distance from a floor point to the map's regions."""
         return self._part("free", work, lambda: FreeSpace(self.linemap.ring_points, self.linemap.ring_offsets, work))

@@ -22,7 +22,7 @@ def within_prior(poses, prior, free, tol, spread=None) -> np.ndarray:
     where more) and, with ``free``, within ``free_space_m`` of the map's
     regions (looked up only for the poses inside the prior)."""
     xe, ye, yaw_e, dt, dyaw = prior
-    work = tol.internals
+    work = tol.shared
     slack_m, slack_yaw = work.prior_slack_m, math.radians(work.prior_slack_deg)
     if spread is not None:
         slack_m = np.maximum(slack_m, work.prior_slack_sigmas * spread[:, 0])

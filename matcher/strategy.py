@@ -117,7 +117,7 @@ class Resection:
         return hyps.truncated or (answer.ranked is not None and not answer.accepted(tol))
 
     def run(self, answer: Answer, problem: Problem) -> Hypotheses | None:
-        ranked, kept = answer.ranked, problem.tol.internals.tree_sets_kept
+        ranked, kept = answer.ranked, problem.tol.stage1.tree_sets_kept
         held = [] if ranked is None else [int(h) for h in ranked.order if np.isfinite(ranked.score[h])][:kept]
         more = with_resection(answer.hyps, held, problem)
         # With nothing ranked yet the resection's (possibly empty) sets stand,

@@ -1,11 +1,19 @@
 """Every threshold of the matcher, in one documented place.
 
 :class:`Tolerances` holds what a user tunes (the detector's noise, the
-search budgets, acceptance); :class:`Internals`, nested in it as
-``Tolerances.internals``, the method's inner constants (sample points,
-slacks, work sizes), each with the reason for its value. No other module of
-the matcher keeps a numeric threshold of its own (tests/test_layout.py
-walks their syntax trees for it).
+search budgets, acceptance) and, nested in it, the method's inner constants
+(sample points, slacks, work sizes), each with the reason for its value. The
+inner constants are split by the part of the matcher that reads them, one
+frozen class each (:data:`CONSTANTS`): ``tol.map_index``
+(:class:`MapIndexConstants`, the per-map structures), ``tol.shared``
+(:class:`SharedConstants`, read alike by several parts), ``tol.stage1``,
+``tol.stage2``, ``tol.verdict``, ``tol.attitude``, ``tol.lost``. A module
+is handed its part's object, so what it depends on shows in its signature.
+They were one class, ``Internals`` (``Tolerances.internals``), until the
+split: the constants kept their names and values, and the old names fail
+with where they went (:func:`constants_owner`). No other module of the
+matcher keeps a numeric threshold of its own (tests/test_layout.py walks
+their syntax trees for it).
 
 Lengths in metres, angles in degrees, image quantities in pixels. The
 defaults fit a detector whose lines are good to about 1 px in position and
@@ -31,16 +39,31 @@ def _number(v) -> bool:
     return isinstance(v, numbers.Real) and not isinstance(v, bool)
 
 
-@dataclass(frozen=True)
-class Internals:
-    """The matcher's inner constants. Changing one changes the method, not
-    its tuning: each comment says what the value was chosen against. Tuples
-    are turned into arrays once (the ``*_array`` properties)."""
+class _Constants:
+    """What the inner constants' classes below share. Changing a constant
+    changes the method, not its tuning: each comment says what the value
+    was chosen against. Every value (each item of a tuple) is a number
+    >= 0, checked when one is made; tuples are turned into arrays once (the
+    ``*_array`` properties)."""
 
-    # ---- the map and its segments ---------------------------------------
-    #: Segments whose direction is within this many degrees of the vertical
-    #: are vertical (the map builder's axis tolerance, mapkit.tolerances.AXIS_DEG).
-    vertical_axis_deg: float = 2.0
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            for x in (v if isinstance(v, tuple) else (v,)):
+                if not _number(x) or not (x == x) or x < 0:
+                    raise InputError(f"internal tolerance {type(self).__name__}.{f.name} must be >= 0, got {v!r}")
+
+
+@dataclass(frozen=True)
+class MapIndexConstants(_Constants):
+    """Constants of the per-map structures (matcher/map_index.py,
+    matcher/scene/): collinear groups, the sight table, the wall faces'
+    sides, the free-space raster. Every field is one of
+    :data:`matcher.map_index.PART_FIELDS`: a part is built once per map and
+    per the values of its fields.
+
+    Held as ``Tolerances.map_index``."""
+
     #: Two segments are one collinear group (image lines cannot tell them
     #: apart) when parallel within this many degrees...
     collinear_deg: float = 0.5
@@ -67,8 +90,50 @@ class Internals:
     sight_skip_m: float = 0.05
     #: A wall face's side is probed this far from a segment, metres.
     face_probe_m: float = 0.03
+    #: Most (ray, wall edge) pairs cast at once: arrays under about 10 MB
+    #: each (the first frame on a map casts every vertical edge's rays).
+    ray_chunk: int = 1 << 20
 
-    # ---- stage 1: correspondences and pairs ------------------------------
+
+@dataclass(frozen=True)
+class SharedConstants(_Constants):
+    """Constants that several consumers read alike: which segments are
+    vertical (stage 1, stage 2, lost mode's votes), the prior's slack (stage
+    1's resection and stage 2, matcher/prior.py), the sight-line test's box
+    filter (both stages' visibility, matcher/scene/occlusion.py) and the
+    searches' share of the time budget (matcher/from_prior.py,
+    matcher/lost.py).
+
+    Held as ``Tolerances.shared``."""
+
+    #: Segments whose direction is within this many degrees of the vertical
+    #: are vertical (the map builder's axis tolerance, mapkit.tolerances.AXIS_DEG).
+    vertical_axis_deg: float = 2.0
+    #: A refined pose may leave the prior bounds by this much (metres,
+    #: degrees) before the hypothesis is dropped: noise on a pose at the
+    #: border. A pose its matches fix loosely gets more: this many of its
+    #: standard deviations (six far vertical edges on one side leave the
+    #: position uncertain by a decimetre).
+    prior_slack_m: float = 0.1
+    prior_slack_deg: float = 2.0
+    prior_slack_sigmas: float = 3.0
+    #: Share of the time budget the searches may use: the final tests of a
+    #: few hundred sets found take up to about a third of the search's time.
+    search_share: float = 0.7
+    #: Above this many wall edges, sight lines are first tested against the
+    #: edges' bounding boxes (below it the filter costs more than it saves).
+    box_filter_edges: int = 512
+
+
+@dataclass(frozen=True)
+class Stage1Constants(_Constants):
+    """Constants of stage 1 (matcher/stage1/, and matcher/strategy.py's
+    merge of its searches): the correspondences, the pairwise test, the
+    interpretation tree's tests at a grid pose, the resection from vertical
+    edges.
+
+    Held as ``Tolerances.stage1``."""
+
     #: Slack of the half-planes, metres: a vertical edge still counts as
     #: ahead from this far behind the camera, a wall face as facing from this
     #: far behind it (pose grid and noise).
@@ -79,8 +144,6 @@ class Internals:
     #: ...and a pair shares a pose where their summed quadratic's minimum is
     #: at most this (each term must also stay within ``q_max``).
     pair_fit_max: float = 3.0
-
-    # ---- stage 1: the interpretation tree --------------------------------
     #: The tree tests visibility and free space inside the search only once
     #: a set fixes the position: its feasible points at the best yaw reach
     #: less than this far, metres, in any direction. Before that the best
@@ -125,102 +188,6 @@ class Internals:
     #: When the resection adds hypotheses, the tree's that stage 2 kept stay
     #: with them, at most this many (best ranked first).
     tree_sets_kept: int = 5
-    #: Lost mode multiplies the tree's node and set budgets by this: the
-    #: robot is stopped, and one search covers a whole region at any heading.
-    lost_budget_factor: int = 10
-
-    # ---- lost mode: pose votes (matcher/lost_votes.py) ---------------------
-    #: Lost mode first tries the places this many pairs of horizontal
-    #: sightings (or a sighting and a vertical edge) vote for, best first,
-    #: each as a narrow prior; the region sweep runs only when none of them
-    #: gives an answer. On 40 frames of the example map (seed 7) the true
-    #: place was among the first 10 in 31 frames, the first 30 in 33.
-    vote_places: int = 12
-    #: A voted place's answer stands without the sweep when it explains at
-    #: least this share of the frame's usable lines (a wrong place voted by
-    #: chance explains a few; on the seed-7 frames of the example map wrong
-    #: voted answers explained 44 to 50 %, right ones 62 to 100 %); below it
-    #: the sweep looks for regions that explain more.
-    vote_trust_share: float = 0.6
-    #: Votes use the longest this many horizontal and this many vertical
-    #: image lines (the surest; a close view of a door and its frames has
-    #: 30 lines, and all of them cost a third of a second of votes).
-    vote_lines: int = 12
-    #: A voted place's prior: this far (metres) and this many degrees around
-    #: it (a cell's half diagonal and half its heading span, with noise).
-    vote_prior_m: float = 0.4
-    vote_prior_deg: float = 6.0
-    #: Map segments sighted: horizontal (further than the vertical axis
-    #: tolerance from the vertical) and level, their two ends within this
-    #: many metres of one height.
-    vote_flat_m: float = 0.02
-    #: An image line's plane is cut at a segment's height only within this
-    #: many metres of the camera (the map's usual visibility range and a
-    #: margin: farther, a pixel's error is decimetres of depth).
-    vote_range_m: float = 12.0
-    #: The piece seen may pass a segment's ends by this many metres, plus
-    #: this share of its distance (depth errors grow with distance).
-    vote_slack_m: float = 0.3
-    vote_slack_share: float = 0.05
-    #: The camera stands at least this far (metres) from a sighted segment's
-    #: line and from a vertical edge it sees (the robot's radius, less).
-    vote_min_offset_m: float = 0.15
-    #: Two sightings meet when their headings are within this many degrees
-    #: (a line's heading error at a few metres, with 1 px noise)...
-    vote_yaw_deg: float = 3.0
-    #: ...and their segments (or a segment and the bearing to an edge) cross
-    #: at this many degrees or more (nearly parallel lines meet anywhere).
-    vote_cross_deg: float = 25.0
-    #: A vote off the map's free space by more than this (metres) is dropped.
-    vote_free_m: float = 0.1
-    #: Votes are counted in cells this many metres and degrees across (on
-    #: the seed-7 frames 0.4 m / 5 deg ranked the truth first-10 in 31 of 40,
-    #: 0.25 m / 3 deg in 25, 0.5 m / 6 deg in 29)...
-    vote_cell_m: float = 0.4
-    vote_cell_deg: float = 5.0
-    #: ...and two places kept are at least this far apart (metres, degrees).
-    vote_apart_m: float = 0.5
-    vote_apart_deg: float = 8.0
-
-    #: The matcher names the poses it cannot tell apart instead of picking
-    #: one: answers explaining as many lines as the best, fitting within this
-    #: factor of its E...
-    ambiguous_score_ratio: float = 3.0
-    #: ...and of its reprojection cost (stage 2's ranking: the summed squared
-    #: pixel distances of the lines to their segments; over seeds 0 to 4 the
-    #: three rivals of a right answer that E alone let through cost 2.2 to
-    #: 10 times more)...
-    ambiguous_cost_ratio: float = 2.0
-    #: ...at poses farther apart than these (metres, degrees) make the answer
-    #: ambiguous (a symmetric room, like rooms)...
-    ambiguous_m: float = 0.5
-    ambiguous_deg: float = 10.0
-    #: ...and farther than this many of the best pose's standard deviations
-    #: (a loosely fixed pose's near rivals are the same answer, imprecise).
-    ambiguous_sigmas: float = 3.0
-
-    #: An accepted pose must explain more lines the more lines the frame
-    #: has: a wrong pose among clutter (blinds, shelves, casings) explains
-    #: some by chance, about in proportion to their number. The best pose
-    #: must explain ``min_matches`` plus this share of the lines stage 1
-    #: searched (``Tolerances.search_lines`` at most). On 80 real views of
-    #: the ZInD sample tour at PEQ 1, 3 and 5 the accepted and wrong answers
-    #: explained 4 to 9 of 25 lines (median 5.5), the right ones 4 to 14
-    #: (median 9): 0.16 (7 of 25) kept 46 of 61 right answers and 4 of 16
-    #: wrong ones. A simulated frame of 10 lines needs 4, as the check on
-    #: exact fits below already asks.
-    chance_fit_share: float = 0.16
-
-    #: An accepted pose must show the map: of the segments it predicts in
-    #: view (projected at least this long, pixels, and in plain sight), a
-    #: match's collinear groups must hold this share, once it predicts this
-    #: many (a picture of stripes fits a few vertical edges anywhere, but not
-    #: the floor and ceiling lines those poses would show).
-    coverage_min_px: float = 40.0
-    coverage_min_share: float = 0.25
-    coverage_min_predicted: int = 8
-
-    # ---- stage 1: resection from vertical edges ----------------------------
     #: A line counts as explained at a resected pose if its bearing is within
     #: this many times its noise bound of a candidate edge's: the pose comes
     #: from three noisy bearings (stage 2 refits and applies the exact test).
@@ -232,8 +199,37 @@ class Internals:
     #: Every edge of a triple must stand at least this far in front of its
     #: resected camera, metres: nearer, the solution is a degenerate one.
     resection_min_range_m: float = 0.2
+    #: Most (pair, grid yaw) entries the pairwise test handles at once: its
+    #: arrays then stay under about 15 MB each.
+    pair_chunk: int = 1 << 18
+    #: Most triples of correspondences resected in one batch (memory).
+    resection_chunk: int = 20000
 
-    # ---- stage 2: refinement ----------------------------------------------
+    @cached_property
+    def grid_sight_array(self) -> np.ndarray:
+        """``grid_sight_samples`` as an array."""
+        return np.array(self.grid_sight_samples)
+
+    @cached_property
+    def shown_array(self) -> np.ndarray:
+        """``shown_samples`` as an array."""
+        return np.array(self.shown_samples)
+
+    @cached_property
+    def jitter_array(self) -> np.ndarray:
+        """(5, 2) the grid pose's point and the four around it, metres."""
+        j = self.grid_jitter_m
+        return np.array([[0.0, 0.0], [j, 0.0], [-j, 0.0], [0.0, j], [0.0, -j]])
+
+
+@dataclass(frozen=True)
+class Stage2Constants(_Constants):
+    """Constants of stage 2 (matcher/stage2/): the refinement, the fit and
+    visibility of matches at a refined pose, the slide of loosely fixed
+    poses.
+
+    Held as ``Tolerances.stage2``."""
+
     #: Gauss-Newton iterations: from the grid start (within half a yaw step
     #: and a few centimetres) the fit converges in 3 to 4.
     refine_iterations: int = 6
@@ -247,16 +243,6 @@ class Internals:
     #: Gauss-Newton stops once no hypothesis moves more than this (metres and
     #: radians) in one step: a micrometre, far below the pose's noise.
     refine_converged: float = 1e-6
-    #: A refined pose may leave the prior bounds by this much (metres,
-    #: degrees) before the hypothesis is dropped: noise on a pose at the
-    #: border. A pose its matches fix loosely gets more: this many of its
-    #: standard deviations (six far vertical edges on one side leave the
-    #: position uncertain by a decimetre).
-    prior_slack_m: float = 0.1
-    prior_slack_deg: float = 2.0
-    prior_slack_sigmas: float = 3.0
-
-    # ---- stage 2: fit and visibility at a refined pose ---------------------
     #: Segments are cut this far in front of the optical centre before
     #: projecting, metres.
     near_plane_m: float = 0.05
@@ -270,8 +256,6 @@ class Internals:
     #: Points tested for visibility along the part of a segment a line shows
     #: (fractions of that part, its ends moved in a little: they are the least sure).
     refined_sight_samples: tuple = (0.05, 0.275, 0.5, 0.725, 0.95)
-
-    # ---- stage 2: the slide of loosely fixed poses -------------------------
     #: Hypotheses matching this many horizontal segments or more are not
     #: slid: their lines fix the position.
     slide_max_horizontal: int = 2
@@ -289,7 +273,72 @@ class Internals:
     slide_grid: int = 15
     slide_bisections: int = 8
 
-    # ---- the frame's own pitch and roll (matcher/attitude.py) ----------------
+    @cached_property
+    def refined_sight_array(self) -> np.ndarray:
+        """``refined_sight_samples`` as an array."""
+        return np.array(self.refined_sight_samples)
+
+    @cached_property
+    def slide_grid_array(self) -> np.ndarray:
+        """(G, 2) fractions of the slide's range along the position's two axes."""
+        t = np.linspace(-1, 1, self.slide_grid)
+        return np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2)
+
+
+@dataclass(frozen=True)
+class VerdictConstants(_Constants):
+    """Constants of the verdict on the best answer (matcher/verdict.py,
+    matcher/ambiguity.py, and the counts it judges with: matcher/frame.py's
+    lines needed, matcher/stage2/fit.py's coverage): lines explained by
+    chance, the map shown, ambiguity.
+
+    Held as ``Tolerances.verdict``."""
+
+    #: The matcher names the poses it cannot tell apart instead of picking
+    #: one: answers explaining as many lines as the best, fitting within this
+    #: factor of its E...
+    ambiguous_score_ratio: float = 3.0
+    #: ...and of its reprojection cost (stage 2's ranking: the summed squared
+    #: pixel distances of the lines to their segments; over seeds 0 to 4 the
+    #: three rivals of a right answer that E alone let through cost 2.2 to
+    #: 10 times more)...
+    ambiguous_cost_ratio: float = 2.0
+    #: ...at poses farther apart than these (metres, degrees) make the answer
+    #: ambiguous (a symmetric room, like rooms)...
+    ambiguous_m: float = 0.5
+    ambiguous_deg: float = 10.0
+    #: ...and farther than this many of the best pose's standard deviations
+    #: (a loosely fixed pose's near rivals are the same answer, imprecise).
+    ambiguous_sigmas: float = 3.0
+    #: An accepted pose must explain more lines the more lines the frame
+    #: has: a wrong pose among clutter (blinds, shelves, casings) explains
+    #: some by chance, about in proportion to their number. The best pose
+    #: must explain ``min_matches`` plus this share of the lines stage 1
+    #: searched (``Tolerances.search_lines`` at most). On 80 real views of
+    #: the ZInD sample tour at PEQ 1, 3 and 5 the accepted and wrong answers
+    #: explained 4 to 9 of 25 lines (median 5.5), the right ones 4 to 14
+    #: (median 9): 0.16 (7 of 25) kept 46 of 61 right answers and 4 of 16
+    #: wrong ones. A simulated frame of 10 lines needs 4, as the check on
+    #: exact fits below already asks.
+    chance_fit_share: float = 0.16
+    #: An accepted pose must show the map: of the segments it predicts in
+    #: view (projected at least this long, pixels, and in plain sight), a
+    #: match's collinear groups must hold this share, once it predicts this
+    #: many (a picture of stripes fits a few vertical edges anywhere, but not
+    #: the floor and ceiling lines those poses would show).
+    coverage_min_px: float = 40.0
+    coverage_min_share: float = 0.25
+    coverage_min_predicted: int = 8
+
+
+@dataclass(frozen=True)
+class AttitudeConstants(_Constants):
+    """Constants of the frame's own pitch and roll (matcher/attitude.py):
+    the estimate from vertical lines, the first runs in pitch bands, the fit
+    on their matches, the second runs.
+
+    Held as ``Tolerances.attitude``."""
+
     #: How many standard deviations of the camera file's pitch and roll the
     #: estimate may stray (and lines that may be vertical edges are looked
     #: for), and by how many of what the fit on the first run's matches
@@ -345,55 +394,75 @@ class Internals:
     attitude_again_m: float = 0.3
     attitude_again_deg: float = 5.0
 
-    # ---- time and work sizes -----------------------------------------------
-    #: Share of the time budget the searches may use: the final tests of a
-    #: few hundred sets found take up to about a third of the search's time.
-    search_share: float = 0.7
-    #: Most (pair, grid yaw) entries the pairwise test handles at once: its
-    #: arrays then stay under about 15 MB each.
-    pair_chunk: int = 1 << 18
-    #: Most triples of correspondences resected in one batch (memory).
-    resection_chunk: int = 20000
-    #: Most (ray, wall edge) pairs cast at once: arrays under about 10 MB
-    #: each (the first frame on a map casts every vertical edge's rays).
-    ray_chunk: int = 1 << 20
-    #: Above this many wall edges, sight lines are first tested against the
-    #: edges' bounding boxes (below it the filter costs more than it saves).
-    box_filter_edges: int = 512
 
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            v = getattr(self, f.name)
-            for x in (v if isinstance(v, tuple) else (v,)):
-                if not _number(x) or not (x == x) or x < 0:
-                    raise InputError(f"internal tolerance {f.name} must be >= 0, got {v!r}")
+@dataclass(frozen=True)
+class LostConstants(_Constants):
+    """Constants of lost mode (matcher/lost.py), its pose votes
+    (matcher/lost_votes.py) and the trust in a voted or cut-short answer
+    (matcher/verdict.py's ``trusted``).
 
-    @cached_property
-    def grid_sight_array(self) -> np.ndarray:
-        """``grid_sight_samples`` as an array."""
-        return np.array(self.grid_sight_samples)
+    Held as ``Tolerances.lost``."""
 
-    @cached_property
-    def shown_array(self) -> np.ndarray:
-        """``shown_samples`` as an array."""
-        return np.array(self.shown_samples)
+    #: Lost mode multiplies the tree's node and set budgets by this: the
+    #: robot is stopped, and one search covers a whole region at any heading.
+    lost_budget_factor: int = 10
+    #: Lost mode first tries the places this many pairs of horizontal
+    #: sightings (or a sighting and a vertical edge) vote for, best first,
+    #: each as a narrow prior; the region sweep runs only when none of them
+    #: gives an answer. On 40 frames of the example map (seed 7) the true
+    #: place was among the first 10 in 31 frames, the first 30 in 33.
+    vote_places: int = 12
+    #: A voted place's answer stands without the sweep when it explains at
+    #: least this share of the frame's usable lines (a wrong place voted by
+    #: chance explains a few; on the seed-7 frames of the example map wrong
+    #: voted answers explained 44 to 50 %, right ones 62 to 100 %); below it
+    #: the sweep looks for regions that explain more.
+    vote_trust_share: float = 0.6
+    #: Votes use the longest this many horizontal and this many vertical
+    #: image lines (the surest; a close view of a door and its frames has
+    #: 30 lines, and all of them cost a third of a second of votes).
+    vote_lines: int = 12
+    #: A voted place's prior: this far (metres) and this many degrees around
+    #: it (a cell's half diagonal and half its heading span, with noise).
+    vote_prior_m: float = 0.4
+    vote_prior_deg: float = 6.0
+    #: Map segments sighted: horizontal (further than the vertical axis
+    #: tolerance from the vertical) and level, their two ends within this
+    #: many metres of one height.
+    vote_flat_m: float = 0.02
+    #: An image line's plane is cut at a segment's height only within this
+    #: many metres of the camera (the map's usual visibility range and a
+    #: margin: farther, a pixel's error is decimetres of depth).
+    vote_range_m: float = 12.0
+    #: The piece seen may pass a segment's ends by this many metres, plus
+    #: this share of its distance (depth errors grow with distance).
+    vote_slack_m: float = 0.3
+    vote_slack_share: float = 0.05
+    #: The camera stands at least this far (metres) from a sighted segment's
+    #: line and from a vertical edge it sees (the robot's radius, less).
+    vote_min_offset_m: float = 0.15
+    #: Two sightings meet when their headings are within this many degrees
+    #: (a line's heading error at a few metres, with 1 px noise)...
+    vote_yaw_deg: float = 3.0
+    #: ...and their segments (or a segment and the bearing to an edge) cross
+    #: at this many degrees or more (nearly parallel lines meet anywhere).
+    vote_cross_deg: float = 25.0
+    #: A vote off the map's free space by more than this (metres) is dropped.
+    vote_free_m: float = 0.1
+    #: Votes are counted in cells this many metres and degrees across (on
+    #: the seed-7 frames 0.4 m / 5 deg ranked the truth first-10 in 31 of 40,
+    #: 0.25 m / 3 deg in 25, 0.5 m / 6 deg in 29)...
+    vote_cell_m: float = 0.4
+    vote_cell_deg: float = 5.0
+    #: ...and two places kept are at least this far apart (metres, degrees).
+    vote_apart_m: float = 0.5
+    vote_apart_deg: float = 8.0
 
-    @cached_property
-    def refined_sight_array(self) -> np.ndarray:
-        """``refined_sight_samples`` as an array."""
-        return np.array(self.refined_sight_samples)
 
-    @cached_property
-    def jitter_array(self) -> np.ndarray:
-        """(5, 2) the grid pose's point and the four around it, metres."""
-        j = self.grid_jitter_m
-        return np.array([[0.0, 0.0], [j, 0.0], [-j, 0.0], [0.0, j], [0.0, -j]])
-
-    @cached_property
-    def slide_grid_array(self) -> np.ndarray:
-        """(G, 2) fractions of the slide's range along the position's two axes."""
-        t = np.linspace(-1, 1, self.slide_grid)
-        return np.stack(np.meshgrid(t, t, indexing="ij"), -1).reshape(-1, 2)
+#: The fields of :class:`Tolerances` that hold inner constants, and each one's class.
+CONSTANTS = {"map_index": MapIndexConstants, "shared": SharedConstants, "stage1": Stage1Constants,
+             "stage2": Stage2Constants, "verdict": VerdictConstants, "attitude": AttitudeConstants,
+             "lost": LostConstants}
 
 
 @dataclass(frozen=True)
@@ -518,15 +587,31 @@ class Tolerances:
     #: of lines): a photo gives a few hundred after merging (``matcher
     #: localize --max-lines`` raises it).
     max_lines: int = 2000
-    #: The method's inner constants (:class:`Internals`).
-    internals: Internals = field(default_factory=Internals)
+    #: The method's inner constants, one object per part of the matcher
+    #: that reads them (:data:`CONSTANTS`); changed as
+    #: ``replace(tol, stage1=replace(tol.stage1, pinned_m=0.2))``. The
+    #: per-map structures' (collinear groups, sight table, free space)...
+    map_index: MapIndexConstants = field(default_factory=MapIndexConstants)
+    #: ...those several parts read alike (vertical axis, prior slack)...
+    shared: SharedConstants = field(default_factory=SharedConstants)
+    #: ...stage 1's (correspondences, the tree, the resection)...
+    stage1: Stage1Constants = field(default_factory=Stage1Constants)
+    #: ...stage 2's (refinement, fit and visibility, the slide)...
+    stage2: Stage2Constants = field(default_factory=Stage2Constants)
+    #: ...the verdict's (chance fits, coverage, ambiguity)...
+    verdict: VerdictConstants = field(default_factory=VerdictConstants)
+    #: ...the frame's own pitch and roll's...
+    attitude: AttitudeConstants = field(default_factory=AttitudeConstants)
+    #: ...and lost mode's (its pose votes).
+    lost: LostConstants = field(default_factory=LostConstants)
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "internals":
-                if not isinstance(v, Internals):
-                    raise InputError(f"tolerance internals must be a matcher.tolerances.Internals, got {v!r}")
+            if f.name in CONSTANTS:
+                if not isinstance(v, CONSTANTS[f.name]):
+                    raise InputError(f"tolerance {f.name} must be a matcher.tolerances.{CONSTANTS[f.name].__name__}, "
+                                     f"got {v!r}")
                 continue
             if not _number(v) or not (v == v) or v < 0:
                 raise InputError(f"tolerance {f.name} must be >= 0, got {v!r}")
@@ -537,10 +622,34 @@ class Tolerances:
         if self.search_lines < self.min_matches:
             raise InputError(f"tolerance search_lines must be >= min_matches ({self.min_matches}), got {self.search_lines}")
 
+    @property
+    def internals(self):
+        """Gone: the inner constants were split by consumer (see :data:`SPLIT_INTERNALS`)."""
+        raise AttributeError(SPLIT_INTERNALS)
+
 
 DEFAULT = Tolerances()
-#: The default inner constants (for the per-map structures built before any call's tolerances are known).
-DEFAULT_INTERNALS = DEFAULT.internals
+
+#: What code written for the former single class of inner constants is told.
+SPLIT_INTERNALS = ("matcher.tolerances.Internals (Tolerances.internals) was split by consumer: each constant keeps "
+                   "its name in one of Tolerances.map_index, .shared, .stage1, .stage2, .verdict, .attitude, .lost "
+                   "(matcher.tolerances.constants_owner(name) says which; docs/matcher.md, 'Inner constants')")
+
+
+def constants_owner(name: str) -> str:
+    """The field of :class:`Tolerances` whose constants class holds the inner
+    constant ``name`` (``"pinned_m"`` -> ``"stage1"``); InputError if none does."""
+    for owner, cls in CONSTANTS.items():
+        if any(f.name == name for f in fields(cls)):
+            return owner
+    raise InputError(f"no inner constant is named {name!r} (the fields of {', '.join(c.__name__ for c in CONSTANTS.values())})")
+
+
+def __getattr__(name: str):
+    """The former names fail with where their constants went, not a bare "cannot import"."""
+    if name in ("Internals", "DEFAULT_INTERNALS"):
+        raise ImportError(SPLIT_INTERNALS)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 from matcher import ambiguity
 from matcher.result import Deferred
-from matcher.tolerances import Internals, Tolerances
+from matcher.tolerances import LostConstants, Tolerances
 
 ACCEPTED, NOT_LOCALISED, AMBIGUOUS = "accepted", "not_localised", "ambiguous"
 
@@ -124,7 +124,7 @@ def score_accepted(score: float, tol: Tolerances) -> bool:
     return bool(score <= tol.e_accept)
 
 
-def trusted(explained: int, usable: int, work: Internals) -> bool:
+def trusted(explained: int, usable: int, work: LostConstants) -> bool:
     """Does an answer explaining ``explained`` of the frame's ``usable``
     lines explain most of the image (``vote_trust_share``), so that no
     other place could explain much more?"""
@@ -152,7 +152,7 @@ def decide(ev: Evidence, tol: Tolerances) -> Verdict:
     if ev.standing is not None and not ev.standing:
         return ev.standing
     sweep = ev.sweep
-    if sweep is not None and ev.cut == BY_TIME and not trusted(sweep.explained, sweep.usable, tol.internals):
+    if sweep is not None and ev.cut == BY_TIME and not trusted(sweep.explained, sweep.usable, tol.lost):
         # Cut short, the best so far explains too little to stand for the
         # whole map (a place voted by chance, a look-alike room): a candidate.
         return Verdict(NOT_LOCALISED, f"the time budget of {tol.time_budget_ms:g} ms ran out before the whole map "
@@ -170,7 +170,7 @@ def _refused(ev: Evidence, tol: Tolerances, cut: str) -> Verdict | None:
         finite = E == E and abs(E) != float("inf")
         why = ev.unscored if not finite else f"best score E={E:.3g} is above the acceptance threshold {tol.e_accept:g}"
         return Verdict(NOT_LOCALISED, why + cut, score=float(E) if finite else None)
-    work = tol.internals
+    work = tol.verdict
     if ev.coverage is not None:
         predicted, seen = ev.coverage.get()
         if predicted >= work.coverage_min_predicted and seen < work.coverage_min_share * predicted:
@@ -190,7 +190,7 @@ def _rivals(ev: Evidence, tol: Tolerances) -> list:
     if len(answers) < 2 or answers[1][1] != answers[0][1]:
         return list(answers[:1])
     spread = None if ev.spread is None else ev.spread.get()
-    return ambiguity.rivals(list(answers), tol.internals, spread)
+    return ambiguity.rivals(list(answers), tol.verdict, spread)
 
 
 def _nothing_found(sweep: Sweep, cut: str, tol: Tolerances) -> str:

@@ -36,11 +36,11 @@ def test_the_free_space_raster_of_a_2_km_map_stays_small():
     """A plan 2 km across (the builder's limit) would need a raster of 1.6e9
     cells at 5 cm: the cells grow instead, and the distances stay right."""
     from matcher.scene.freespace import FreeSpace
-    from matcher.tolerances import DEFAULT_INTERNALS
+    from matcher.tolerances import DEFAULT
 
     ring = np.array([[0.0, 0.0], [2000.0, 0.0], [2000.0, 2000.0], [0.0, 2000.0]])
     fs = FreeSpace(ring, np.array([0, 4]))
-    assert fs.dist.size <= DEFAULT_INTERNALS.free_max_cells
+    assert fs.dist.size <= DEFAULT.map_index.free_max_cells
     assert fs.distance(np.array([[1000.0, 1000.0], [5.0, 5.0]])).tolist() == [0.0, 0.0]
     assert 0.0 < fs.distance(np.array([[1000.0, -0.9]]))[0] <= 0.9 + fs.cell
 

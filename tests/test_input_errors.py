@@ -53,7 +53,7 @@ def test_every_error_of_bad_input_is_an_input_error():
 
 
 def test_the_matchers_input_checks_raise_input_errors():
-    from matcher.tolerances import LineDetection, Tolerances, Tracking
+    from matcher.tolerances import LineDetection, Stage1Constants, Stage2Constants, Tolerances, Tracking
 
     m = load_map(ROOT / "maps" / "flat.lmap")
     cam = Camera.from_dict(base_camera())
@@ -67,6 +67,9 @@ def test_the_matchers_input_checks_raise_input_errors():
         lambda: matcher.localize(m, cam, good, (2.0, 6.6, 0.0), 0.3, 10, tolerances={"dt": 1}),
         lambda: matcher.detect_lines(np.zeros((0, 0)), cam),
         lambda: Tolerances(yaw_step_deg=0.0),
+        lambda: Tolerances(stage1=Stage2Constants()),  # a consumer's constants in another's place
+        lambda: Stage1Constants(pinned_m=-0.1),
+        lambda: Stage1Constants(grid_sight_samples=(0.5, "1")),
         lambda: Tracking(max_candidates=0),
         lambda: LineDetection(merge_sample_px=0.0),
         lambda: matcher.Tracker(m, cam, (2.0, 6.6, 0.0), None, None),
@@ -75,6 +78,25 @@ def test_the_matchers_input_checks_raise_input_errors():
     for call in bad_calls:
         with pytest.raises(InputError):
             call()
+
+
+def test_the_former_single_class_of_inner_constants_says_where_they_went():
+    """Code written for ``Internals`` / ``Tolerances.internals`` fails at
+    once, saying the constants kept their names under ``tol.stage1`` and
+    the others, not with a bare "cannot import"."""
+    import matcher.tolerances as t
+
+    with pytest.raises(ImportError, match="split by consumer"):
+        from matcher.tolerances import Internals  # noqa: F401
+    with pytest.raises(ImportError, match="split by consumer"):
+        t.DEFAULT_INTERNALS
+    with pytest.raises(AttributeError, match=r"Tolerances\.map_index, \.shared, \.stage1"):
+        t.DEFAULT.internals
+    with pytest.raises(TypeError):
+        t.Tolerances(internals=None)
+    assert t.constants_owner("pinned_m") == "stage1" and t.constants_owner("vote_places") == "lost"
+    with pytest.raises(InputError, match="no inner constant is named 'pinned'"):
+        t.constants_owner("pinned")
 
 
 # ---- an injected bug: the command lines --------------------------------------------

@@ -179,7 +179,8 @@ def _numeric(node: ast.AST) -> bool:
 @pytest.mark.parametrize("package", ["matcher", "linemap"])
 def test_no_module_level_threshold_outside_tolerances(package):
     """Every numeric constant at module level lives in matcher/tolerances.py
-    (as a field of Tolerances or Internals), or is named in NOT_THRESHOLDS."""
+    (as a field of Tolerances or of one of its constants classes), or is
+    named in NOT_THRESHOLDS."""
     found = []
     for p in _python_files(package):
         rel = str(p.relative_to(ROOT))
@@ -210,7 +211,8 @@ def test_builder_geometric_zeros_live_in_tolerances():
 
 
 def test_tolerances_document_every_field():
-    """Each field of Tolerances and Internals has a ``#:`` comment."""
+    """Each field of every class in matcher/tolerances.py (Tolerances, each
+    consumer's constants class, LineDetection, Tracking) has a ``#:`` comment."""
     src = (ROOT / "matcher" / "tolerances.py").read_text().splitlines()
     tree = ast.parse("\n".join(src))
     missing = []
@@ -224,3 +226,21 @@ def test_tolerances_document_every_field():
                 if not (above.startswith("#:") or shares):
                     missing.append(f"{cls.name}.{node.target.id}")
     assert not missing
+
+
+def test_every_constants_class_is_held_by_tolerances_and_names_are_unique():
+    """Each ``*Constants`` class of matcher/tolerances.py is a field of
+    Tolerances (so a user reaches it, and the type check covers it), and no
+    two share a field name (each constant has one home: constants_owner)."""
+    from dataclasses import fields
+
+    import matcher.tolerances as t
+
+    tree = ast.parse((ROOT / "matcher" / "tolerances.py").read_text())
+    defined = {n.name for n in tree.body if isinstance(n, ast.ClassDef) and n.name.endswith("Constants")
+               and not n.name.startswith("_")}
+    held = {f.name: f.type for f in fields(t.Tolerances) if f.name in t.CONSTANTS}
+    assert {c.__name__ for c in t.CONSTANTS.values()} == defined == set(held.values())
+    names = [f.name for c in t.CONSTANTS.values() for f in fields(c)]
+    assert len(names) == len(set(names))
+    assert all(hasattr(getattr(t.DEFAULT, t.constants_owner(n)), n) for n in names)

@@ -17,7 +17,7 @@ from mapkit_harness.simulate import make_frame
 
 ROOT = Path(__file__).resolve().parents[1]
 
-SEARCH_SHARE = DEFAULT.internals.search_share
+SEARCH_SHARE = DEFAULT.shared.search_share
 
 #: A budget spent before the search starts.
 SPENT = replace(matcher.Tolerances(), time_budget_ms=1e-9)

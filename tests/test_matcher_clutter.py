@@ -61,7 +61,7 @@ def test_lines_needed_grows_with_the_lines_searched():
     small = prepare_lines(cam, _short_clutter(rng, 6, cam), tol)
     large = prepare_lines(cam, _short_clutter(rng, 60, cam), tol)
     assert lines_needed(small, tol) == tol.min_matches
-    share = tol.internals.chance_fit_share
+    share = tol.verdict.chance_fit_share
     assert lines_needed(large, tol) == tol.min_matches + int(share * tol.search_lines)
 
 

@@ -202,7 +202,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     near = np.array([[1.0, 0.0, 0.0], [-0.5, 0.0, 0.0]])  # one ahead (+x), one behind
     grid = YawGrid(yaws, 0.0, None, None, ce, 1.0)
     pairs = Pairs(np.array([0, 1]), np.array([0, 0]), np.array([True, True]))
-    c, b = _half_planes(_Img, ModelLines(None, None, near), pairs, grid, None, DEFAULT.internals.front_slack_m)
+    c, b = _half_planes(_Img, ModelLines(None, None, near), pairs, grid, None, DEFAULT.stage1.front_slack_m)
     # At the disk centre (z = 0): c . z <= b holds for the edge ahead only.
     assert (0.0 <= b[0, 0]) and not (0.0 <= b[1, 0])
     assert np.allclose(c[:, 0], [[1.0, 0.0], [1.0, 0.0]])
@@ -211,7 +211,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
 def test_collinear_groups_hand_worked_and_from_map_labels(flat):
     from matcher.scene.collinear import collinear_classes, collinear_labels
 
-    angle, dist = DEFAULT.internals.collinear_deg, DEFAULT.internals.collinear_m
+    angle, dist = DEFAULT.map_index.collinear_deg, DEFAULT.map_index.collinear_m
 
     segs = np.array([
         [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],  # a wall's floor line, split by a door...
@@ -358,7 +358,7 @@ def test_sight_clear_against_shapely(flat, box_filter):
 
     from dataclasses import replace
 
-    work = replace(DEFAULT.internals, box_filter_edges=0) if box_filter else DEFAULT.internals
+    shared = replace(DEFAULT.shared, box_filter_edges=0) if box_filter else DEFAULT.shared
     walls = occlusion.wall_edges(flat)
     outline = MultiLineString([[tuple(a), tuple(b)] for a, b in zip(*walls)])
     rng = np.random.default_rng(3)
@@ -370,7 +370,7 @@ def test_sight_clear_against_shapely(flat, box_filter):
         pts = lo + rng.random((30, 2)) * (hi - lo)
         on_wall = rng.integers(0, len(walls[0]), 15)
         pts[:15] = walls[0][on_wall] + rng.random((15, 1)) * (walls[1][on_wall] - walls[0][on_wall])
-        got = occlusion.sight_clear(cam, pts, walls, margin, work)
+        got = occlusion.sight_clear(cam, pts, walls, margin, shared)
         for p, clear in zip(pts, got):
             r = p - cam
             u = r / np.linalg.norm(r)

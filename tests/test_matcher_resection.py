@@ -17,7 +17,7 @@ from matcher.stage1.resection import resect as _resect
 from matcher.stage1.resection import EdgeCorrespondences, triples, vertical_hypotheses
 from mapkit_harness.simulate import make_frame, paper_camera, pose_error
 
-WORK = DEFAULT.internals
+WORK = DEFAULT.stage1
 
 
 def resect(points, alpha):

@@ -36,7 +36,7 @@ def test_slides_along_the_loose_axis_to_the_nearest_fit():
     assert move.tolist() == [True]
     assert moved[0, 0] == pytest.approx(2.0, abs=1e-9)
     assert moved[0, 2] == pytest.approx(0.3, abs=1e-9)
-    assert 0.6 <= moved[0, 1] <= 0.6 + 2 * slide.DEFAULT_INTERNALS.slide_max_m / 2**8 + 1e-9
+    assert 0.6 <= moved[0, 1] <= 0.6 + 2 * slide.DEFAULT.stage2.slide_max_m / 2**8 + 1e-9
 
 
 def test_the_yaw_follows_the_position_as_the_information_says():

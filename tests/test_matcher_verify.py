@@ -13,7 +13,7 @@ from linemap.geometry import project_segments as _project
 from matcher.tolerances import DEFAULT as _TOL
 from mapkit_harness.simulate import paper_camera
 
-_NEAR_M = _TOL.internals.near_plane_m
+_NEAR_M = _TOL.stage2.near_plane_m
 
 
 def project_segments(cam, poses, segments):
@@ -83,7 +83,7 @@ def test_refine_recovers_each_pose_from_exact_rays():
             hyp.append(h)
     start = truth + np.array([0.2, -0.1, math.radians(3.0)])
     terms = verify.MatchTerms(np.array(seg_a), np.array(seg_b), np.array(ray_a), np.array(ray_b), PITCH, HEIGHT)
-    got = verify.refine(start, np.array(hyp), terms, _TOL.internals)
+    got = verify.refine(start, np.array(hyp), terms, _TOL.stage2)
     assert got == pytest.approx(truth, abs=1e-7)
 
 
@@ -142,9 +142,9 @@ def test_visibility_is_tested_on_the_part_the_line_shows():
         sub = seg[:, :1] + np.array([t0, t1])[None, :, None] * (seg[:, 1:] - seg[:, :1])
         return project_segments(cam, pose, sub)[0]
 
-    assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls, DEFAULT.internals).all()  # y in [-1.8, -1.4]
-    assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls, DEFAULT.internals).any()  # y in [-0.4, 1.2]
-    assert visible(cam, pose[:0], seg[:0], line_showing(0.2, 0.6)[:0], walls, DEFAULT.internals).shape == (0,)
+    assert visible(cam, pose, seg, line_showing(0.8, 0.95), walls, DEFAULT.stage2, DEFAULT.shared).all()  # y in [-1.8, -1.4]
+    assert not visible(cam, pose, seg, line_showing(0.2, 0.6), walls, DEFAULT.stage2, DEFAULT.shared).any()  # y in [-0.4, 1.2]
+    assert visible(cam, pose[:0], seg[:0], line_showing(0.2, 0.6)[:0], walls, DEFAULT.stage2, DEFAULT.shared).shape == (0,)
 
 
 def test_shown_spans_agree_with_covered_span():
@@ -256,7 +256,7 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
     for _ in range(300):
         rays = unit_rays(cam, add_noise(ideal, rng, 1.0, 1.0, 0.0, cam))
         terms = verify.MatchTerms(segs[ids, 0], segs[ids, 1], rays[:, 0], rays[:, 1], cam.pitch, cam.height_m)
-        fit = verify.refine(truth[None], hyp, terms, tol.internals)[0]
+        fit = verify.refine(truth[None], hyp, terms, tol.stage2)[0]
         errors.append(fit - truth)
     errors = np.array(errors)
     scatter_m = math.sqrt(np.linalg.eigvalsh(np.cov(errors[:, :2].T))[1])

@@ -35,7 +35,7 @@ def test_a_floor_line_puts_the_camera_beside_its_segment(cam):
     assert flat.any()
     one = lines[np.flatnonzero(flat)[:1]]
     _, img = checked_inputs(linemap, cam, one, None)
-    s = sightings(linemap, cam, img, DEFAULT.internals)
+    s = sightings(linemap, cam, img, DEFAULT)
     mine = s.line == 0
     assert mine.any()
     yaw_err = np.abs(np.remainder(s.yaw[mine] - math.radians(pose[2]) + np.pi, 2 * np.pi) - np.pi)
@@ -56,7 +56,7 @@ def test_the_true_place_is_among_the_voted_ones(cam):
     for _ in range(12):
         fr = make_frame(linemap, cam, rng, 1, 1.0, 1.0, clutter=3)
         _, img = checked_inputs(linemap, cam, fr.lines, None)
-        places = vote_places(linemap, cam, img, DEFAULT.internals, DEFAULT.internals.vote_places)
+        places = vote_places(linemap, cam, img, DEFAULT, DEFAULT.lost.vote_places)
         assert places.shape[1] == 4 and (np.diff(places[:, 3]) <= 0).all()
         found += any(_near(p, fr.pose) for p in places)
     assert found >= 8

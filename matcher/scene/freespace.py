@@ -17,13 +17,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import distance_transform_edt
 
-from matcher.tolerances import DEFAULT_INTERNALS, Internals
+from matcher.tolerances import DEFAULT, MapIndexConstants
 
 
 class FreeSpace:
     """Distance from a floor point to the map's regions, metres (0 inside)."""
 
-    def __init__(self, ring_points: np.ndarray, ring_offsets: np.ndarray, work: Internals = DEFAULT_INTERNALS) -> None:
+    def __init__(self, ring_points: np.ndarray, ring_offsets: np.ndarray, work: MapIndexConstants = DEFAULT.map_index) -> None:
         """``ring_points`` (P, 2) and ``ring_offsets`` (K+1,): the region rings
         of a map (outer rings and holes alike; the union of regions is their
         even-odd set because regions do not overlap). The raster's cell and

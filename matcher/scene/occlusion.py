@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from matcher.tolerances import DEFAULT_INTERNALS, Internals
+from matcher.tolerances import DEFAULT, MapIndexConstants, SharedConstants
 
 
 class WallEdges(tuple):
@@ -60,7 +60,7 @@ def inside_walls(points: np.ndarray, walls) -> np.ndarray:
     return ((straddle & (xc > x)).sum(axis=1) % 2) == 1
 
 
-def face_normals(segments: np.ndarray, walls, work: Internals = DEFAULT_INTERNALS) -> np.ndarray:
+def face_normals(segments: np.ndarray, walls, work: MapIndexConstants = DEFAULT.map_index) -> np.ndarray:
     """(N, 2) unit normal of the wall face each non-vertical segment (N, 2, 3)
     lies on, pointing into the room; zeros where there is no single face (a
     vertical segment, a line in a doorway or away from the walls). Probed
@@ -117,7 +117,7 @@ class SightRays:
     b + pi, up to that distance. Rays are cast once per point and kept, so
     a map's table fills up over the frames."""
 
-    def __init__(self, walls, work: Internals = DEFAULT_INTERNALS) -> None:
+    def __init__(self, walls, work: MapIndexConstants = DEFAULT.map_index) -> None:
         self.walls = walls
         self.bins = int(work.sight_bins)
         self.step = 2 * np.pi / self.bins
@@ -162,7 +162,7 @@ class SightRays:
 
 
 def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float,
-                work: Internals = DEFAULT_INTERNALS) -> np.ndarray:
+                shared: SharedConstants = DEFAULT.shared) -> np.ndarray:
     """(Q,) bool: the floor sight line from ``cam`` (2,) or (Q, 2) to each of
     ``points`` (Q, 2) crosses no wall edge farther than ``end_margin`` metres
     from both its ends (the points lie on wall faces; the camera may be a
@@ -181,7 +181,7 @@ def sight_clear(cam: np.ndarray, points: np.ndarray, walls, end_margin: float,
     ea, eb = walls
     cam = np.asarray(cam, dtype=float)  # (2,) or (Q, 2): broadcast in every use below
     ends, lines = (walls.ends, walls.lines) if isinstance(walls, WallEdges) else _homogeneous(ea, eb)
-    if len(ea) > work.box_filter_edges:
+    if len(ea) > shared.box_filter_edges:
         lo = np.minimum(points.min(axis=0), cam.reshape(-1, 2).min(axis=0))
         hi = np.maximum(points.max(axis=0), cam.reshape(-1, 2).max(axis=0))
         near = (np.maximum(ea, eb) >= lo).all(axis=1) & (np.minimum(ea, eb) <= hi).all(axis=1)

@@ -121,7 +121,7 @@ def find_correspondences(segments: np.ndarray, camera: Camera, image_lines: Imag
     W = np.einsum("gki,mk->mgi", Rg, image_lines.normals)  # (M, Y, 3) world normals R^T n
     fwd = Rg[:, 2, :]  # (Y, 3) optical axis
 
-    vert_seg = segment_is_vertical(segments, tol.internals.vertical_axis_deg)
+    vert_seg = segment_is_vertical(segments, tol.shared.vertical_axis_deg)
     v = segments[:, 1] - segments[:, 0]
     v = v / np.linalg.norm(v, axis=1, keepdims=True)
     tpar = np.einsum("nk,nk->n", ce - segments[:, 0], v)
@@ -153,8 +153,8 @@ def find_correspondences(segments: np.ndarray, camera: Camera, image_lines: Imag
     model, pairs = ModelLines(segments, v, near), Pairs(seg_k, line_k, is_v)
     mask, quad = _strips(camera, image_lines, model, pairs, grid, tol, sight)
     val, zx, zy = posegrid.minimise(quad, dt)
-    mask &= val <= tol.internals.single_fit_max
-    front_c, front_b = _half_planes(image_lines, model, pairs, grid, faces, tol.internals.front_slack_m)
+    mask &= val <= tol.stage1.single_fit_max
+    front_c, front_b = _half_planes(image_lines, model, pairs, grid, faces, tol.stage1.front_slack_m)
     mask &= posegrid.halfplane_reachable(quad, (val, zx, zy), 1, tol.q_max, dt, front_c, front_b)
     keep = mask.any(axis=1)
     # Each correspondence alone as the tree's root tests it (its own term

@@ -68,7 +68,7 @@ def generate(cands: Candidates, camera: Camera, image_lines: ImageLines, prior, 
     segments, dt = cands.reps, prior[3]
     sight = cands.sight
     if sight is None and cands.walls is not None:
-        sight = SightRays(cands.walls, tol.internals)
+        sight = SightRays(cands.walls, tol.map_index)
     counts: dict = {}
     corr = find_correspondences(segments, camera, image_lines, prior, tol, sight, cands.faces, counts)
     if not isinstance(corr, Correspondences):  # too few: the unary survivors, for the counts

@@ -40,7 +40,7 @@ def pair_compatibility(image_lines: ImageLines, corr: Correspondences, dt: float
     iu, ju = iu[distinct], ju[distinct]
     # In chunks of pairs, so that a huge prior (lost mode, a large dt with
     # any heading) does not need gigabytes; a frame's pairs are one chunk.
-    step = max(1, tol.internals.pair_chunk // mask.shape[1])
+    step = max(1, tol.stage1.pair_chunk // mask.shape[1])
     chunks = []
     for c in range(0, len(iu), step):
         if not deadlines.may_search():
@@ -72,7 +72,7 @@ def _share_a_pose(iu, ju, corr: Correspondences, dt: float, tol: Tolerances) -> 
     qi, qj = np.take(flat, at_i, axis=0), np.take(flat, at_j, axis=0)
     qs = qi + qj
     pval, zx, zy = posegrid.minimise(qs, dt)
-    ok = (pval <= tol.internals.pair_fit_max) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
+    ok = (pval <= tol.stage1.pair_fit_max) & (posegrid.evaluate(qi, zx, zy) <= tol.q_max) & (posegrid.evaluate(qj, zx, zy) <= tol.q_max)
     # The half-planes, on the (pair, yaw) entries left and only for the
     # correspondences that have one (most of these arrays' entries fail the
     # value test).

@@ -135,7 +135,7 @@ def vertical_hypotheses(corr: EdgeCorrespondences, prior, free, tol: Tolerances,
     edge, one edge per line) with the pose. Returns ``(sets, inits)``: at
     most ``max_hypotheses`` index arrays into the correspondences and
     (H, 3) poses ``(x, y, yaw)``."""
-    work = tol.internals
+    work = tol.stage1
     vert = np.nonzero(corr.vertical)[0]
     empty = ([], np.zeros((0, 3)))
     if len(np.unique(corr.line[vert])) < max(3, min_lines):
@@ -180,7 +180,7 @@ def _best_of_chunk(corr: EdgeCorrespondences, vert: np.ndarray, t: np.ndarray, p
     (minus the lines explained, the summed squared normalised bearing
     error) and each vertical correspondence's (``vert``, sorted by line)
     normalised bearing error at the pose; None when there is none."""
-    work = tol.internals
+    work = tol.stage1
     poses, ok = resect(corr.points[t], corr.alpha[corr.line[t]], work.resection_min_range_m)
     poses = poses[ok]
     poses = poses[within_prior(poses, prior, free, tol)]

@@ -10,8 +10,8 @@ before it becomes a hypothesis (:func:`check_once`, :func:`visible_best`).
 
 Visibility here is at a grid pose, a few centimetres and up to half a yaw
 step off: a sight line counts as blocked only well away from its ends
-(``Internals.grid_sight_end_m``) and a segment counts as seen from the pose
-or a point around it (``Internals.grid_jitter_m``). Stage 2's test at the
+(``Stage1Constants.grid_sight_end_m``) and a segment counts as seen from the pose
+or a point around it (``Stage1Constants.grid_jitter_m``). Stage 2's test at the
 refined pose (:func:`matcher.stage2.fit.visible`) is stricter.
 """
 
@@ -24,7 +24,7 @@ import numpy as np
 from matcher.scene.occlusion import sight_clear
 from matcher.stage1 import posegrid
 from matcher.stage1.tree_input import TreeInput
-from matcher.tolerances import Internals, Tolerances
+from matcher.tolerances import SharedConstants, Stage1Constants, Tolerances
 
 
 def visible_best(inp: TreeInput, sets, inits, tol: Tolerances, cache):
@@ -68,7 +68,7 @@ def _best_pose(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np.ndarray, t
     z = (float(zx[i]), float(zy[i]))
     cam = inp.centre[:2] + z
     e, lam, _ = posegrid.weak_axis(Qsum[g])
-    pinned_m = tol.internals.pinned_m
+    pinned_m = tol.stage1.pinned_m
     if lam < 1.0 / pinned_m**2:  # cheap early out: even the summed strips leave it loose
         return False, g, cam
     lo, hi = posegrid.stretch(inp.quad[R, g], z, e, tol.q_max, inp.dt)
@@ -110,7 +110,7 @@ def edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np
     sight line per sample decides. Only yaws where a leaf of at most
     ``most`` members could stand count: adding members only raises the
     summed quadratic's minimum, and a leaf's must stay <= its size + 1."""
-    q_max, work = tol.q_max, tol.internals
+    q_max, work = tol.q_max, tol.stage1
     G = mR.nonzero()[0]
     val, zx, zy = posegrid.minimise(Qsum[G], inp.dt)
     near = val <= most + 1.0
@@ -140,7 +140,7 @@ def edge_seen_from_region(inp: TreeInput, R: list[int], Qsum: np.ndarray, mR: np
         return False
     edge = inp.segments[R[-1], 0, :2]
     if inp.sight is None:
-        return bool(sight_clear(pts, np.broadcast_to(edge, pts.shape), inp.walls, work.grid_sight_end_m, work).any())
+        return bool(sight_clear(pts, np.broadcast_to(edge, pts.shape), inp.walls, work.grid_sight_end_m, tol.shared).any())
     # The map's sight table (rays cast from the edge once per map): a sample
     # sees the edge if the ray from the edge towards it runs that far.
     rel = pts - edge
@@ -207,15 +207,16 @@ def _seen_cached(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, t
     """:func:`_seen` remembered per (members, grid yaw, centimetre of
     position): a leaf repeats the test its last node made."""
     if cache is None:
-        return _seen(inp, members, cam, g, tol.internals)
+        return _seen(inp, members, cam, g, tol.stage1, tol.shared)
     key = (members.tobytes(), g, int(round(cam[0] * 100)), int(round(cam[1] * 100)))
     hit = cache.get(key)
     if hit is None:
-        hit = cache[key] = _seen(inp, members, cam, g, tol.internals)
+        hit = cache[key] = _seen(inp, members, cam, g, tol.stage1, tol.shared)
     return hit
 
 
-def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, work: Internals) -> np.ndarray:
+def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, work: Stage1Constants,
+          shared: SharedConstants) -> np.ndarray:
     """(S,) bool: the member's segment has a sample point in front of the
     camera at ``cam`` (2,) and grid yaw index ``g`` and, with walls, with a
     clear sight line."""
@@ -236,19 +237,19 @@ def _seen(inp: TreeInput, members: np.ndarray, cam: np.ndarray, g: int, work: In
     seen = np.zeros(S, dtype=bool)
     if len(todo_s) == 0:
         return seen
-    seen[todo_s[sight_clear(cam, flat[todo_s, todo_p], inp.walls, work.grid_sight_end_m, work)]] = True
+    seen[todo_s[sight_clear(cam, flat[todo_s, todo_p], inp.walls, work.grid_sight_end_m, shared)]] = True
     todo_s, todo_p = (front & ~seen[:, None]).nonzero()
     if len(todo_s):
         jitter = work.jitter_array
         J = len(jitter) - 1
         cams = (cam + jitter[1:])[np.tile(np.arange(J), len(todo_s))]
         pts = np.repeat(flat[todo_s, todo_p], J, axis=0)
-        clear = sight_clear(cams, pts, inp.walls, work.grid_sight_end_m, work)
+        clear = sight_clear(cams, pts, inp.walls, work.grid_sight_end_m, shared)
         seen[np.repeat(todo_s, J)[clear]] = True
     return seen
 
 
-def _shown_points(inp: TreeInput, members: np.ndarray, cam: np.ndarray, yaw: float, work: Internals) -> np.ndarray:
+def _shown_points(inp: TreeInput, members: np.ndarray, cam: np.ndarray, yaw: float, work: Stage1Constants) -> np.ndarray:
     """(S, n, 3) points of the part of each member's segment that its image
     line shows at the pose (cam, yaw) (:func:`~matcher.projection.covered_span`),
     that part widened by ``shown_widen_m`` at both ends: the grid pose is a few

@@ -150,7 +150,7 @@ class InterpretationTree:
             alone = np.arange(self.K) if inp.single_fit is None else np.nonzero(np.isfinite(inp.single_fit))[0]
             target = len(np.unique(self.level_of[alone]))
             while target > tol.min_matches and not self.sets and not self.truncated:
-                if not self._run(target, tol.internals.aim_high_share * tol.max_nodes - self.nodes):
+                if not self._run(target, tol.stage1.aim_high_share * tol.max_nodes - self.nodes):
                     break
                 target -= 1
         if not self.sets and not self.truncated:
@@ -229,7 +229,7 @@ class InterpretationTree:
         candidates ``c`` in turn; ``rest`` the pool of the lines after it."""
         inp, tol = self.inp, self.tol
         quad, mask = inp.quad, inp.mask
-        loose_after = tol.internals.loose_test_after * tol.max_nodes
+        loose_after = tol.stage1.loose_test_after * tol.max_nodes
         # Lines each candidate can still reach: its child's look-ahead keeps
         # only the rest compatible with it, so a candidate that cannot reach
         # the bound is not worth a node (a cheap count against a feasibility

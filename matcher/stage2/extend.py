@@ -33,7 +33,7 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
     # Every candidate segment projected once per hypothesis (C, N, 2, 2),
     # then each (hypothesis, free line, segment) pair looks it up.
     uv, in_front = project_segments(camera, poses[hyps][:, None, :], np.broadcast_to(segs, (len(hyps),) + segs.shape),
-                                    tol.internals.near_plane_m)
+                                    tol.stage2.near_plane_m)
     ph, pl, ps = [], [], []
     matched = {}  # (contender, segment) -> the lines on it
     for c, h in enumerate(hyps.tolist()):
@@ -53,7 +53,7 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
     ok, dist = fits_projected(image_lines, uv[pc, si], in_front[pc, si], li, tol)
     if ok.any():
         sel = np.nonzero(ok)[0]
-        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], image_lines.lines[li[sel]], walls, tol.internals)
+        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], image_lines.lines[li[sel]], walls, tol.stage2, tol.shared)
     out_h, out_l, out_s = [], [], []
     lines_taken = set()  # (hypothesis, line)
     # Closest first within each hypothesis; a line is added once, a segment

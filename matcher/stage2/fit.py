@@ -17,7 +17,7 @@ import numpy as np
 from linemap.geometry import clip_lines, project_segments
 from matcher.projection import covered_span, distance_and_overlap, projected_distance_and_overlap
 from matcher.scene.occlusion import sight_clear
-from matcher.tolerances import Internals
+from matcher.tolerances import SharedConstants, Stage2Constants
 
 
 def fits(camera, image_lines, poses, segments, line_ids, tol, end_px=None):
@@ -33,7 +33,7 @@ def fits(camera, image_lines, poses, segments, line_ids, tol, end_px=None):
     noise alone, so that a pose it accepts has the lines inside their
     segments). ``dist`` is the lines' larger end-point distance to the
     projected segment's line."""
-    uv, in_front = project_segments(camera, poses, segments, tol.internals.near_plane_m)
+    uv, in_front = project_segments(camera, poses, segments, tol.stage2.near_plane_m)
     return fits_projected(image_lines, uv, in_front, line_ids, tol, end_px)
 
 
@@ -43,7 +43,7 @@ def fits_projected(image_lines, uv, in_front, line_ids, tol, end_px=None):
     lines = image_lines.lines[line_ids]
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = projected_distance_and_overlap(uv, in_front, lines)
-    end_px = 2 * tol.line_end_px + tol.internals.fit_pose_px if end_px is None else end_px
+    end_px = 2 * tol.line_end_px + tol.stage2.fit_pose_px if end_px is None else end_px
     return (dist <= fit_bound_px(L, tol)) & (ov >= L - end_px), dist
 
 
@@ -51,10 +51,10 @@ def fit_bound_px(length, tol):
     """Largest distance, pixels, of a true line's end points from the
     projected segment: offset and rotation noise over half its length,
     plus ``fit_pose_px`` for the pose's own error."""
-    return tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length + tol.internals.fit_pose_px
+    return tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length + tol.stage2.fit_pose_px
 
 
-def visible(camera, poses, segments, lines, walls, work: Internals) -> np.ndarray:
+def visible(camera, poses, segments, lines, walls, work: Stage2Constants, shared: SharedConstants) -> np.ndarray:
     """(T,) bool: some point of the part of each segment (T, 2, 3) that its
     image line (T, 2, 2) shows (:func:`~matcher.projection.covered_span`) is in
     plain sight from the camera at poses (T, 3), walls as occluders. (Points
@@ -62,7 +62,8 @@ def visible(camera, poses, segments, lines, walls, work: Internals) -> np.ndarra
     would let a line showing the hidden part of a segment pass on another
     part's visibility.) At a refined pose (a centimetre off) a sight line
     that cuts a wall ``refined_sight_end_m`` or more from the segment is
-    blocked: it tells the near and far faces of a door jamb apart."""
+    blocked: it tells the near and far faces of a door jamb apart.
+    ``shared`` sizes the sight-line test's work (``box_filter_edges``)."""
     if walls is None or not len(poses):
         return np.ones(len(poses), dtype=bool)
     span = covered_span(camera, poses, segments, lines)  # (T, 2)
@@ -71,7 +72,7 @@ def visible(camera, poses, segments, lines, walls, work: Internals) -> np.ndarra
     a, b = segments[:, None, 0, :2], segments[:, None, 1, :2]
     pts = a + t[..., None] * (b - a)
     cams = np.repeat(poses[:, :2], len(samples), axis=0)
-    clear = sight_clear(cams, pts.reshape(-1, 2), walls, work.refined_sight_end_m, work)
+    clear = sight_clear(cams, pts.reshape(-1, 2), walls, work.refined_sight_end_m, shared)
     return clear.reshape(len(poses), -1).any(axis=1)
 
 
@@ -108,15 +109,16 @@ def coverage(camera, pose: np.ndarray, segments: np.ndarray, label: np.ndarray, 
     (``matched``: indices into ``segments``). The sight test, the dear part,
     runs only when the segments in view alone fall short of
     ``coverage_min_share``: it can only drop unmatched ones (the matched
-    are in sight by stage 2's own test)."""
-    work = tol.internals
+    are in sight by stage 2's own test). Thresholds: ``tol.verdict``'s
+    (it judges the best pose), projection and sight: ``tol.stage2``'s."""
+    work = tol.verdict
     poses = np.broadcast_to(pose, (len(segments), 3))
-    uv, ahead = project_segments(camera, poses, segments, work.near_plane_m)
+    uv, ahead = project_segments(camera, poses, segments, tol.stage2.near_plane_m)
     uv, inside = clip_lines(uv, (0.0, camera.width, 0.0, camera.height))
     length = np.hypot(*(uv[:, 1] - uv[:, 0]).T)
     cand = np.nonzero(ahead & inside & (length >= work.coverage_min_px))[0]
     held = np.isin(label[cand], label[matched])
     if held.sum() >= work.coverage_min_share * len(cand):
         return int(len(cand)), int(held.sum())
-    in_sight = visible(camera, poses[cand], segments[cand], uv[cand], walls, work)
+    in_sight = visible(camera, poses[cand], segments[cand], uv[cand], walls, tol.stage2, tol.shared)
     return int(in_sight.sum()), int((held & in_sight).sum())

@@ -91,7 +91,7 @@ def verify_hypotheses(camera, image_lines, cands: Candidates, hyps, prior, tol) 
     # other line two. Matches that fix no more than the pose's three leave
     # nothing over to check it: three vertical edges fit exactly (E = 0)
     # whichever they are. Such a hypothesis is not accepted.
-    fixed = np.bincount(m.hyp, np.where(segment_is_vertical(segs[m.local], tol.internals.vertical_axis_deg), 1.0, 2.0),
+    fixed = np.bincount(m.hyp, np.where(segment_is_vertical(segs[m.local], tol.shared.vertical_axis_deg), 1.0, 2.0),
                         minlength=n_h)
     exact = alive & (fixed <= 3)
     alive &= ~exact
@@ -129,7 +129,7 @@ def _fitted(camera, image_lines, cands: Candidates, hyps, tol) -> tuple:
     bool)``; the matches with the piece of its group each line shows, the
     fit the line's at its pose (and its segment visible there), slid which
     poses moved to where their lines fit."""
-    segs, label, reps, work = cands.segments, cands.label, cands.reps, tol.internals
+    segs, label, reps, work = cands.segments, cands.label, cands.reps, tol.stage2
     n_h = len(hyps.sets)
     members = np.concatenate(hyps.sets)
     hyp = np.repeat(np.arange(n_h), [len(x) for x in hyps.sets])
@@ -149,7 +149,7 @@ def _fitted(camera, image_lines, cands: Candidates, hyps, tol) -> tuple:
         m = Matches(hyp, resolve_pieces(camera, poses[hyp], label, cls, segs, lines, work.near_plane_m), line_ids)
         inl = fits(camera, image_lines, poses[hyp], segs[m.local], line_ids, tol)[0]
     at = inl.nonzero()[0]  # visibility only where the line fits
-    inl[at] = visible(camera, poses[hyp[at]], segs[m.local[at]], lines[at], cands.walls, work)
+    inl[at] = visible(camera, poses[hyp[at]], segs[m.local[at]], lines[at], cands.walls, work, tol.shared)
     return poses, m, inl, slid
 
 
@@ -203,7 +203,7 @@ def reprojection_cost(camera, image_lines, poses, m: Matches, segs, tol, n_h) ->
     if not len(m):
         return np.full(n_h, np.inf)
     lines = image_lines.lines[m.line]
-    d = projected_end_distances(*project_segments(camera, poses[m.hyp], segs[m.local], tol.internals.near_plane_m),
+    d = projected_end_distances(*project_segments(camera, poses[m.hyp], segs[m.local], tol.stage2.near_plane_m),
                                 lines)  # (T, 2)
     length = np.hypot(*(lines[:, 1] - lines[:, 0]).T)
     noise = tol.line_px + math.tan(math.radians(tol.line_deg)) * 0.5 * length
@@ -219,7 +219,7 @@ def _refit(camera, image_lines, segs, poses, m: Matches, tol, slid):
         return poses
     r = unit_rays(camera, image_lines.lines[m.line])
     terms = refine.MatchTerms(segs[m.local, 0], segs[m.local, 1], r[:, 0], r[:, 1], camera.pitch, camera.height_m)
-    new = refine.refine(poses, m.hyp, terms, tol.internals, iterations=tol.internals.refit_iterations)
+    new = refine.refine(poses, m.hyp, terms, tol.stage2, iterations=tol.stage2.refit_iterations)
     if slid.any():  # judged as the slide judges, so that they go back as far
         sel = slid[m.hyp]
         inl = np.ones(len(m), dtype=bool)

@@ -22,7 +22,7 @@ import numpy as np
 
 from linemap.camera import world2cam_rotation
 from linemap.geometry import world_normals
-from matcher.tolerances import Internals
+from matcher.tolerances import Stage2Constants
 
 
 
@@ -93,7 +93,7 @@ def residuals(params, hyp, terms: MatchTerms, jacobian=False):
     return r, J
 
 
-def refine(init, hyp, terms: MatchTerms, work: Internals, robust_scale=None, iterations: int | None = None):
+def refine(init, hyp, terms: MatchTerms, work: Stage2Constants, robust_scale=None, iterations: int | None = None):
     """Gauss-Newton on all hypotheses together.
 
     ``init`` (H, 3) ``(x, y, yaw)``; per match t: ``hyp`` (T,) and its

@@ -22,7 +22,7 @@ from linemap.geometry import segment_is_vertical
 from matcher.stage2.covariance import pose_information
 from matcher.stage2.fit import fits
 from matcher.stage2.matches import Matches
-from matcher.tolerances import DEFAULT_INTERNALS, Internals
+from matcher.tolerances import DEFAULT, Stage2Constants
 
 #: ``count(p)``: for poses ``p`` (W, N, 3) of W hypotheses, (W, N) how many
 #: of each one's lines fit there.
@@ -30,7 +30,7 @@ Counter = Callable[[np.ndarray], np.ndarray]
 
 
 def slide_poses(poses: np.ndarray, info: np.ndarray, count: Counter, now: np.ndarray,
-                work: Internals = DEFAULT_INTERNALS):
+                work: Stage2Constants = DEFAULT.stage2):
     """``(moved (W, 3), move (W,) bool)`` for poses (W, 3) ``(x, y, yaw)``
     with information matrices ``info`` (W, 3, 3) (``J^T J`` of the noise-
     weighted residuals) and ``now`` (W,) lines fitting.
@@ -94,8 +94,8 @@ def slide_to_fit(camera, image_lines, segs, poses, m: Matches, tol, inl, stuck_o
     worth = (n_fit < n_all) & (n_all >= max(tol.min_matches, int(n_fit.max(initial=0)) - 1))
     # Bearings are what leave a position loose: two horizontal segments' lines
     # fix it (each puts the camera on a line of the floor at a given yaw).
-    work = tol.internals
-    worth &= np.bincount(m.hyp, ~segment_is_vertical(segs[m.local], work.vertical_axis_deg),
+    work = tol.stage2
+    worth &= np.bincount(m.hyp, ~segment_is_vertical(segs[m.local], tol.shared.vertical_axis_deg),
                          minlength=n_h) < work.slide_max_horizontal
     if stuck_out is not None:
         worth &= np.bincount(m.hyp, stuck_out, minlength=n_h) > 0
