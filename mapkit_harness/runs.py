@@ -12,13 +12,8 @@ images rendered by :mod:`mapkit_harness.render`. ``--kidnap K`` carries the robo
 distant pose that shows at least 6 map lines before frame K, with no
 odometry for it.
 
-    python tools/simulate_run.py --map maps/flat.lmap --frames 150 -o run.jsonl --truth truth.txt
-    python tools/simulate_run.py --frames 120 --kidnap 60 -o run.jsonl --truth truth.txt
-    python tools/simulate_run.py --frames 40 --images frames/ -o run.jsonl   # rendered images
-
-The JSON Lines file is what ``matcher track --frames`` reads; the truth is
-a TUM trajectory (t x y z qx qy qz qw). The start pose is printed, for
-``--prior``.
+Its command line, writing the JSON Lines file ``matcher track --frames``
+reads and the TUM truth, is ``tools/simulate_run.py``.
 """
 
 from __future__ import annotations
