@@ -29,7 +29,7 @@ def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limi
     the largest interpretation found. Returns ``(pose (x, y, yaw_deg) or
     None, matches, nodes, timed_out)``."""
     from matcher.stage2 import refine as verify
-    from matcher.checks import check_lines, check_prior
+    from matcher.input_validation import check_lines, check_prior
     from linemap.geometry import in_field_of_view
     from matcher.tolerances import DEFAULT
 

@@ -28,8 +28,8 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.geometry import in_field_of_view
 from linemap.lmap import SegmentKind
-from matcher.scene.freespace import free_space
-from matcher.scene.occlusion import inside_walls, wall_edges
+from matcher.map_geometry.freespace import free_space
+from matcher.map_geometry.occlusion import inside_walls, wall_edges
 
 LINTEL, WINDOW = SegmentKind.LINTEL, SegmentKind.WINDOW
 

@@ -57,7 +57,7 @@ def indistinguishable(linemap, camera, frame) -> set:
     ok = fits(camera, _Img, poses, linemap.segments[si], li, DEFAULT)[0]
     sel = np.nonzero(ok)[0]
     walls = None
-    from matcher.scene.occlusion import wall_edges
+    from matcher.map_geometry.occlusion import wall_edges
 
     walls = wall_edges(linemap)
     ok[sel] &= visible(camera, poses[sel], linemap.segments[si[sel]], frame.lines[li[sel]], walls, DEFAULT.stage2, DEFAULT.shared)

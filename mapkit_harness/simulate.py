@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from linemap.camera import Camera
-from matcher.scene.occlusion import wall_edges
+from matcher.map_geometry.occlusion import wall_edges
 from matcher.stage1.constraints import wrap
 
 from mapkit_harness.visibility_oracle import sight_blocked

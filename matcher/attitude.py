@@ -36,7 +36,7 @@ from typing import Protocol
 import numpy as np
 
 from linemap.camera import Camera, world2cam_rotation
-from matcher.checks import check_lines
+from matcher.input_validation import check_lines
 from matcher.stage1.constraints import plane_noises
 from matcher.tolerances import Tolerances
 

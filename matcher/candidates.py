@@ -17,7 +17,7 @@ from linemap.camera import Camera
 from linemap.geometry import in_field_of_view
 from linemap.lmap import LineMap
 from matcher.map_index import index_of
-from matcher.scene.collinear import class_faces, collinear_classes
+from matcher.map_geometry.collinear import class_faces, collinear_classes
 from matcher.tolerances import Tolerances
 
 
@@ -27,9 +27,9 @@ class Candidates:
     3) its end points, ``label`` its collinear group; per group g (G,):
     ``reps`` (G, 2, 3) the span of its members, ``faces`` (G, 2) the
     room-side normal of the wall face its members lie on (zeros: none or
-    several). The map's ``walls`` (:class:`~matcher.scene.occlusion.WallEdges`
-    or None), ``free`` (:class:`~matcher.scene.freespace.FreeSpace`) and
-    ``sight`` (:class:`~matcher.scene.occlusion.SightRays` or None)."""
+    several). The map's ``walls`` (:class:`~matcher.map_geometry.occlusion.WallEdges`
+    or None), ``free`` (:class:`~matcher.map_geometry.freespace.FreeSpace`) and
+    ``sight`` (:class:`~matcher.map_geometry.occlusion.SightRays` or None)."""
 
     ids: np.ndarray
     segments: np.ndarray

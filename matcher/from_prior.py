@@ -23,7 +23,7 @@ from linemap.lmap import LineMap
 from matcher import ambiguity, attitude
 from matcher.budget import NO_LIMIT, Deadlines
 from matcher.candidates import select_candidates
-from matcher.checks import check_lines, check_prior
+from matcher.input_validation import check_lines, check_prior
 from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
 from matcher.stage2.covariance import pose_std_of
@@ -46,10 +46,10 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     if attitude.applies(camera):
         # The frame's own pitch and roll (matcher.attitude): the lines moved
         # to the nominal camera, then localised as any.
-        tol = checked_types(linemap, camera, tolerances)
+        tol = validated_types(linemap, camera, tolerances)
         check_prior(prior, dt, dyaw)
         return attitude.localize_with_attitude(camera, lines, tol, FromPrior(linemap, prior, dt, dyaw))
-    tol, image_lines = checked_inputs(linemap, camera, lines, tolerances)
+    tol, image_lines = validated_inputs(linemap, camera, lines, tolerances)
     return _localize_checked(linemap, camera, image_lines, check_prior(prior, dt, dyaw), tol, t0)
 
 
@@ -90,14 +90,14 @@ def _localize_checked(linemap, camera: Camera, image_lines: ImageLines, px, tol:
     return localize_prepared(linemap, camera, image_lines, px, tol, t0, deadlines, Scope(sources))
 
 
-def checked_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
+def validated_inputs(linemap, camera, lines, tolerances) -> tuple[Tolerances, ImageLines]:
     """ValueError unless the map, camera and tolerances are of their types
     and the lines valid; the tolerances to use and the prepared lines."""
-    tol = checked_types(linemap, camera, tolerances)
+    tol = validated_types(linemap, camera, tolerances)
     return tol, prepare_lines(camera, check_lines(lines, camera, tol), tol)
 
 
-def checked_types(linemap, camera, tolerances) -> Tolerances:
+def validated_types(linemap, camera, tolerances) -> Tolerances:
     """ValueError unless the map, camera and tolerances are of their types;
     the tolerances to use."""
     if not isinstance(linemap, LineMap):

@@ -60,10 +60,10 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
         # The frame's own pitch and roll (matcher.attitude); the second run,
         # on the lines moved with the attitude the first answer gave, is a
         # narrow prior around that answer.
-        tol = from_prior.checked_types(linemap, camera, tolerances)
+        tol = from_prior.validated_types(linemap, camera, tolerances)
         return attitude.localize_with_attitude(camera, lines, tol, Lost(linemap, first_accepted, progress, regions),
                                                attitude.RerunPolicy(around_answer=True))
-    tol, image_lines = from_prior.checked_inputs(linemap, camera, lines, tolerances)
+    tol, image_lines = from_prior.validated_inputs(linemap, camera, lines, tolerances)
     return _localize_global(linemap, camera, image_lines, tol, t0, first_accepted, progress, regions)
 
 

@@ -18,9 +18,9 @@ from functools import cached_property
 import numpy as np
 
 from linemap.lmap import LineMap
-from matcher.scene.collinear import collinear_labels
-from matcher.scene.freespace import FreeSpace
-from matcher.scene.occlusion import SightRays, WallEdges, face_normals, wall_edges
+from matcher.map_geometry.collinear import collinear_labels
+from matcher.map_geometry.freespace import FreeSpace
+from matcher.map_geometry.occlusion import SightRays, WallEdges, face_normals, wall_edges
 from matcher.tolerances import DEFAULT, MapIndexConstants
 
 #: The fields of :class:`~matcher.tolerances.MapIndexConstants` each part is
@@ -58,7 +58,7 @@ class MapIndex:
 
     def collinear(self, work: MapIndexConstants = DEFAULT.map_index) -> np.ndarray:
         """(N,) group id of each segment: segments on one 3D line
-        (:func:`~matcher.scene.collinear.collinear_labels`)."""
+        (:func:`~matcher.map_geometry.collinear.collinear_labels`)."""
         return self._part("collinear", work,
                           lambda: collinear_labels(self.linemap.segments, work.collinear_deg, work.collinear_m))
 

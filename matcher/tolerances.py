@@ -57,7 +57,7 @@ class _Constants:
 @dataclass(frozen=True)
 class MapIndexConstants(_Constants):
     """Constants of the per-map structures (matcher/map_index.py,
-    matcher/scene/): collinear groups, the sight table, the wall faces'
+    matcher/map_geometry/): collinear groups, the sight table, the wall faces'
     sides, the free-space raster. Every field is one of
     :data:`matcher.map_index.PART_FIELDS`: a part is built once per map and
     per the values of its fields.
@@ -100,7 +100,7 @@ class SharedConstants(_Constants):
     """Constants that several consumers read alike: which segments are
     vertical (stage 1, stage 2, lost mode's votes), the prior's slack (stage
     1's resection and stage 2, matcher/prior.py), the sight-line test's box
-    filter (both stages' visibility, matcher/scene/occlusion.py) and the
+    filter (both stages' visibility, matcher/map_geometry/occlusion.py) and the
     searches' share of the time budget (matcher/from_prior.py,
     matcher/lost.py).
 

@@ -35,7 +35,7 @@ def test_a_bulge_larger_than_any_building_is_left_out_with_a_warning(tmp_path, c
 def test_the_free_space_raster_of_a_2_km_map_stays_small():
     """A plan 2 km across (the builder's limit) would need a raster of 1.6e9
     cells at 5 cm: the cells grow instead, and the distances stay right."""
-    from matcher.scene.freespace import FreeSpace
+    from matcher.map_geometry.freespace import FreeSpace
     from matcher.tolerances import DEFAULT
 
     ring = np.array([[0.0, 0.0], [2000.0, 0.0], [2000.0, 2000.0], [0.0, 2000.0]])

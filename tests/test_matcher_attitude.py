@@ -14,7 +14,7 @@ import pytest
 
 import matcher
 from matcher import attitude
-from matcher.checks import check_lines
+from matcher.input_validation import check_lines
 from matcher.tolerances import DEFAULT
 
 from mapkit_harness.scoring import indistinguishable, is_correct, level_view

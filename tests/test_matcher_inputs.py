@@ -217,7 +217,7 @@ def test_tolerances_are_validated():
 
 
 def test_lines_a_little_outside_the_image_are_cut_and_used(cam):
-    from matcher.checks import check_lines
+    from matcher.input_validation import check_lines
     from matcher.tolerances import DEFAULT
 
     lines = np.array([[[600.0, 100.0], [680.0, 100.0]],  # 40 px past the right border: cut at 640 + 5 margin
@@ -232,7 +232,7 @@ def test_lines_a_little_outside_the_image_are_cut_and_used(cam):
 def test_lines_wholly_outside_or_too_many_are_refused(cam):
     from dataclasses import replace
 
-    from matcher.checks import check_lines
+    from matcher.input_validation import check_lines
     from matcher.tolerances import DEFAULT
 
     beside = np.array([[[660.0, 100.0], [700.0, 120.0]]])  # near, but no part inside

@@ -79,7 +79,7 @@ def test_lines_of_a_distorted_image_are_accepted_by_localize():
     """Barrel distortion moves the image corners outwards on the ideal
     pinhole: lines along the border, undistorted, lie beyond the image and
     must still pass localize's input check."""
-    from matcher.checks import check_lines
+    from matcher.input_validation import check_lines
 
     cam = Camera(640, 480, 900.0, 900.0, 320.0, 240.0, 1.2, 0.0, (-0.3, 0.1, 0.0, 0.0))
     img = np.full((480, 640), 200, np.uint8)
@@ -160,7 +160,7 @@ def test_a_real_photograph():
     assert (found[..., 0] >= -5).all() and (found[..., 0] <= 645).all()
     assert (found[..., 1] >= -5).all() and (found[..., 1] <= 432).all()
     # The lines pass the matcher's input check as they are.
-    from matcher.checks import check_lines
+    from matcher.input_validation import check_lines
     cam = matcher.Camera.from_fov(60.0, 640, 427, 1.2, 0.0)
     assert (check_lines(found, cam, matcher.Tolerances()) == found).all()
     length = np.linalg.norm(found[:, 1] - found[:, 0], axis=1)

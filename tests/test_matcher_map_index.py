@@ -11,7 +11,7 @@ import pytest
 
 import matcher
 from matcher.map_index import PART_FIELDS, index_of
-from matcher.scene.freespace import free_space
+from matcher.map_geometry.freespace import free_space
 from matcher.tolerances import DEFAULT, MapIndexConstants
 
 MAP = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"

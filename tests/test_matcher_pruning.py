@@ -12,7 +12,7 @@ import pytest
 from mapkit_harness.simulate import make_frame, paper_camera
 
 import matcher
-from matcher.scene.freespace import FreeSpace, free_space
+from matcher.map_geometry.freespace import FreeSpace, free_space
 from matcher.stage1.correspondences import horizon_side_ok
 from matcher.tolerances import DEFAULT
 
@@ -173,7 +173,7 @@ def test_feasible_ellipse_reaches_equals_halfplane_reachable():
 
 
 def test_face_normals_point_into_the_rooms(flat):
-    from matcher.scene.occlusion import face_normals, inside_walls, wall_edges
+    from matcher.map_geometry.occlusion import face_normals, inside_walls, wall_edges
 
     walls = wall_edges(flat)
     f = face_normals(flat.segments, walls)
@@ -209,7 +209,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
 
 
 def test_collinear_groups_hand_worked_and_from_map_labels(flat):
-    from matcher.scene.collinear import collinear_classes, collinear_labels
+    from matcher.map_geometry.collinear import collinear_classes, collinear_labels
 
     angle, dist = DEFAULT.map_index.collinear_deg, DEFAULT.map_index.collinear_m
 
@@ -270,11 +270,11 @@ def test_edge_seen_from_a_loose_region_hand_worked():
     edge at (3, 0): a wall at x = 2 hides it from the whole region, a
     doorway in that wall lets it be seen, and a wall off to the side does
     not matter."""
-    from matcher.stage1.set_checks import edge_seen_from_region
+    from matcher.stage1.set_visibility import edge_seen_from_region
 
     from dataclasses import replace
 
-    from matcher.scene.occlusion import SightRays
+    from matcher.map_geometry.occlusion import SightRays
 
     def seen(walls):
         inp = _loose_set_facing_an_edge(walls)
@@ -298,7 +298,7 @@ def test_loose_sets_cut_by_the_region_test(flat):
     true lines, three of them door jambs that each fit some twenty jambs.
     The sets of wrong jambs leave the position loose, so the pinned test
     never runs on them; the test on their whole feasible region
-    (set_checks.edge_seen_from_region) cuts them: with a budget of 3000 nodes
+    (set_visibility.edge_seen_from_region) cuts them: with a budget of 3000 nodes
     (the test starting after 300) the search ends at about 2300. Without it
     the full search takes over 10000 nodes."""
     from dataclasses import replace
@@ -347,14 +347,14 @@ def test_aiming_at_large_sets_first_finds_the_same_sets_sooner(flat, monkeypatch
 
 @pytest.mark.parametrize("box_filter", [False, True])
 def test_sight_clear_against_shapely(flat, box_filter):
-    """matcher.scene.occlusion.sight_clear against shapely on the example map's
+    """matcher.map_geometry.occlusion.sight_clear against shapely on the example map's
     walls: sight lines from random cameras to random floor points and to
     points on wall faces, trimmed by the end margin, cross no wall edge
     exactly when the function says clear (with and without the edges'
     bounding-box filter that large maps use)."""
     from shapely.geometry import LineString, MultiLineString
 
-    import matcher.scene.occlusion as occlusion
+    import matcher.map_geometry.occlusion as occlusion
 
     from dataclasses import replace
 

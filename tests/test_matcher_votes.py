@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import matcher
-from matcher.from_prior import checked_inputs
+from matcher.from_prior import validated_inputs
 from matcher.lost_votes import sightings, vote_places
 from matcher.tolerances import DEFAULT
 from mapkit_harness.simulate import make_frame, pose_error, visible_lines
@@ -34,7 +34,7 @@ def test_a_floor_line_puts_the_camera_beside_its_segment(cam):
     flat = np.abs(segs[:, 0, 2] - segs[:, 1, 2]) < 1e-6
     assert flat.any()
     one = lines[np.flatnonzero(flat)[:1]]
-    _, img = checked_inputs(linemap, cam, one, None)
+    _, img = validated_inputs(linemap, cam, one, None)
     s = sightings(linemap, cam, img, DEFAULT)
     mine = s.line == 0
     assert mine.any()
@@ -55,7 +55,7 @@ def test_the_true_place_is_among_the_voted_ones(cam):
     found = 0
     for _ in range(12):
         fr = make_frame(linemap, cam, rng, 1, 1.0, 1.0, clutter=3)
-        _, img = checked_inputs(linemap, cam, fr.lines, None)
+        _, img = validated_inputs(linemap, cam, fr.lines, None)
         places = vote_places(linemap, cam, img, DEFAULT, DEFAULT.lost.vote_places)
         assert places.shape[1] == 4 and (np.diff(places[:, 3]) <= 0).all()
         found += any(_near(p, fr.pose) for p in places)

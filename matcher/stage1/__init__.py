@@ -10,7 +10,7 @@ set can hold for some pose of the prior set. In pipeline order:
   and feasible regions;
 - :mod:`~matcher.stage1.pairwise`: which correspondences can hold together;
 - :mod:`~matcher.stage1.tree` (with :mod:`~matcher.stage1.tree_input` and
-  :mod:`~matcher.stage1.set_checks`): the interpretation tree's maximal
+  :mod:`~matcher.stage1.set_visibility`): the interpretation tree's maximal
   consistent sets, each in free space and seeing its segments;
 - :mod:`~matcher.stage1.generate`: the three steps for one prior;
 - :mod:`~matcher.stage1.resection`: a second source of hypotheses, poses

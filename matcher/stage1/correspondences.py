@@ -108,7 +108,7 @@ def find_correspondences(segments: np.ndarray, camera: Camera, image_lines: Imag
     frame's lines ``image_lines`` under ``prior`` ``(xe, ye, yaw_e, dt, dyaw)``
     (radians): a :class:`Correspondences`, or ``(seg_k, line_k)`` of the
     survivors when fewer than ``min_matches`` of them, or of their lines,
-    have a feasible grid pose. ``sight`` the walls' :class:`~matcher.scene.occlusion.SightRays`
+    have a feasible grid pose. ``sight`` the walls' :class:`~matcher.map_geometry.occlusion.SightRays`
     (None: no walls); ``faces`` (N, 2) the room-side normal of each
     candidate's wall face (zeros: none) or None. ``counts``, a dict, gets
     the numbers of each step."""
@@ -238,7 +238,7 @@ def _vertical_sight(points, rows, alpha, yaw, grid: YawGrid, width, sight, exten
     width[e]`` of the centre of the ``grid``'s disk; the stretch is also cut at
     ``extent[rows[e]]``, the farthest the edge can be for its image line to
     fit inside its projection (:func:`vertical_extent_bound`). The stretches
-    come from the map's :class:`~matcher.scene.occlusion.SightRays` table."""
+    come from the map's :class:`~matcher.map_geometry.occlusion.SightRays` table."""
     centre, dt, step = grid.centre[:2], grid.dt, grid.spacing
     first, inv = distinct_points(points)  # edges shared by several correspondences: looked up once
     # For each entry: the bearing from camera to edge, and how far the ray

@@ -10,7 +10,7 @@ candidate model segments it meets:
 3. the interpretation tree (:mod:`matcher.stage1.tree`): the maximal sets of
    correspondences that are pairwise compatible and whose whole feasible
    pose set is non-empty, with at least the minimum number of matches,
-   each passing the set checks (:mod:`matcher.stage1.set_checks`).
+   each passing the set checks (:mod:`matcher.stage1.set_visibility`).
 
 Each hypothesis carries the grid yaw and position at which it is feasible:
 the starting point of stage 2. The tree's input stays with the hypotheses
@@ -30,7 +30,7 @@ from matcher.budget import NO_LIMIT, Deadlines
 from matcher.candidates import Candidates
 from matcher.frame import ImageLines
 from matcher.projection import ShownSpans
-from matcher.scene.occlusion import SightRays
+from matcher.map_geometry.occlusion import SightRays
 from matcher.stage1.correspondences import Correspondences, find_correspondences
 from matcher.stage1.pairwise import pair_compatibility
 from matcher.stage1.tree import TreeInput, search

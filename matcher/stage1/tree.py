@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from matcher.stage1 import posegrid
-from matcher.stage1.set_checks import check_once, final_check, visible_at_best, visible_best
+from matcher.stage1.set_visibility import check_once, final_check, visible_at_best, visible_best
 from matcher.stage1.tree_input import TreeInput
 from matcher.tolerances import Tolerances
 
@@ -73,7 +73,7 @@ class InterpretationTree:
     The search state (the sets found, the bound on their size, the node
     count, whether a budget cut it) lives in the fields; :meth:`search`
     runs it. With ``eager`` every leaf gets the set checks as it is found
-    (:func:`~matcher.stage1.set_checks.final_check`) instead of afterwards.
+    (:func:`~matcher.stage1.set_visibility.final_check`) instead of afterwards.
     """
 
     def __init__(self, inp: TreeInput, tol: Tolerances, eager: bool = False) -> None:

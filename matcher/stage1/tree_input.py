@@ -25,7 +25,7 @@ class TreeInput:
     points, or None; ``vertical`` (K,) bool, correspondences of vertical
     segments (explored last: each fixes only a bearing, so they are compatible
     with much and prune little); ``line`` (K,) the image line of each
-    correspondence; ``free`` the map's :class:`~matcher.scene.freespace.FreeSpace`
+    correspondence; ``free`` the map's :class:`~matcher.map_geometry.freespace.FreeSpace`
     (or None) and ``free_m`` how far outside it the camera may stand;
     ``front_c`` (K, Y, 2) and ``front_b`` (K, Y) half-planes ``c . z <= b`` on
     the camera position relative to the centre that keep a vertical edge ahead
@@ -33,7 +33,7 @@ class TreeInput:
     each correspondence's best value alone (the root's look-ahead: the summed
     quadratic's minimum over the yaws where it passes every test of the
     look-ahead, inf where none), or None to compute it at the root; ``sight``
-    the walls' :class:`~matcher.scene.occlusion.SightRays` (how far one sees from a
+    the walls' :class:`~matcher.map_geometry.occlusion.SightRays` (how far one sees from a
     vertical edge, per bearing), or None to cast sight lines; ``shown`` the
     :class:`~matcher.projection.ShownSpans` of the correspondences (``segments``
     with their image lines), or None: with it, visibility is tested on the
@@ -68,7 +68,7 @@ class TreeInput:
 
     def in_free_space(self, xy: np.ndarray) -> np.ndarray:
         """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
-        the map's regions (:mod:`matcher.scene.freespace`); all True without a map."""
+        the map's regions (:mod:`matcher.map_geometry.freespace`); all True without a map."""
         if self.free is None:
             return np.ones(np.shape(xy)[:-1], dtype=bool)
         return self.free.distance(xy) <= self.free_m

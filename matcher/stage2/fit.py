@@ -5,7 +5,7 @@ One fit test (:func:`fits`) serves the whole of stage 2: dropping matches
 that do not fit, sliding a loose pose (with a tighter end allowance), and
 adding the lines of other visible segments. One visibility test
 (:func:`visible`) at the refined pose; stage 1's own, at a grid pose a few
-centimetres off, is looser (:mod:`matcher.stage1.set_checks`).
+centimetres off, is looser (:mod:`matcher.stage1.set_visibility`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 
 from linemap.geometry import clip_lines, project_segments
 from matcher.projection import covered_span, distance_and_overlap, projected_distance_and_overlap
-from matcher.scene.occlusion import sight_clear
+from matcher.map_geometry.occlusion import sight_clear
 from matcher.tolerances import SharedConstants, Stage2Constants
 
 

@@ -21,7 +21,7 @@ import heapq
 
 import numpy as np
 
-from matcher.scene.occlusion import sight_clear
+from matcher.map_geometry.occlusion import sight_clear
 from matcher.stage1 import posegrid
 from matcher.stage1.tree_input import TreeInput
 from matcher.tolerances import SharedConstants, Stage1Constants, Tolerances
