@@ -174,6 +174,12 @@ DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 #: lies at least this share in wall.
 MAX_DOOR_WIDTH = 2.5
 CUT_MIN_WALL_SHARE = 0.5
+#: ... and which reaches at least this share across the wall under it: a
+#: swing's hinge on a single-line wall lies on its centre line, half way
+#: across, less where a wall joining there widens the piece under the
+#: drawing (hal9k's plan: 0.39); a door drawn against a wall's face only
+#: touches it (0).
+CUT_MIN_REACH = 0.3
 
 #: Sheets (mapkit/importers/dxf/sheets.py): wall linework closer than
 #: this, metres, belongs to one plan (the widest opening in a facade is a

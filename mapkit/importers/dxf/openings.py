@@ -14,7 +14,7 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import nearest_points, unary_union
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import (CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH,
+from mapkit.tolerances import (CUT_MIN_REACH, CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH,
                                 THIN_WALL, ZERO)
 
 
@@ -246,7 +246,7 @@ def cut_opening(item: MultiLineString, walls, max_wall_thickness: float) -> Poly
     under the drawing gives the wall's direction (its rotated bounding
     box's long side) and thickness (its extent across); the drawing's
     extent along the wall is the door's width, between ``MIN_OPENING_WIDTH``
-    and ``MAX_DOOR_WIDTH``. The drawing must reach half way into the wall's
+    and ``MAX_DOOR_WIDTH``. The drawing must reach about half way into the wall's
     thickness, and the footprint, that rectangle, lie mostly
     (``CUT_MIN_WALL_SHARE``) in wall: else the drawing is beside the wall,
     not over it."""
@@ -269,11 +269,12 @@ def cut_opening(item: MultiLineString, walls, max_wall_thickness: float) -> Poly
         return None
     wall_across = np.asarray(piece.exterior.coords)[:, :2] @ normal
     s0, s1 = float(wall_across.min()), float(wall_across.max())
-    # Over the wall, not beside it: the drawing reaches at least half way
-    # across the wall under it (a swing's hinge on a single-line wall, a
-    # rectangle across a double-line one; a door drawn against a wall's
-    # face only touches it).
-    if s1 - s0 > max_wall_thickness or min(s1, float(across.max())) - max(s0, float(across.min())) < 0.5 * (s1 - s0):
+    # Over the wall, not beside it: the drawing reaches about half way
+    # (``CUT_MIN_REACH``) across the wall under it (a swing's hinge on a
+    # single-line wall, a rectangle across a double-line one; a door drawn
+    # against a wall's face only touches it).
+    reach = min(s1, float(across.max())) - max(s0, float(across.min()))
+    if s1 - s0 > max_wall_thickness or reach < CUT_MIN_REACH * (s1 - s0):
         return None
     footprint = Polygon([axis * t0 + normal * s0, axis * t1 + normal * s0, axis * t1 + normal * s1,
                          axis * t0 + normal * s1])
