@@ -218,8 +218,11 @@ def run_jobs(jobs: list[Job], options, *, workers: int | None = None, scheduler:
                 raise MapkitError(f"--scheduler {scheduler}: cannot connect ({str(exc).splitlines()[0][:200]}); "
                                   "check the address and that 'dask scheduler' runs there") from None
         else:
+            # No dashboard; the scheduler's HTTP server (health checks) on a free port, not 8787,
+            # which another cluster on the machine may hold (distributed then warns on stderr).
             cluster = LocalCluster(n_workers=workers or default_workers(len(jobs)), threads_per_worker=1,
-                                   processes=True, dashboard_address=None, silence_logs=logging.ERROR)
+                                   processes=True, dashboard_address="127.0.0.1:0",
+                                   scheduler_kwargs={"dashboard": False}, silence_logs=logging.ERROR)
             client = Client(cluster)
         with client:
             # pure=False: a rerun after a failure builds again, never a result the cluster kept.
