@@ -50,7 +50,7 @@ class Job:
 class JobResult:
     """What a task sends back: ``status`` (BUILT, FAILED, BUG), a one-line
     ``summary`` (counts of what was written) or ``error``, the seconds it
-    took and the worker's peak resident memory in bytes (0 if unknown)."""
+    took, and the worker process's id and peak resident memory so far in bytes (0 if unknown)."""
 
     source: str
     output: str
@@ -58,6 +58,7 @@ class JobResult:
     summary: str = ""
     error: str = ""
     seconds: float = 0.0
+    worker_pid: int = 0
     peak_rss_bytes: int = 0
 
 
@@ -141,7 +142,7 @@ def build_job(job: Job, options) -> JobResult:
         status, summary = BUG, ""
         error = f"{type(exc).__name__}: {lines[0][:300]}" if lines else type(exc).__name__
     return JobResult(str(job.source), str(job.output), status, summary, _one_line(error, job.source),
-                     time.perf_counter() - t, _peak_rss_bytes())
+                     time.perf_counter() - t, os.getpid(), _peak_rss_bytes())
 
 
 def _one_line(error: str, source: Path) -> str:

@@ -189,3 +189,12 @@ def test_the_skip_rule_compares_source_options_and_version(inputs, one_at_a_time
     assert not is_up_to_date(other, options)
     job.output.write_bytes(b"LMAP damaged")
     assert not is_up_to_date(job, options)
+
+
+@pytest.mark.slow
+def test_the_batch_benchmark_runs_and_checks_the_bytes(capsys):
+    import bench_batch
+
+    assert bench_batch.main(["--floors", "2", "--rooms", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "maps byte-identical: yes" in out and "| at once (`--workers 2`) | 2 |" in out, out
