@@ -134,11 +134,23 @@ def test_scheduler_builds_the_maps_of_one_at_a_time_builds(capsys, inputs, one_a
 
 @pytest.mark.slow
 def test_local_cluster_of_two_workers(capsys, inputs, one_at_a_time, tmp_path):
+    """Plans and an IFC model (a folder of storey maps and building.json, as built on its own)."""
+    from test_ifc_import import write_model
+
+    model = write_model(tmp_path / "house.ifc")
+    assert run(capsys, "build", model, "-o", tmp_path / "alone", "-q")[0] == 0
     out = tmp_path / "new" / "maps"  # made, with its parent
-    code, stdout, stderr = run(capsys, "build", inputs / "flat.dxf", inputs / "office2.dxf", inputs / "office3.dxf",
-                               "-o", out, "--workers", "2")
-    assert code == 0 and "built 3, skipped 0 unchanged, failed 0 of 3 inputs" in stdout, (stdout, stderr)
+    plans = [inputs / "flat.dxf", inputs / "office2.dxf", inputs / "office3.dxf", model]
+    code, stdout, stderr = run(capsys, "build", *plans, "-o", out, "--workers", "2")
+    assert code == 0 and "built 4, skipped 0 unchanged, failed 0 of 4 inputs" in stdout, (stdout, stderr)
+    assert f"wrote {out / 'flat.lmap'}: " in stdout
     _good_maps_equal(out, one_at_a_time)
+    alone = sorted(p.name for p in (tmp_path / "alone").iterdir())
+    assert "building.json" in alone and sorted(p.name for p in (out / "house").iterdir()) == alone
+    for name in alone:
+        assert (out / "house" / name).read_bytes() == (tmp_path / "alone" / name).read_bytes(), name
+    code, stdout, stderr = run(capsys, "build", *plans, "-o", out, "--workers", "2")
+    assert code == 0 and "built 0, skipped 4 unchanged, failed 0 of 4 inputs" in stdout, (stdout, stderr)
 
 
 def test_several_inputs_need_a_folder(capsys, inputs, tmp_path):

@@ -173,7 +173,8 @@ def _run_batch(args, options) -> int:
 
     def say(result) -> None:
         if result.status == batch.BUILT and not args.quiet:
-            print(f"wrote {result.output}: {result.summary}  ({result.seconds:.2f}s)", flush=True)
+            shown = out / Path(result.output).name  # as the user wrote -o (the workers get absolute paths)
+            print(f"wrote {shown}: {result.summary}  ({result.seconds:.2f}s)", flush=True)
         elif result.status == batch.FAILED:
             print(f"mapkit: error: {result.error}", file=sys.stderr, flush=True)
 
