@@ -2,7 +2,8 @@
 
 The job list (:func:`plan_jobs`): each input gives one output in ``DIR``,
 ``DIR/<stem>.lmap`` for a plan or mesh, ``DIR/<stem>/`` (a map per storey
-and ``building.json``, as :mod:`mapkit.building` writes) for an IFC model.
+and ``building.json``, as :mod:`mapkit.building` writes) for an IFC model,
+whose task reads the model and runs each storey's map as a task of its own.
 The skip rule (:func:`is_up_to_date`): an output whose META records the
 same source SHA-256, the same build options and the same mapkit version as
 the planned build is left as it is (the map would come out byte for byte
@@ -173,10 +174,33 @@ def _build_building(job: Job, options) -> str:
         raise MapkitError("--storey builds one storey into one map; build that model on its own with -o OUT.lmap")
     if not job.source.is_file():
         raise FileNotFoundError(2, "no such file", str(job.source))
-    result = build_building(job.source, options)
+    result = build_building(job.source, options, map_storeys=_storeys_on_cluster if _on_a_worker() else None)
     write_building(result, job.output)
     built = [o for o in result.storeys if o.map is not None]
     return f"{len(built)} of {len(result.storeys)} storeys mapped"
+
+
+def _on_a_worker() -> bool:
+    """Is this a Dask worker's task (the storeys can be tasks of their own)?"""
+    try:
+        from distributed import get_worker
+
+        get_worker()
+        return True
+    except (ImportError, ValueError):
+        return False
+
+
+def _storeys_on_cluster(calls: list[tuple]) -> list[tuple]:
+    """A building's storeys mapped as Dask tasks of their own, from the
+    model's task (which leaves its worker's thread to them while it waits):
+    :func:`mapkit.building.map_storey` per ``(scene, path, options)``, in order."""
+    from distributed import worker_client
+
+    from mapkit.building import map_storey
+
+    with worker_client() as client:
+        return client.gather([client.submit(map_storey, *call, pure=False) for call in calls])
 
 
 def _peak_rss_bytes() -> int:
