@@ -210,3 +210,39 @@ def test_the_batch_benchmark_runs_and_checks_the_bytes(capsys):
     assert bench_batch.main(["--floors", "2", "--rooms", "2"]) == 0
     out = capsys.readouterr().out
     assert "maps byte-identical: yes" in out and "| at once (`--workers 2`) | 2 |" in out, out
+
+
+def test_a_task_meeting_a_bug_says_so_in_one_line(monkeypatch, inputs, tmp_path):
+    import mapkit.pipeline
+    from mapkit.batch import BUG, FAILED, build_job, plan_jobs
+    from mapkit.options import BuildOptions
+
+    good, bad = plan_jobs([inputs / "office2.dxf", inputs / "bad.dxf"], tmp_path)
+    failed = build_job(bad, BuildOptions())
+    assert failed.status == FAILED and failed.error.startswith(("bad.dxf", str(bad.source))) and "\n" not in failed.error
+
+    def broken(*_args, **_kwargs):
+        raise RuntimeError("an invariant broke\nsecond line")
+
+    monkeypatch.setattr(mapkit.pipeline, "build_map", broken)
+    result = build_job(good, BuildOptions())
+    assert result.status == BUG and result.error == "office2.dxf: RuntimeError: an invariant broke"
+    assert not good.output.exists()
+
+
+def test_the_command_exits_3_on_a_bug_and_2_on_bad_input(monkeypatch, capsys, inputs, tmp_path):
+    from mapkit import batch
+
+    def results(status, error):
+        def run_jobs(jobs, options, **_kwargs):
+            return [batch.JobResult(str(j.source), str(j.output), status, error=error) for j in jobs]
+        return run_jobs
+
+    plans = [inputs / "flat.dxf", inputs / "office2.dxf"]
+    monkeypatch.setattr(batch, "run_jobs", results(batch.BUG, "flat.dxf: RuntimeError: boom"))
+    code, out, err = run(capsys, "build", *plans, "-o", tmp_path / "a")
+    assert code == 3 and "mapkit: internal error: flat.dxf: RuntimeError: boom -- this is a bug" in err, err
+    assert "Traceback" not in err
+    monkeypatch.setattr(batch, "run_jobs", results(batch.FAILED, "flat.dxf: no walls"))
+    code, out, err = run(capsys, "build", *plans, "-o", tmp_path / "b")
+    assert code == 2 and "failed 2 of 2 inputs" in out
