@@ -94,9 +94,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def run(args) -> int:
-    import logging
-
-    logging.disable(logging.WARNING)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         floors = make_floors(tmp, args.floors, args.rooms)
