@@ -219,7 +219,8 @@ def test_a_task_meeting_a_bug_says_so_in_one_line(monkeypatch, inputs, tmp_path)
 
     good, bad = plan_jobs([inputs / "office2.dxf", inputs / "bad.dxf"], tmp_path)
     failed = build_job(bad, BuildOptions())
-    assert failed.status == FAILED and failed.error.startswith(("bad.dxf", str(bad.source))) and "\n" not in failed.error
+    assert failed.status == FAILED and "\n" not in failed.error
+    assert failed.error.startswith(("bad.dxf", str(bad.source))), failed.error
 
     def broken(*_args, **_kwargs):
         raise RuntimeError("an invariant broke\nsecond line")
