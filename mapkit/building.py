@@ -54,13 +54,17 @@ class BuildingBuild:
     warnings: list[str] = field(default_factory=list)
 
 
-def build_building(model_path: str | Path, options, progress: bool = False) -> BuildingBuild:
-    """Build every storey of the IFC model at ``model_path``; nothing is written."""
+def build_building(model_path: str | Path, options, progress: bool = False, map_storeys=None) -> BuildingBuild:
+    """Build every storey of the IFC model at ``model_path``; nothing is written.
+
+    ``map_storeys``, if given, maps the storeys' scenes in place of a loop
+    here: called with a list of ``(scene, path, options)``, it returns
+    :func:`map_storey`'s result for each, in order (``mapkit.batch`` runs
+    them as Dask tasks); the maps are the same either way."""
     from linemap.lmap import file_sha256
 
     from mapkit import __version__
     from mapkit.importers.ifc import load_building
-    from mapkit.pipeline import build_map_of_scene
 
     path = Path(model_path)
     options.validate()
@@ -68,15 +72,24 @@ def build_building(model_path: str | Path, options, progress: bool = False) -> B
     building = load_building(path, options)
     import_seconds = time.perf_counter() - t
     names = storey_file_names([s.name for s in building.storeys])
-    outcomes = []
+    outcomes: list[StoreyBuild | None] = [None] * len(building.storeys)
+    calls, called, scene_seconds = [], [], []
     for k, storey in enumerate(building.storeys):
         t = time.perf_counter()
         try:
             scene = building.scene(k, options)
-            linemap, report = build_map_of_scene(scene, path, _storey_options(options, storey.name), progress)
-            outcomes.append(StoreyBuild(storey.name, names[k], linemap, report, seconds=time.perf_counter() - t))
         except MapkitError as exc:
-            outcomes.append(StoreyBuild(storey.name, None, why=str(exc), seconds=time.perf_counter() - t))
+            outcomes[k] = StoreyBuild(storey.name, None, why=str(exc), seconds=time.perf_counter() - t)
+            continue
+        calls.append((scene, path, _storey_options(options, storey.name)))
+        called.append(k)
+        scene_seconds.append(time.perf_counter() - t)
+        if map_storeys is None:  # one storey at a time: one scene in memory at a time
+            called.pop()
+            _record(outcomes, k, storey.name, names[k], map_storey(*calls.pop(), progress), scene_seconds.pop())
+    if map_storeys is not None:
+        for k, result, seconds in zip(called, map_storeys(calls), scene_seconds):
+            _record(outcomes, k, building.storeys[k].name, names[k], result, seconds)
     if not any(o.map is not None for o in outcomes):
         raise MapkitError(f"{path.name}: no storey could be mapped: " + "; ".join(o.why for o in outcomes))
     source = {"name": path.name, "sha256": file_sha256(path), "bytes": path.stat().st_size,
@@ -92,6 +105,30 @@ def build_building(model_path: str | Path, options, progress: bool = False) -> B
     }
     warnings = [w for o in outcomes if o.report for w in o.report.warnings]
     return BuildingBuild(outcomes, manifest, import_seconds, warnings)
+
+
+def map_storey(scene, path: Path, options, progress: bool = False) -> tuple:
+    """One storey's map: ``(linemap, report, None, seconds)``, or
+    ``(None, None, why, seconds)`` when it has none (a MapkitError: no
+    walls, no free space)."""
+    from mapkit.pipeline import build_map_of_scene
+
+    t = time.perf_counter()
+    try:
+        linemap, report = build_map_of_scene(scene, path, options, progress)
+        return linemap, report, None, time.perf_counter() - t
+    except MapkitError as exc:
+        return None, None, str(exc), time.perf_counter() - t
+
+
+def _record(outcomes: list, k: int, name: str, file_name: str, result: tuple, scene_seconds: float) -> None:
+    """Put :func:`map_storey`'s ``result`` as storey ``k``'s outcome (its
+    seconds: making the scene and mapping it)."""
+    linemap, report, why, seconds = result
+    if linemap is None:
+        outcomes[k] = StoreyBuild(name, None, why=why, seconds=scene_seconds + seconds)
+    else:
+        outcomes[k] = StoreyBuild(name, file_name, linemap, report, seconds=scene_seconds + seconds)
 
 
 def write_building(result: BuildingBuild, out_dir: str | Path) -> Path:

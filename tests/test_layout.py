@@ -69,6 +69,7 @@ def test_import_matcher_loads_no_authoring_stack():
     loaded = _modules_loaded_by("import matcher, matcher.cli")
     assert "linemap" in loaded
     assert not loaded & set(AUTHORING), sorted(loaded & set(AUTHORING))
+    assert not loaded & {"dask", "distributed"}  # the batch builder's, never the runtime's
 
 
 def test_import_linemap_loads_neither_half():
@@ -83,7 +84,7 @@ HARNESS = "mapkit_harness"
 @pytest.mark.parametrize("package,forbidden", [
     # (linemap.camera imports cv2 inside the one method that undistorts: loading stays numpy-only.)
     ("linemap", {"mapkit", "matcher", "scipy", "ezdxf", "trimesh", "shapely", "viser", HARNESS}),
-    ("matcher", {*AUTHORING, HARNESS}),
+    ("matcher", {*AUTHORING, HARNESS, "dask", "distributed"}),
     ("mapkit", {"matcher", HARNESS}),
 ])
 def test_packages_import_only_what_they_may(package, forbidden):

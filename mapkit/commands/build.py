@@ -1,5 +1,6 @@
 """``mapkit build PLAN -o OUT.lmap``: the main job, plan, mesh, ZInD annotations or IFC model in, map out
-(an IFC model of several storeys: ``-o DIR``, a map per storey and the building manifest)."""
+(an IFC model of several storeys: ``-o DIR``, a map per storey and the building manifest).
+``mapkit build A.dxf B.dxf ... -o DIR``: many builds at once as Dask tasks (:mod:`mapkit.batch`)."""
 
 from __future__ import annotations
 
@@ -14,12 +15,22 @@ def add_arguments(p) -> None:
     from mapkit.commands._import_args import add_import_arguments, add_option_flags
     from mapkit.options import BUILD_GROUPS, DEFAULT_HFOV_DEG, DEFAULT_IMAGE_SIZE, default_camera
 
-    p.add_argument("plan", metavar="PLAN",
+    p.add_argument("plans", nargs="+", metavar="PLAN",
                    help="DXF plan, mesh (.obj .ply .stl .glb .gltf .off), 3D segments (.csv, or .json with "
-                        "\"segments\"), ZInD zind_data.json or IFC model (.ifc)")
+                        "\"segments\"), ZInD zind_data.json or IFC model (.ifc); several: built at once on Dask "
+                        "into -o DIR")
     p.add_argument("-o", "--output", required=True, metavar="OUT.lmap",
                    help="map file to write; for an IFC model of several storeys a folder: DIR/<storey>.lmap and "
-                        "DIR/building.json (--storey NAME with OUT.lmap: that storey)")
+                        "DIR/building.json (--storey NAME with OUT.lmap: that storey); for several inputs a folder "
+                        "(made if missing): DIR/<stem>.lmap per plan, DIR/<stem>/ per IFC model")
+    g = p.add_argument_group("many inputs at once (Dask; pip install 'mapkit[dask]')")
+    where = g.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, metavar="N",
+                       help="worker processes of a local Dask cluster, one build each at a time (default: the "
+                            "cores available, at most one per input)")
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run the builds on the running Dask cluster at ADDRESS (tcp://HOST:PORT); its "
+                            "workers must see the inputs and DIR at the same paths")
     add_import_arguments(p)
     cam = default_camera()
     g = p.add_argument_group("camera (what 'visible' means)")
@@ -85,6 +96,9 @@ def run(args) -> int:
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)
+    if len(args.plans) > 1 or args.workers is not None or args.scheduler is not None:
+        return _run_batch(args, options)
+    args.plan = args.plans[0]
     if _is_building(args):
         return _run_building(args, options)
     out = output_file(args.output, (".lmap",), [args.plan])
@@ -130,3 +144,52 @@ def _run_building(args, options) -> int:
                   f"mean list {c['mean_list_length']:.1f}  ({o.seconds:.2f}s)")
         print(f"wrote {manifest}")
     return 0
+
+
+def _run_batch(args, options) -> int:
+    """Several inputs (or --workers/--scheduler): each built by a Dask task into
+    ``-o DIR``; the unchanged skipped; every failure one line, exit 2 (3 for a bug)."""
+    from pathlib import Path
+
+    from mapkit import batch
+
+    if args.workers is not None and args.workers < 1:
+        raise MapkitError(f"--workers must be at least 1, got {args.workers}")
+    out = Path(args.output)
+    if out.suffix.lower() == ".lmap":
+        raise MapkitError(f"several inputs (or --workers/--scheduler) build into a folder: give -o DIR, not "
+                          f"'{args.output}'")
+    if out.exists() and not out.is_dir():
+        raise MapkitError(f"{out}: exists and is not a folder; give a folder for the maps (-o DIR)")
+    jobs = batch.plan_jobs(args.plans, out)
+    todo = [j for j in jobs if not batch.is_up_to_date(j, options)]
+    skipped = len(jobs) - len(todo)
+    if todo:
+        try:
+            import distributed  # noqa: F401 - only to say what to install
+        except ImportError:
+            raise MapkitError("building several inputs at once needs Dask: pip install 'mapkit[dask]'") from None
+        out.mkdir(parents=True, exist_ok=True)
+
+    def say(result) -> None:
+        if result.status == batch.BUILT and not args.quiet:
+            shown = out / Path(result.output).name  # as the user wrote -o (the workers get absolute paths)
+            print(f"wrote {shown}: {result.summary}  ({result.seconds:.2f}s)", flush=True)
+        elif result.status == batch.FAILED:
+            print(f"mapkit: error: {result.error}", file=sys.stderr, flush=True)
+
+    results = batch.run_jobs(todo, options, workers=args.workers, scheduler=args.scheduler,
+                             progress=not args.quiet and sys.stderr.isatty(), on_result=say)
+    failed = [r for r in results if r.status == batch.FAILED]
+    bugs = [r for r in results if r.status == batch.BUG]
+    for r in bugs:
+        print(f"mapkit: internal error: {r.error} -- this is a bug, please report it (rerun that input on its own "
+              "with --debug for the traceback)", file=sys.stderr)
+    if not args.quiet:
+        built = len(results) - len(failed) - len(bugs)
+        print(f"built {built}, skipped {skipped} unchanged, failed {len(failed) + len(bugs)} of {len(jobs)} inputs")
+    if bugs:
+        from linemap.errors import EXIT_BUG
+
+        return EXIT_BUG
+    return 2 if failed else 0
