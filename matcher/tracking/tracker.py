@@ -234,7 +234,10 @@ class Tracker:
     def _usable(self, lines) -> int:
         """Image lines at least ``Tolerances.min_line_px`` long (the lines
         passed ``localize``'s checks)."""
-        arr = np.asarray(lines, dtype=float).reshape(-1, 4)
+        try:
+            arr = np.asarray(lines, dtype=float).reshape(-1, 4)
+        except (TypeError, ValueError):  # ragged or not numbers: the frame is skipped with this reason
+            raise InputError("lines must be numbers: Expected shape (M, 2, 2) or (M, 4)") from None
         return int((np.hypot(arr[:, 2] - arr[:, 0], arr[:, 3] - arr[:, 1]) >= self.tolerances.min_line_px).sum())
 
     def _telling(self, lines) -> bool:
