@@ -83,6 +83,10 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     if len(segments) == 0:
         raise MapkitError(f"{path}: no segment of --min-edge-length {options.min_edge_length:g} m or more")
     floor_z, top = float(segments[..., 2].min()), float(segments[..., 2].max())
+    if top - floor_z <= SEGMENTS_LEVEL:
+        # No height to the building: a map's walls must stand above its floor.
+        raise MapkitError(f"{path}: every segment lies at one height ({floor_z:g} m): a map needs walls standing "
+                          "above the floor; check the file's z column (x1,y1,z1,x2,y2,z2)")
     at_floor = (np.abs(segments[:, :, 2] - floor_z) <= SEGMENTS_LEVEL).all(axis=1)
     faces = shapely.union_all(shapely.linestrings(segments[at_floor, :, :2]))
     rooms = _enclosed(faces)
