@@ -96,7 +96,7 @@ def bench(model: Path, work: Path) -> None:
     print(f"\n### {model.name} ({manifest['source']['schema']})\n")
     print(markdown_table(["storey", "floor (m)", "height (m)", "walls (m)", "segments", "regions", "time (s)",
                  "peak RSS (MiB)"], rows))
-    print(f"\nconnections: " + ("; ".join(f"{c['kind']} '{c['name']}' {' <-> '.join(c['storeys'])}"
+    print("\nconnections: " + ("; ".join(f"{c['kind']} '{c['name']}' {' <-> '.join(c['storeys'])}"
                                           for c in manifest["connections"]) or "none"))
     print()
     print(markdown_table(["storey", "doors", "windows", "in the map", "missing"], openings_in_maps(model, out, manifest)))

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from functools import partial
 
-import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
