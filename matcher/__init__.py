@@ -15,6 +15,10 @@ hypothesis generation; :mod:`matcher.stage2`, verification);
     >>> res = matcher.localize(m, cam, lines, prior=(x, y, yaw_deg), dt=0.5, dyaw=20)
     >>> if res: print(res.pose)
     ... else: print(res.reason)
+
+A robot with several cameras (:mod:`matcher.rig`) gives one list of lines
+per camera: ``matcher.localize_rig(m, rig, [lines0, lines1, ...], prior,
+dt, dyaw)``, and :func:`localize_rig_global` without a prior.
 """
 
 from linemap.camera import Camera, CameraError
@@ -23,6 +27,7 @@ from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
+from matcher.rig import localize_rig, localize_rig_global
 from matcher.tolerances import Tolerances, Tracking
 from matcher.tracking import TrackedFrame, Tracker
 
@@ -42,6 +47,8 @@ __all__ = [
     "load_map",
     "localize",
     "localize_global",
+    "localize_rig",
+    "localize_rig_global",
 ]
 
 

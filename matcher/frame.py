@@ -89,7 +89,13 @@ def lines_needed(image_lines: ImageLines, tol: Tolerances) -> int:
     """How many lines an accepted pose must explain in this frame:
     ``min_matches`` and a share of the lines searched (a wrong pose among
     clutter explains some by chance; ``VerdictConstants.chance_fit_share``)."""
-    return tol.min_matches + int(tol.verdict.chance_fit_share * int(image_lines.searched.sum()))
+    return needed_of(int(image_lines.searched.sum()), tol)
+
+
+def needed_of(searched: int, tol: Tolerances) -> int:
+    """:func:`lines_needed` of a frame (or a rig's frame) whose stage 1
+    searches with ``searched`` lines."""
+    return tol.min_matches + int(tol.verdict.chance_fit_share * searched)
 
 
 def too_few_lines(image_lines: ImageLines, tol: Tolerances) -> str:

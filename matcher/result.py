@@ -122,6 +122,12 @@ class LocalizeResult:
     pitch_deg: float | None = None
     roll_deg: float | None = None
 
+    #: A rig's frame: per camera, in the rig's order, its ``name``, its
+    #: ``matches`` ``[[segment_id, line_index], ...]`` (lines counted in its
+    #: own list) and the RMS pixel distance of their end points to the
+    #: projected segments (``rms_px``); None for a single camera.
+    cameras: list[dict] | None = None
+
     #: :attr:`pose_std`, or the :class:`Deferred` that works it out.
     _pose_std: Deferred | tuple | None = field(default=None, repr=False, compare=False)
 
@@ -168,6 +174,10 @@ class LocalizeResult:
         }
         if self.pitch_deg is not None:  # only with a camera file that gives an attitude
             d["pitch_deg"], d["roll_deg"] = float(self.pitch_deg), float(self.roll_deg)
+        if self.cameras is not None:  # only for a rig's frame
+            d["cameras"] = [{"name": c["name"], "matches": [[int(a), int(b)] for a, b in c["matches"]],
+                             "rms_px": None if c["rms_px"] is None else round(float(c["rms_px"]), 3)}
+                            for c in self.cameras]
         if self.candidates:
             d["candidates"] = [{k: (float(v) if k != "matches" else int(v)) for k, v in c.items()}
                                for c in self.candidates]

@@ -459,10 +459,36 @@ class LostConstants(_Constants):
     vote_apart_deg: float = 8.0
 
 
+@dataclass(frozen=True)
+class RigConstants(_Constants):
+    """Constants of a rig of cameras (matcher/rig/): each camera's own
+    search gives seed poses, every camera's lines verify them together.
+
+    Held as ``Tolerances.rig``."""
+
+    #: Each camera's search hands this many of its best ranked poses to the
+    #: joint verification (a narrow view's best is often a look-alike that
+    #: the other cameras refute, the true pose a few places down).
+    seeds_per_camera: int = 6
+    #: Seeds closer than this (metres, degrees) are one: cameras that see
+    #: the same place give the same pose to a few centimetres.
+    same_seed_m: float = 0.05
+    same_seed_deg: float = 1.0
+    #: Rounds of (every camera's lines matched at the pose, the pose refitted
+    #: on all of them): the seed's pose comes from one narrow view, the first
+    #: refit on all cameras moves it by centimetres, the second settles it.
+    verify_rounds: int = 2
+    #: Lost mode: each camera's lost search gets this share of the budget
+    #: left, and its answers are verified as priors this far (metres,
+    #: degrees) around them.
+    lost_seed_m: float = 0.25
+    lost_seed_deg: float = 4.0
+
+
 #: The fields of :class:`Tolerances` that hold inner constants, and each one's class.
 CONSTANTS = {"map_index": MapIndexConstants, "shared": SharedConstants, "stage1": Stage1Constants,
              "stage2": Stage2Constants, "verdict": VerdictConstants, "attitude": AttitudeConstants,
-             "lost": LostConstants}
+             "lost": LostConstants, "rig": RigConstants}
 
 
 @dataclass(frozen=True)
@@ -602,8 +628,10 @@ class Tolerances:
     verdict: VerdictConstants = field(default_factory=VerdictConstants)
     #: ...the frame's own pitch and roll's...
     attitude: AttitudeConstants = field(default_factory=AttitudeConstants)
-    #: ...and lost mode's (its pose votes).
+    #: ...lost mode's (its pose votes)...
     lost: LostConstants = field(default_factory=LostConstants)
+    #: ...and a rig of cameras' (matcher/rig/).
+    rig: RigConstants = field(default_factory=RigConstants)
 
     def __post_init__(self) -> None:
         for f in fields(self):

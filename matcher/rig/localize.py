@@ -1,0 +1,316 @@
+"""A rig's frame localised: :func:`localize_rig` from a prior,
+:func:`localize_rig_global` without one.
+
+    lines per camera -> rig frame (matcher.rig.frame)
+        -> each camera's search, seed poses (matcher.rig.seeds)
+        -> verification on every camera (matcher.rig.verify)
+        -> the one verdict (matcher.verdict) -> LocalizeResult of the robot
+
+The one-camera rig (one camera at the robot's centre) is localised by the
+single-camera entry points themselves: its results are theirs, bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from linemap.errors import InputError
+from linemap.geometry import project_segments, wrap
+from matcher import ambiguity
+from matcher.budget import Deadlines
+from matcher.candidates import select_candidates
+from matcher.from_prior import localize, validated_types
+from matcher.input_validation import check_prior
+from matcher.lost import _localize_global, localize_global
+from matcher.projection import projected_end_distances
+from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
+from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
+from matcher.rig.joint_fit import robot_information
+from matcher.rig.seeds import distinct_poses, search_cameras, search_counts, seed_poses
+from matcher.rig.verify import RigRanked, verify_seeds
+from matcher.stage2.fit import coverage as coverage_of
+from matcher.strategy import SOURCES
+from matcher.tolerances import Tolerances
+from matcher.verdict import BY_TIME, UNCUT, Evidence, decide, trusted
+
+
+def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
+    """Localise the robot carrying ``rig`` (:class:`~linemap.rig.Rig`) from
+    ``lines``, a list with one (M_c, 2, 2) or (M_c, 4) array of pixel lines
+    per camera (ideal pinhole, in the rig's order), under the robot's
+    ``prior`` ``(x, y, yaw_deg)`` within ``dt`` metres and ``dyaw``
+    degrees. Returns a :class:`LocalizeResult` of the robot's pose; its
+    ``cameras`` name each camera's matches. Bad input raises InputError."""
+    t0 = time.perf_counter()
+    rig = check_rig(rig)
+    if rig.is_single:
+        return localize(linemap, rig[0].camera, _single_lines(rig, lines), prior, dt, dyaw, tolerances)
+    tol = validated_types(linemap, rig[0].camera, tolerances)
+    px = check_prior(prior, dt, dyaw)
+    frame = prepare_rig_frame(rig, lines, tol)
+    deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.shared.search_share)
+    searches = search_cameras(linemap, frame, px, tol, deadlines, SOURCES)
+    t_search = time.perf_counter()
+    counts = search_counts(searches)
+    if all(s.answer is None for s in searches):  # no camera could be searched: each one's reason
+        return _unsearched("; ".join(f"{s.view.name}: {s.why}" for s in searches), tol, t0)
+    seeds = seed_poses(searches, tol)
+    cut = BY_TIME if counts["out_of_time"] else UNCUT
+    times = {"generate": (t_search - t0) * 1e3}
+    if not len(seeds):
+        verdict = decide(Evidence(n_correspondences=counts["correspondences"], cut=cut), tol)
+        return LocalizeResult(False, verdict.reason, time_ms=Timings(total=(time.perf_counter() - t0) * 1e3, **times),
+                              stage1=SearchStats(**counts))
+    cands = [s.cands for s in searches]
+    ranked = verify_seeds(frame.views, cands, seeds, px, tol)
+    times["verify"] = (time.perf_counter() - t_search) * 1e3
+    return rig_result(frame, cands, ranked, tol, RunInfo(t0, times, counts, cut))
+
+
+def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None):
+    """Lost mode on a rig's frame: each camera's lost search
+    (:func:`matcher.localize_global`, a share of the time budget each)
+    gives seed poses; each seed, a narrow prior around it
+    (``RigConstants.lost_seed_m``, ``lost_seed_deg``), is verified on every
+    camera's lines, and the best verified pose is judged by the one verdict
+    against all the others (a look-alike place that fits as well is named
+    as a candidate, the result then falsy)."""
+    t0 = time.perf_counter()
+    rig = check_rig(rig)
+    if rig.is_single:
+        return localize_global(linemap, rig[0].camera, _single_lines(rig, lines), tolerances)
+    tol = validated_types(linemap, rig[0].camera, tolerances)
+    frame = prepare_rig_frame(rig, lines, tol)
+    found = _lost_search(linemap, frame, tol, t0)
+    times = {"generate": found.search_ms, "verify": found.verify_ms}
+    run = RunInfo(t0, times, found.counts, found.cut)
+    if found.best is None:
+        reason = "no camera's lost search gave a pose to verify"
+        if found.cut != UNCUT:
+            reason += f"; the time budget of {tol.time_budget_ms:g} ms ran out"
+        return LocalizeResult(False, decide(Evidence(unsearched=reason), tol).reason,
+                              time_ms=Timings(total=(time.perf_counter() - t0) * 1e3, **times),
+                              stage1=SearchStats(**found.counts))
+    cands, ranked = found.best
+    return rig_result(frame, cands, ranked, tol, run, rivals=found.answers)
+
+
+class RunInfo:
+    """A call's clock start ``t0``, its step ``times`` (ms), stage 1's
+    ``counts`` and how the search was ``cut``."""
+
+    def __init__(self, t0: float, times: dict, counts: dict, cut: str) -> None:
+        self.t0, self.times, self.counts, self.cut = t0, times, counts, cut
+
+
+def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, run: RunInfo,
+               rivals: list | None = None) -> LocalizeResult:
+    """The :class:`LocalizeResult` of the verified poses as the verdict
+    judges them: the best robot pose if accepted (with each camera's
+    matches), else a falsy result with the reason and candidates.
+    ``rivals``: every answer of the other verifications (lost mode's other
+    seeds), ``(pose_deg, matches, E, cost)``, for the ambiguity test."""
+    E, order = ranked.score, ranked.order
+    best = int(order[0]) if len(order) else None
+    finite = [int(h) for h in order if np.isfinite(E[h])]
+    answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(E[h]), float(ranked.cost[h])) for h in finite]
+    if rivals and answers:  # the best stays first; the others by the ranking's keys
+        rest = sorted([a for a in rivals if a[0] != answers[0][0]] + answers[1:], key=lambda a: (-a[1], a[3], a[2]))
+        answers = answers[:1] + rest
+    answers = tuple(answers)
+    if not finite:
+        ev = Evidence(score=math.inf, unscored=ranked.why or "no verified pose", cut=run.cut)
+    else:
+        pose_std = Deferred(lambda: _pose_std(frame, cands, ranked, best, tol))
+        ev = Evidence(score=float(E[best]), coverage=Deferred(lambda: _coverage(frame, cands, ranked, best, tol)),
+                      explained=int(ranked.explained[best]), searched=frame.searched, needed=frame.lines_needed(tol),
+                      answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=run.cut)
+    verdict = decide(ev, tol)
+    times = dict(run.times, total=(time.perf_counter() - run.t0) * 1e3)
+    listed = [(float(E[h]), _all_matches(frame, cands, ranked, h), _pose_deg(ranked.poses[h])) for h in finite]
+    common = dict(hypotheses=len(ranked.poses), time_ms=Timings(**times), ranked=listed, sets_found=len(finite),
+                  stage1=SearchStats(**run.counts),
+                  runner_up_score=float(E[finite[1]]) if len(finite) > 1 else None)
+    if not verdict:
+        return LocalizeResult(False, verdict.reason, score=verdict.score, candidates=list(verdict.candidates),
+                              **common)
+    return LocalizeResult(True, "", pose=_pose_deg(ranked.poses[best]), score=verdict.score,
+                          matches=listed[0][1], cameras=_per_camera(frame, cands, ranked, best, tol), _pose_std=pose_std,
+                          **common)
+
+
+def _single_lines(rig, lines):
+    """The one camera's lines of a one-camera rig's frame."""
+    if isinstance(lines, np.ndarray) or not isinstance(lines, (list, tuple)) or len(lines) != 1:
+        raise InputError(f"a rig frame's lines must be a list with one array of lines per camera "
+                         f"({len(rig)} camera: {rig.names[0]})")
+    return lines[0]
+
+
+def _unsearched(reason: str, tol: Tolerances, t0: float) -> LocalizeResult:
+    verdict = decide(Evidence(unsearched=reason), tol)
+    return LocalizeResult(False, verdict.reason, time_ms=Timings(total=(time.perf_counter() - t0) * 1e3))
+
+
+def _pose_deg(p) -> tuple[float, float, float]:
+    return float(p[0]), float(p[1]), float(math.degrees(wrap(p[2])))
+
+
+def _all_matches(frame: RigFrame, cands: list, ranked: RigRanked, h: int) -> list[list[int]]:
+    """Pose ``h``'s matches over all cameras ``[[segment_id, line], ...]``,
+    lines counted through the cameras' lists in the rig's order."""
+    out = []
+    for v, c, m in zip(frame.views, cands, ranked.matches):
+        sel = m.hyp == h
+        out += [[int(c.ids[a]), int(b) + v.offset] for a, b in zip(m.local[sel], m.line[sel])]
+    return sorted(out)
+
+
+def _per_camera(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances) -> list[dict]:
+    """Each camera's matches of pose ``h`` and their RMS end-point distance, pixels."""
+    out = []
+    for v, c, m in zip(frame.views, cands, ranked.matches):
+        sel = m.hyp == h
+        pairs = sorted([int(c.ids[a]), int(b)] for a, b in zip(m.local[sel], m.line[sel])) if c is not None else []
+        rms = None
+        if pairs:
+            q = v.mount.camera_poses(np.repeat(ranked.poses[h:h + 1], int(sel.sum()), axis=0))
+            d = projected_end_distances(*project_segments(v.camera, q, c.segments[m.local[sel]], tol.stage2.near_plane_m),
+                                        v.lines.lines[m.line[sel]])
+            rms = float(np.sqrt(np.mean(d**2)))
+        out.append({"name": v.name, "matches": pairs, "rms_px": rms})
+    return out
+
+
+def _coverage(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances) -> tuple[int, int]:
+    """``(predicted, seen)`` map segments in view of every camera at pose
+    ``h`` (:func:`matcher.stage2.fit.coverage` summed over the cameras): a
+    pose must be supported around the robot, not by one camera's clutter."""
+    predicted = seen = 0
+    for v, c, m in zip(frame.views, cands, ranked.matches):
+        if c is None:
+            continue
+        q = v.mount.camera_poses(ranked.poses[h])
+        p, s = coverage_of(v.camera, q, c.segments, c.label, m.local[m.hyp == h], c.walls, tol)
+        predicted, seen = predicted + p, seen + s
+    return predicted, seen
+
+
+def _pose_std(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances):
+    """``(x, y, yaw_deg)`` standard deviations of pose ``h`` over every
+    camera's matches, or None where they do not fix it."""
+    triples = [(v, c.segments, m.of_one(h)) for v, c, m in zip(frame.views, cands, ranked.matches) if c is not None]
+    A = robot_information(triples, ranked.poses[h:h + 1], tol)[0]
+    if np.linalg.det(A) <= 1e-12 * max(float(np.abs(A).max()), 1e-300) ** 3:
+        return None
+    cov = np.linalg.inv(A)
+    return float(math.sqrt(cov[0, 0])), float(math.sqrt(cov[1, 1])), float(math.degrees(math.sqrt(cov[2, 2])))
+
+
+def _candidates(linemap, view, px: tuple, tol: Tolerances):
+    """A camera's candidates under the robot's prior ``px``, None when none."""
+    cands = select_candidates(linemap, view.camera, view.camera_prior(px), tol)
+    return None if isinstance(cands, str) else cands
+
+
+@dataclass
+class LostFound:
+    """Lost mode's search so far: the ``best`` verification ``(candidates,
+    ranked)`` (None: none), every verified ``answers`` (for the rivals),
+    stage 1's ``counts``, how the search was ``cut``, the milliseconds of
+    the cameras' searches and of the verifications."""
+
+    best: tuple | None = None
+    answers: list = field(default_factory=list)
+    counts: dict = field(default_factory=lambda: {"out_of_time": False})
+    cut: str = UNCUT
+    search_ms: float = 0.0
+    verify_ms: float = 0.0
+
+
+def _lost_search(linemap, frame: RigFrame, tol: Tolerances, t0: float) -> LostFound:
+    """Each camera's lost search, the cameras with the most usable lines
+    first, with its share of the budget left; its answers' robot poses
+    (``seeds_per_camera`` of its ranked answers and its candidates) each
+    verified on every camera as a narrow prior. Stops once the best
+    verified pose explains most of the frame's usable lines
+    (``LostConstants.vote_trust_share``): no other camera's seeds could
+    explain much more."""
+    found, tried = LostFound(), []
+    found.counts["lines"] = int(sum(len(v.lines.lines) for v in frame.views))
+    order = sorted(range(len(frame.views)), key=lambda i: -int(frame.views[i].lines.usable.sum()))
+    # First each camera's quick search (its first accepted answer), then,
+    # if no seed explained most of the frame, each camera's whole one.
+    for quick in (True, False):
+        for k, i in enumerate(order):
+            left = tol.time_budget_ms - (time.perf_counter() - t0) * 1e3
+            if left <= 0:
+                found.cut = BY_TIME
+                return found
+            share = left / (len(order) * (2 if quick else 1) - k) if math.isfinite(left) else left
+            tried += list(_lost_camera(linemap, frame, frame.views[i], replace(tol, time_budget_ms=share), quick,
+                                       found, tried))
+            best = found.best
+            if best is not None and trusted(int(best[1].n[best[1].order[0]]), frame.usable, tol.lost):
+                return found
+    return found
+
+
+def _lost_camera(linemap, frame: RigFrame, view, tol: Tolerances, quick: bool, found: LostFound,
+                 tried: list) -> np.ndarray:
+    """One camera's lost search (``quick``: to its first accepted answer)
+    and its seeds (none near one ``tried``) verified into ``found``;
+    returns the seeds."""
+    t = time.perf_counter()
+    res = _localize_global(linemap, view.camera, view.lines, tol, t, quick, None, None)
+    found.counts["out_of_time"] |= bool(res.stage1.out_of_time)
+    seeds = _seeds_of(res, view, tol, tried)
+    t_v = time.perf_counter()
+    found.search_ms += (t_v - t) * 1e3
+    for seed in seeds:
+        _verify_lost_seed(linemap, frame, seed, tol, found)
+    found.verify_ms += (time.perf_counter() - t_v) * 1e3
+    return seeds
+
+
+def _seeds_of(res: LocalizeResult, view, tol: Tolerances, tried: list) -> np.ndarray:
+    """(S, 3) robot poses of a camera's lost result: its best ranked
+    answers and its candidates, each once and none near a seed ``tried``."""
+    poses = [r[2] for r in res.ranked[:tol.rig.seeds_per_camera]]
+    poses += [(c["x"], c["y"], c["yaw_deg"]) for c in res.candidates]
+    if not poses:
+        return np.zeros((0, 3))
+    q = np.array([(x, y, math.radians(yaw)) for x, y, yaw in poses])
+    apart_m, apart_rad = tol.rig.same_seed_m, math.radians(tol.rig.same_seed_deg)
+    seeds = distinct_poses(view.mount.robot_poses(q), apart_m, apart_rad)
+    new = [s for s in seeds if not any(_near(s, t, apart_m, apart_rad) for t in tried)]
+    return np.array(new).reshape(-1, 3)
+
+
+def _near(a: np.ndarray, b: np.ndarray, apart_m: float, apart_rad: float) -> bool:
+    return math.hypot(a[0] - b[0], a[1] - b[1]) <= apart_m and abs(math.remainder(a[2] - b[2], 2 * math.pi)) <= apart_rad
+
+
+def _verify_lost_seed(linemap, frame: RigFrame, seed: np.ndarray, tol: Tolerances, found: LostFound) -> None:
+    """One seed verified on every camera under a narrow prior around it;
+    ``found`` keeps the better verification and every answer."""
+    px = (float(seed[0]), float(seed[1]), float(seed[2]), tol.rig.lost_seed_m, math.radians(tol.rig.lost_seed_deg))
+    cands = [_candidates(linemap, v, px, tol) for v in frame.views]
+    ranked = verify_seeds(frame.views, cands, seed[None], px, tol)
+    answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(ranked.score[h]), float(ranked.cost[h]))
+               for h in ranked.order if np.isfinite(ranked.score[h])]
+    found.answers += answers
+    if answers and (found.best is None or _key(ranked) < _key(found.best[1])):
+        found.best = (cands, ranked)
+
+
+def _key(ranked: RigRanked) -> tuple:
+    h = int(ranked.order[0])
+    ok = bool(np.isfinite(ranked.score[h]))
+    return (not ok, -int(ranked.n[h]) if ok else 0, float(ranked.cost[h]) if ok else math.inf,
+            float(ranked.score[h]))
+
