@@ -24,6 +24,7 @@ dt, dyaw)``, and :func:`localize_rig_global` without a prior.
 from linemap.camera import Camera, CameraError
 from linemap.errors import InputError
 from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
+from linemap.rig import Mount, Rig, RigCamera
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
@@ -38,6 +39,9 @@ __all__ = [
     "LineMap",
     "LmapError",
     "LocalizeResult",
+    "Mount",
+    "Rig",
+    "RigCamera",
     "SegmentKind",
     "Tolerances",
     "TrackedFrame",

@@ -29,10 +29,7 @@ def rivals(answers: list[tuple], work: VerdictConstants, spread: tuple[float, fl
     direction, which are the same answer told imprecisely, not another
     place. The first is always kept: one answer means no ambiguity."""
     best = answers[0]
-    reach_m, reach_deg = work.ambiguous_m, work.ambiguous_deg
-    if spread is not None:
-        reach_m = max(reach_m, work.ambiguous_sigmas * max(spread[0], spread[1]))
-        reach_deg = max(reach_deg, work.ambiguous_sigmas * spread[2])
+    reach_m, reach_deg = _reach(work, spread)
     kept = [best]
     for a in answers[1:]:
         if a[1] < best[1] or not a[2] <= work.ambiguous_score_ratio * best[2]:
@@ -42,6 +39,25 @@ def rivals(answers: list[tuple], work: VerdictConstants, spread: tuple[float, fl
         if all(_apart(a[0], k[0], reach_m, reach_deg) for k in kept):
             kept.append(a)
     return kept
+
+
+def rival_apart(answers: list[tuple], work: VerdictConstants, spread: tuple[float, float, float] | None = None):
+    """The answer of ``answers`` (best first, as :func:`rivals` takes them)
+    that explains the most lines at a pose apart from the best's (apart as
+    :func:`rivals` says: ``ambiguous_m``, ``ambiguous_deg``, and the
+    ``spread``), or None when every other answer is the same place."""
+    reach_m, reach_deg = _reach(work, spread)
+    apart = [a for a in answers[1:] if _apart(a[0], answers[0][0], reach_m, reach_deg)]
+    return max(apart, key=lambda a: a[1]) if apart else None
+
+
+def _reach(work: VerdictConstants, spread) -> tuple[float, float]:
+    """How far (metres, degrees) another answer must be to be another place."""
+    reach_m, reach_deg = work.ambiguous_m, work.ambiguous_deg
+    if spread is not None:
+        reach_m = max(reach_m, work.ambiguous_sigmas * max(spread[0], spread[1]))
+        reach_deg = max(reach_deg, work.ambiguous_sigmas * spread[2])
+    return reach_m, reach_deg
 
 
 def spread_of(pose_std) -> tuple[float, float, float]:

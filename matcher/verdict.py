@@ -15,7 +15,9 @@ this order, each where its evidence is given:
    (:mod:`matcher.strategy`) also asks while it chooses its sources;
 4. the map segments the pose predicts in view are seen
    (``coverage_min_predicted``, ``coverage_min_share``);
-5. it explains the lines that clutter makes needed (``lines_needed``);
+5. it explains clearly more lines than the best answer at another place
+   (a rig: ``RigConstants.clear_ratio``), and the lines that clutter
+   makes needed (``lines_needed``);
 6. no rival explains as many lines and fits about as well at a pose
    elsewhere (:mod:`matcher.ambiguity`);
 7. lost mode: the best answer's own verdict in its search stands;
@@ -101,7 +103,12 @@ class Evidence:
     ``standing``: lost mode, the best answer's own verdict in its search.
     ``sweep``: lost mode's search of the map (:class:`Sweep`).
     ``cut``: how the search was cut short (:data:`UNCUT`, :data:`BY_TIME`,
-    :data:`BY_SEARCH_BUDGET`)."""
+    :data:`BY_SEARCH_BUDGET`).
+    ``clear_ratio``: when set (a rig, whose verification scores answers at
+    many places), the best must explain this many times the lines of the
+    best answer at another place (:func:`matcher.ambiguity.rival_apart`):
+    how many lines a wrong place explains by chance, measured on the frame
+    itself instead of a share fixed in advance."""
 
     unsearched: str = ""
     n_correspondences: int = 0
@@ -116,6 +123,7 @@ class Evidence:
     standing: Verdict | None = None
     sweep: Sweep | None = None
     cut: str = UNCUT
+    clear_ratio: float | None = None
 
 
 def score_accepted(score: float, tol: Tolerances) -> bool:
@@ -176,6 +184,13 @@ def _refused(ev: Evidence, tol: Tolerances, cut: str) -> Verdict | None:
         if predicted >= work.coverage_min_predicted and seen < work.coverage_min_share * predicted:
             return Verdict(NOT_LOCALISED, f"the best pose predicts {predicted} map segments in view and the image "
                                           f"shows {seen} of them: the lines do not look like the map there")
+    if ev.clear_ratio is not None and ev.answers:
+        rival = ambiguity.rival_apart(list(ev.answers), work, None if ev.spread is None else ev.spread.get())
+        if rival is not None and ev.answers[0][1] < ev.clear_ratio * rival[1]:
+            return Verdict(NOT_LOCALISED, f"the best pose explains {ev.answers[0][1]} lines and a pose elsewhere "
+                                          f"{rival[1]}: not {ev.clear_ratio:g} times as many, too few to tell them "
+                                          "apart; the candidates name both",
+                           tuple(ambiguity.candidates_of([ev.answers[0], rival])), score=ev.score)
     if ev.explained is not None and ev.explained < ev.needed:
         return Verdict(NOT_LOCALISED, f"the best pose explains {ev.explained} of the {ev.searched} longest lines, "
                                       f"fewer than the {ev.needed} that clutter makes needed")

@@ -69,6 +69,10 @@ def main(argv=None) -> int:
     ap.add_argument("--hfov", default="60,90", help="range of horizontal fields of view, degrees (default 60,90)")
     ap.add_argument("--pitch", default="0,10", help="range of pitches, degrees down (default 0,10)")
     ap.add_argument("--sizes", default="640x480,800x600", help="image sizes to choose from (default 640x480,800x600)")
+    ap.add_argument("--rig", type=int, default=0, metavar="N",
+                    help="rig mode: N cameras around each panorama's centre (a seeded heading offset, each camera's "
+                         "field of view, pitch and size drawn as a single view's), localised together as one robot "
+                         "(matcher.localize_rig); one frame per panorama")
     ap.add_argument("--peq", type=int, nargs="*", default=sorted(PEQ), help="PEQs to run (default 1 to 5)")
     ap.add_argument("--lost-every", type=int, default=4, help="lost mode on every N-th view (0: none; default 4)")
     ap.add_argument("--budget-ms", type=float, default=1000.0,
@@ -169,18 +173,21 @@ def prepare(args):
     pitch = _range(args.pitch)
     sizes = [tuple(int(v) for v in s.lower().split("x")) for s in args.sizes.split(",")]
     views = []
+    per_frame = args.rig or args.headings
     for pano in floor.panos:
         image = tour / pano.image_path
         if not image.is_file():
             raise MapkitError(f"{image}: panorama missing; is the tour complete?")
-        offset = rng.uniform(0, 360.0 / args.headings)
-        for k in range(args.headings):
+        offset = rng.uniform(0, 360.0 / per_frame)
+        cut = []
+        for k in range(per_frame):
             w, h = sizes[int(rng.integers(len(sizes)))]
-            views.append({
-                "id": len(views), "pano": pano, "image": str(image),
-                "yaw_deg": offset + k * 360.0 / args.headings,
-                "hfov": float(rng.uniform(*hfov)), "pitch": float(rng.uniform(*pitch)), "size": (w, h),
-            })
+            cut.append({"yaw_deg": offset + k * 360.0 / per_frame, "hfov": float(rng.uniform(*hfov)),
+                        "pitch": float(rng.uniform(*pitch)), "size": (w, h)})
+        if args.rig:  # one frame of N cameras, the robot heading along the first
+            views.append({"id": len(views), "pano": pano, "image": str(image), "yaw_deg": offset, "cameras": cut})
+        else:
+            views += [{"id": len(views) + k, "pano": pano, "image": str(image), **c} for k, c in enumerate(cut)]
     if args.max_views:
         views = views[: args.max_views]
     return views, floor, str(path), camera_height
@@ -223,6 +230,9 @@ def run_pano(task):
     tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
     rows = []
     for view in views:
+        if "cameras" in view:
+            rows.append(run_rig_frame(view, panorama, m, tol, args))
+            continue
         camera = view_camera(view, height_m)
         image = cut(view, panorama, camera)
         truth = view_pose(view["pano"], view["yaw_deg"])
@@ -247,6 +257,35 @@ def run_pano(task):
             save_failures(row, view, image, lines, camera, m, args.overlays)
         rows.append(row)
     return rows
+
+
+def run_rig_frame(view, panorama, m, tol, args) -> dict:
+    """One rig frame of a panorama: its cameras' views cut and their lines
+    detected, the robot localised per PEQ and lost (matcher.localize_rig)."""
+    height_m = float(m.meta["camera"]["height_m"])
+    cameras, lines, shown = [], [], set()
+    truth = view_pose(view["pano"], view["yaw_deg"])
+    for k, c in enumerate(view["cameras"]):
+        camera = view_camera(c, height_m)
+        cameras.append(matcher.RigCamera(f"cam{k}", camera, matcher.Mount(0.0, 0.0, c["yaw_deg"] - view["yaw_deg"])))
+        lines.append(matcher.detect_lines(cut(c | {"pano": view["pano"]}, panorama, camera), camera))
+        shown |= set(visible_lines(m, camera, view_pose(view["pano"], c["yaw_deg"]))[1].tolist())
+    rig = matcher.Rig(tuple(cameras))
+    row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": sum(len(x) for x in lines),
+           "shown": len(shown), "results": {}}
+    rng = np.random.default_rng([args.seed, view["id"]])
+    for peq in args.peq:
+        dt, dyaw = PEQ[peq]
+        r, phi = dt * math.sqrt(rng.uniform()), rng.uniform(0, 2 * math.pi)
+        prior = (truth[0] + r * math.cos(phi), truth[1] + r * math.sin(phi), truth[2] + rng.uniform(-dyaw, dyaw))
+        t = time.perf_counter()
+        res = matcher.localize_rig(m, rig, lines, prior, dt, dyaw, tolerances=tol)
+        row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
+    if args.lost_every and view["id"] % args.lost_every == 0:
+        t = time.perf_counter()
+        res = matcher.localize_rig_global(m, rig, lines, tolerances=tol)
+        row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t)
+    return row
 
 
 def _outcome(res, truth, seconds):

@@ -20,7 +20,7 @@ from linemap.camera import Camera
 from linemap.errors import InputError
 from linemap.rig import Mount, Rig, RigCamera
 from matcher import attitude
-from matcher.frame import ImageLines, needed_of, prepare_lines
+from matcher.frame import ImageLines, prepare_lines
 from matcher.input_validation import check_lines
 from matcher.tolerances import Tolerances
 
@@ -65,11 +65,6 @@ class RigFrame:
     def usable(self) -> int:
         """Usable lines over all cameras."""
         return int(sum(int(v.lines.usable.sum()) for v in self.views))
-
-    def lines_needed(self, tol: Tolerances) -> int:
-        """How many lines an accepted pose must explain over all cameras
-        (:func:`matcher.frame.lines_needed` on the lines of all of them)."""
-        return needed_of(self.searched, tol)
 
 
 def check_rig(rig) -> Rig:
