@@ -354,3 +354,22 @@ def test_small_yaml_reads_what_pyyaml_writes():
 def test_small_yaml_refuses_what_it_does_not_take(text, match):
     with pytest.raises(SmallYamlError, match=match):
         load_yaml(text, "f.yaml")
+
+
+def test_the_rig_file_example_of_docs_inputs_reads(tmp_path):
+    """docs/inputs.md's rig file, with its two camera_info files, and its
+    Kalibr 'robot' entry say what the reader reads."""
+    import textwrap
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "inputs.md").read_text()
+    start = doc.index('    {"cameras": [')
+    block = textwrap.dedent(doc[start:doc.index("\n\n", start)])
+    for name in ("front.yaml", "left.yaml"):
+        (tmp_path / name).write_text((DATA / "ros_camera_info.yaml").read_text())
+    rig = load_rig(_write(tmp_path, "rig.json", block))
+    assert rig.names == ["front", "left", "back"] and rig[0].topic == "/front/image_raw"
+    assert [rc.mount.yaw_deg for rc in rig] == [0, 90, 180] and rig[2].camera.height_m == 0.95
+    start = doc.index("    robot:\n")
+    robot = textwrap.dedent(doc[start:doc.index("\n\n", start)]) + "\n"
+    got = load_rig(_write(tmp_path, "camchain.yaml", KALIBR_OK + robot))
+    assert got[0].mount == Mount(0.2, 0.0, 0.0) and got[0].camera.pitch_deg == 5

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -114,8 +115,9 @@ def test_tools_simulate_writes_one_lines_file_per_camera(flat, tmp_path, capsys,
     import simulate
 
     rig = ring_rig(2, hfov_deg=90.0, width=160, height=120, radius_m=0.15)
-    if kind == "rig.json":
-        (tmp_path / kind).write_text(json.dumps(rig_to_dict(rig)))
+    if kind == "rig.json":  # a camera with distortion: the frame is the ideal pinhole's, and so is rig.json
+        distorted = replace(rig[1], camera=replace(rig[1].camera, distortion=(-0.1, 0.01, 0.0, 0.0)))
+        (tmp_path / kind).write_text(json.dumps(rig_to_dict(Rig((rig[0], distorted)))))
     else:
         f = rig[0].camera
         cam = (f"  camera_model: pinhole\n  intrinsics: [{f.fx!r}, {f.fy!r}, {f.cx!r}, {f.cy!r}]\n"
@@ -128,7 +130,7 @@ def test_tools_simulate_writes_one_lines_file_per_camera(flat, tmp_path, capsys,
     printed = capsys.readouterr().out
     assert "cam0:" in printed and "cam1:" in printed
     got = load_rig(out / "rig.json")
-    assert got.names == rig.names
+    assert got.names == rig.names and not any(rc.camera.distortion for rc in got)
     for g, w in zip(got, rig):
         assert g.camera == w.camera or np.allclose([g.camera.fx, g.camera.height_m, g.camera.pitch_deg],
                                                    [w.camera.fx, w.camera.height_m, w.camera.pitch_deg])

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from linemap.errors import InputError
+from linemap.rig import Rig
 from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera
 
 
@@ -101,10 +102,14 @@ def _rig_frame(args, m, rig) -> int:
     file a camera)."""
     fr = make_rig_frame(m, rig, np.random.default_rng(args.seed), args.peq, args.noise_px, args.noise_deg,
                         clutter=args.clutter, roll_deg=args.roll_deg, pitch_error_deg=args.pitch_error_deg)
-    if args.roll_deg or args.pitch_error_deg:  # the rig file knows the bounds, not the frame's attitudes
-        rig = type(rig)(tuple(replace(rc, camera=replace(rc.camera, pitch_std_deg=0.75 * args.pitch_error_deg,
-                                                                     roll_std_deg=0.67 * args.roll_deg))
-                              for rc in rig))
+    # The rig as written: the lines and the images are the ideal pinhole's (the renderer knows no
+    # distortion), so the cameras' distortion is dropped; the rig file knows the attitude's bounds,
+    # not the frame's attitudes.
+    std = dict(pitch_std_deg=0.75 * args.pitch_error_deg, roll_std_deg=0.67 * args.roll_deg) \
+        if args.roll_deg or args.pitch_error_deg else {}
+    if any(rc.camera.distortion for rc in rig):
+        print("the cameras' distortion is left out: lines and images are the ideal pinhole's")
+    rig = Rig(tuple(replace(rc, camera=replace(rc.camera, distortion=(), **std)) for rc in rig))
     x, y, yaw = fr.prior
     print(f"true pose {tuple(round(v, 3) for v in fr.pose)}; prior ({x:.2f}, {y:.2f}, {yaw:.1f}), "
           f"dt {fr.dt} m, dyaw {fr.dyaw} deg")
@@ -135,7 +140,7 @@ def _rig_frame(args, m, rig) -> int:
 
     for i, (rc, cf) in enumerate(zip(rig, fr.cameras)):
         real = replace(rc.camera, pitch_deg=cf.pitch_deg, roll_deg=cf.roll_deg, pitch_std_deg=0.0,
-                       roll_std_deg=0.0, distortion=())
+                       roll_std_deg=0.0)
         image = render_view(m, real, cf.pose, rng=np.random.default_rng([args.seed, i]))
         cv2.imwrite(str(out / f"frame_{files[rc.name]}.png"), image)
     print(f"wrote {out}/rig.json, truth.json and, a camera each, lines_NAME.json and frame_NAME.png "
