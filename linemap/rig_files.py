@@ -281,7 +281,10 @@ def _entry_camera(entry: dict, overrides: dict, path: Path) -> Camera:
 
 def _rig_from_kalibr(doc: dict, path: Path, first_mount) -> Rig:
     what = f"Kalibr camchain {path}"
-    indices = sorted(int(m.group(1)) for k in doc if (m := _CAM_KEY.match(str(k))))
+    keys = {int(m.group(1)): k for k in doc if (m := _CAM_KEY.match(k))}
+    if len(keys) != sum(1 for k in doc if _CAM_KEY.match(k)):
+        raise CameraError(f"{what} names a camera twice (cam1 and cam01?): cameras must be cam0, cam1, ...")
+    indices = sorted(keys)
     if indices != list(range(len(indices))):
         gap = next(i for i in range(len(indices) + 1) if i not in indices)
         raise CameraError(f"{what} has no cam{gap}: cameras must be cam0, cam1, ... without a gap")
@@ -291,7 +294,7 @@ def _rig_from_kalibr(doc: dict, path: Path, first_mount) -> Rig:
     T[:3, :3], T[:3, 3] = R, -R @ C
     cameras = []
     for n in indices:
-        name = f"cam{n}"
+        name = keys[n]
         entry = doc[name]
         with _context(f"{what} {name}"):
             if not isinstance(entry, dict):
@@ -318,7 +321,8 @@ def _first_placement(doc: dict, what: str, first_mount) -> CameraPlacement:
     if "robot" in doc and "T_robot_cam0" in doc:
         raise CameraError(f"{what} gives both robot and T_robot_cam0: keep one")
     if "robot" in doc:
-        return CameraPlacement.from_dict(doc["robot"], f"{what}: robot (cam0's placement)")
+        with _context(what):
+            return CameraPlacement.from_dict(doc["robot"], "robot (cam0's placement)")
     if "T_robot_cam0" in doc:
         with _context(what):
             T = _rigid(doc["T_robot_cam0"], "T_robot_cam0")

@@ -280,10 +280,13 @@ T_OK = "  T_cn_cnm1:\n  - [0, 0, -1, 0]\n  - [0, 1, 0, 0]\n  - [1, 0, 0, 0]\n  -
     (KALIBR_OK, None, r"does not say where cam0 is on the robot: give the first camera's placement"),
     (KALIBR_OK + "robot: {x: 0}\n", None, r"uses YAML this reader does not take"),
     (KALIBR_OK + "robot:\n  x: 0\n", None, r"robot \(cam0's placement\) lacks \['y', 'yaw_deg', 'height_m'\]"),
+    (KALIBR_OK + "robot:\n  x: 0\n  y: 0\n  yaw_deg: 0\n  height_m: .nan\n", None,
+     r"camchain .*: camera placement height_m must be a finite number, got nan"),
     (KALIBR_OK, dict(PLACE, z=1.0), r"has unknown fields \['z'\]"),
     (KALIBR_OK, dict(PLACE, height_m="1.2"), r"height_m must be a finite number"),
     (KALIBR_OK + KALIBR_OK.replace("cam0", "cam2"), PLACE, r"has no cam1: cameras must be cam0, cam1, \.\.\."),
     (KALIBR_OK + KALIBR_OK.replace("cam0", "cam1"), PLACE, r"cam1: lacks T_cn_cnm1"),
+    (KALIBR_OK + KALIBR_OK.replace("cam0", "cam00"), PLACE, r"names a camera twice"),
     (KALIBR_OK.replace("pinhole", "omni"), PLACE, r"cam0: camera_model 'omni' is not supported \(pinhole is"),
     (KALIBR_OK + "  distortion_model: equidistant\n", PLACE,
      r"cam0: distortion_model 'equidistant' is not supported \(radtan and none are\)"),
@@ -373,3 +376,35 @@ def test_the_rig_file_example_of_docs_inputs_reads(tmp_path):
     robot = textwrap.dedent(doc[start:doc.index("\n\n", start)]) + "\n"
     got = load_rig(_write(tmp_path, "camchain.yaml", KALIBR_OK + robot))
     assert got[0].mount == Mount(0.2, 0.0, 0.0) and got[0].camera.pitch_deg == 5
+
+
+@pytest.mark.parametrize("kind", ["camchain-lines", "camchain-bytes", "rig-json"])
+def test_damaged_rig_files_are_a_rig_or_one_line_error(tmp_path, kind):
+    """Seeded damage (the fuzz families' mutations) to a Kalibr camchain, in
+    both PyYAML styles, and to a rig JSON: each reads into a rig or ends in
+    one CameraError line, never another exception."""
+    import random
+
+    from mapkit_harness.fuzz.mutations import mutate_bytes, mutate_json_doc, mutate_lines
+
+    rig = _rig()
+    chains = [_camchain(rig, flow, extra=_placement_yaml(rig[0])) for flow in (True, False)]
+    doc = rig_to_dict(rig)
+    outcomes = {"rig": 0, "error": 0}
+    for i in range(150):
+        rng = random.Random(i)
+        if kind == "camchain-lines":
+            blob = mutate_lines(chains[i % 2], rng)[0].encode()
+        elif kind == "camchain-bytes":
+            blob = mutate_bytes(chains[i % 2].encode(), rng)[0]
+        else:
+            blob = mutate_json_doc(doc, rng)[0].encode()
+        path = tmp_path / f"case{i}"
+        path.write_bytes(blob)
+        try:
+            assert isinstance(load_rig(path), Rig)
+            outcomes["rig"] += 1
+        except CameraError as exc:
+            assert "\n" not in str(exc), str(exc)
+            outcomes["error"] += 1
+    assert outcomes["error"] >= 20 and outcomes["rig"] >= 1, outcomes  # the damage reaches both ends
