@@ -4,6 +4,8 @@
   :func:`load_map`, :func:`save_map`) and :mod:`linemap.regions`, region
   lookup on a loaded map;
 - :mod:`linemap.camera`: the camera model and camera files;
+- :mod:`linemap.rig`: camera rigs (cameras mounted on one robot) and
+  :mod:`linemap.rig_files`, the rig files and Kalibr camchains they come from;
 - :mod:`linemap.errors`: :class:`InputError`, what every check of bad input raises;
 - :mod:`linemap.geometry`: angle wrap, vertical segments, the horizontal
   field-of-view test, the projection of segments;

@@ -88,11 +88,14 @@ class Mount:
 @dataclass(frozen=True)
 class RigCamera:
     """One camera of a rig: its ``name`` (as its frames and results call
-    it), its ``camera`` model and its ``mount`` on the robot."""
+    it), its ``camera`` model and its ``mount`` on the robot; ``topic``, if
+    known, the image topic its frames come on (a rig file's ``topic``, a
+    Kalibr camchain's ``rostopic``), else empty."""
 
     name: str
     camera: Camera
     mount: Mount = Mount()
+    topic: str = ""
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,9 @@ Ground truth and simulated input, one concept per module:
 - :mod:`.plans`: synthetic plans with known geometry (buildings in code,
   DXF drawings, the example plan ``maps/flat.dxf``, meshes);
 - :mod:`.simulate`: frames of the paper's protocol from a map and a camera
-  (``make_frame``, ``paper_camera``, ``visible_lines``, ``pose_error``);
+  (``make_frame``, ``paper_camera``, ``visible_lines``, ``pose_error``), and
+  a rig's frames (``make_rig_frame``);
+- :mod:`.rigs`: the camera rigs of the tests and benchmarks (``ring_rig``);
 - :mod:`.runs`: a robot driving through a map (route, odometry, frames);
 - :mod:`.render`: grey images of a map seen from a pose;
 - :mod:`.panorama`: perspective views cut from an equirectangular panorama;

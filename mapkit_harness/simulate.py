@@ -5,7 +5,10 @@ the model segments it sees (occluded by the map's walls, extruded to
 ``meta["wall_height"]``, clipped to the image and to the range the map's
 lists were built for), uniform noise on each line's
 orientation, offset and end points, random clutter lines, and a prior drawn
-within the bounds of a PEQ. ``python tools/simulate.py`` prints one frame;
+within the bounds of a PEQ. A rig's frame (:func:`make_rig_frame`) is one
+robot pose seen by each camera of a :class:`~linemap.rig.Rig` at its own
+pose, the one-camera rig's the frame above. ``python tools/simulate.py``
+prints one frame (``--rig``: one a camera);
 the baseline the paper sets out to beat is :mod:`mapkit_harness.baseline`.
 """
 
@@ -17,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from linemap.camera import Camera
+from linemap.rig import Mount, Rig
 from matcher.map_geometry.occlusion import wall_edges
 from matcher.stage1.constraints import wrap
 
@@ -193,28 +197,93 @@ def make_frame(linemap, camera: Camera, rng, peq: int, noise_px: float = 1.0, no
     ``roll_deg``, ``pitch_error_deg``: the frame's camera is rolled and its
     pitch off the camera file's by amounts drawn uniformly within these
     bounds, degrees (a camera not mounted exactly, a robot that rocks); with
-    both 0 nothing is drawn (the frames are those of a level camera)."""
+    both 0 nothing is drawn (the frames are those of a level camera).
+
+    The one-camera rig's frame of :func:`make_rig_frame` (the same draws)."""
+    rig_frame = make_rig_frame(linemap, Rig.single(camera), rng, peq, noise_px, noise_deg, end_px, clutter,
+                               min_seen, max_seen, roll_deg, pitch_error_deg)
+    return rig_frame.cameras[0]
+
+
+@dataclass
+class RigFrame:
+    """One robot pose seen by every camera of a rig. ``pose`` and ``prior``
+    are the robot's ``(x, y, yaw_deg)``; ``cameras`` one :class:`Frame` a
+    camera, in the rig's order, whose ``pose`` and ``prior`` are that
+    camera's (the robot's through its mount: :func:`camera_pose`), with its
+    lines, their truth and its own pitch and roll."""
+
+    pose: tuple[float, float, float]
+    prior: tuple[float, float, float]
+    dt: float
+    dyaw: float
+    cameras: list[Frame]
+
+    @property
+    def lines(self) -> list[np.ndarray]:
+        """Each camera's lines (M_c, 2, 2) pixels."""
+        return [f.lines for f in self.cameras]
+
+
+def camera_pose(mount: Mount, pose) -> tuple[float, float, float]:
+    """The ``(x, y, yaw_deg)`` of a camera on ``mount`` when the robot is at
+    ``pose`` ``(x, y, yaw_deg)`` (a camera at the robot's centre: ``pose`` itself,
+    exactly)."""
+    if mount.at_centre:
+        return pose
+    x, y, _ = mount.camera_poses(np.array([pose[0], pose[1], math.radians(pose[2])]))
+    return float(x), float(y), float(math.degrees(wrap(math.radians(pose[2] + mount.yaw_deg))))
+
+
+def make_rig_frame(linemap, rig: Rig, rng, peq: int, noise_px: float = 1.0, noise_deg: float = 1.0,
+                   end_px: float = 3.0, clutter: int = 3, min_seen: int = 5, max_seen: int | None = None,
+                   roll_deg: float = 0.0, pitch_error_deg: float = 0.0) -> RigFrame:
+    """A rig's frame: a robot pose at which the cameras together see at
+    least ``min_seen`` (and at most ``max_seen``, None: any number) map
+    segments (redrawn otherwise), each camera's lines at its own pose
+    (:func:`visible_lines`) with the noise and ``clutter`` lines of
+    :func:`make_frame`, and one prior of the robot within PEQ bounds.
+
+    ``roll_deg``, ``pitch_error_deg``: each camera's roll and pitch drawn
+    within these bounds of its file's, as :func:`make_frame` does."""
     dt, dyaw = PEQ[peq]
-    real = camera
-    if roll_deg or pitch_error_deg:
-        roll = camera.roll_deg + float(rng.uniform(-roll_deg, roll_deg))
-        pitch = camera.pitch_deg + float(rng.uniform(-pitch_error_deg, pitch_error_deg))
-        real = replace(camera, roll_deg=roll, pitch_deg=pitch)
+    real = [_drawn_attitude(rc.camera, rng, roll_deg, pitch_error_deg) for rc in rig]
     while True:
         pose = random_free_pose(linemap, rng)
-        ideal, ids = visible_lines(linemap, real, pose)
-        if min_seen <= len(ids) <= max_seen:
+        seen = [visible_lines(linemap, cam, camera_pose(rc.mount, pose)) for rc, cam in zip(rig, real)]
+        n = sum(len(ids) for _, ids in seen)
+        if min_seen <= n and (max_seen is None or n <= max_seen):
             break
+    observed = [_observed(ideal, ids, rng, rc.camera, noise_px, noise_deg, end_px, clutter)
+                for rc, (ideal, ids) in zip(rig, seen)]
+    r = dt * math.sqrt(rng.uniform())
+    phi = rng.uniform(0, 2 * math.pi)
+    prior = (pose[0] + r * math.cos(phi), pose[1] + r * math.sin(phi),
+             float(math.degrees(wrap(math.radians(pose[2] + rng.uniform(-dyaw, dyaw))))))
+    frames = [Frame(camera_pose(rc.mount, pose), camera_pose(rc.mount, prior), dt, dyaw, lines, truth,
+                    cam.pitch_deg, cam.roll_deg) for rc, cam, (lines, truth) in zip(rig, real, observed)]
+    return RigFrame(pose, prior, dt, dyaw, frames)
+
+
+def _drawn_attitude(camera: Camera, rng, roll_deg: float, pitch_error_deg: float) -> Camera:
+    """The frame's real camera: rolled and pitched within the bounds of the
+    file's (nothing drawn when both are 0)."""
+    if not (roll_deg or pitch_error_deg):
+        return camera
+    roll = camera.roll_deg + float(rng.uniform(-roll_deg, roll_deg))
+    pitch = camera.pitch_deg + float(rng.uniform(-pitch_error_deg, pitch_error_deg))
+    return replace(camera, roll_deg=roll, pitch_deg=pitch)
+
+
+def _observed(ideal, ids, rng, camera: Camera, noise_px, noise_deg, end_px, clutter):
+    """``(lines (M, 2, 2), truth (M,))``: the ideal lines with noise, then
+    ``clutter`` lines (truth -1), in a random order."""
     noisy = add_noise(ideal, rng, noise_px, noise_deg, end_px, camera)
     extra = clutter_lines(rng, clutter, camera)
     lines = np.concatenate([noisy, extra])
     truth = np.concatenate([ids, -np.ones(len(extra), dtype=np.int64)])
     perm = rng.permutation(len(lines))
-    r = dt * math.sqrt(rng.uniform())
-    phi = rng.uniform(0, 2 * math.pi)
-    prior = (pose[0] + r * math.cos(phi), pose[1] + r * math.sin(phi),
-             float(math.degrees(wrap(math.radians(pose[2] + rng.uniform(-dyaw, dyaw))))))
-    return Frame(pose, prior, dt, dyaw, lines[perm], truth[perm], real.pitch_deg, real.roll_deg)
+    return lines[perm], truth[perm]
 
 
 def pose_error(a, b) -> tuple[float, float]:

@@ -12,6 +12,7 @@ hypothesis generation; :mod:`matcher.stage2`, verification);
     >>> import matcher
     >>> m = matcher.load_map("maps/flat.lmap")
     >>> cam = matcher.Camera.load("camera.json")
+    >>> rig = matcher.load_rig("rig.json")  # several cameras on one robot (linemap.rig_files)
     >>> res = matcher.localize(m, cam, lines, prior=(x, y, yaw_deg), dt=0.5, dyaw=20)
     >>> if res: print(res.pose)
     ... else: print(res.reason)
@@ -25,6 +26,7 @@ from linemap.camera import Camera, CameraError
 from linemap.errors import InputError
 from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
 from linemap.rig import Mount, Rig, RigCamera
+from linemap.rig_files import load_rig
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
@@ -49,6 +51,7 @@ __all__ = [
     "Tracking",
     "detect_lines",
     "load_map",
+    "load_rig",
     "localize",
     "localize_global",
     "localize_rig",
