@@ -3,6 +3,8 @@
     matcher localize --map MAP --camera CAM.json (--lines LINES.json | --image IMG)
                      (--prior X,Y,YAW_DEG --dt METRES --dyaw DEG | --lost)
                      [--budget-ms MS] [--json]
+    matcher localize --map MAP --rig RIG.json (--lines L0.json L1.json ... | --image I0 I1 ...) (...)
+    matcher localize --map MAP --pano PANO.jpg --camera-height H [--pano-yaw-offset DEG] (...)
     matcher track --map MAP [--camera CAM] --frames RUN.jsonl|BAG
                   [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost]
                   [--out TRAJ.txt] [--plot ROUTE.png] [--json]
@@ -50,10 +52,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     p = sub.add_parser("localize", help="pose from image lines and a prior",
                        description="Pose of the camera from image lines (or an image) and a pose prior.")
-    add_map_and_camera(p, camera_required=True)
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--lines", help='lines.json {"lines": [[u1, v1, u2, v2], ...]} (undistorted pixels)')
-    src.add_argument("--image", help="image file; lines are detected with LSD")
+    add_map_and_camera(p, camera_required=False)
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--lines", nargs="+", help='lines.json {"lines": [[u1, v1, u2, v2], ...]} (undistorted '
+                     "pixels); one per camera with --rig")
+    src.add_argument("--image", nargs="+", help="image file; lines are detected with LSD; one per camera with --rig")
+    from matcher.cli_rig import add_rig_options
+
+    add_rig_options(p)
     p.add_argument("--prior", help="pose prior X,Y,YAW_DEG (metres, degrees)")
     p.add_argument("--dt", type=float, help="position bound of the prior, metres")
     p.add_argument("--dyaw", type=float, help="heading bound of the prior, degrees")
@@ -210,7 +216,9 @@ def _human(res, n_lines: int) -> str:
         f"  score E={res.score:.3g} (runner-up {ru}), {res.hypotheses} hypotheses, "
         f"{len(res.matches)} of {n_lines} lines matched\n"
         f"  matches [segment, line]: {res.matches}\n"
-        f"  time ms: {t}"
+        + "".join(f"  camera {c['name']}: {len(c['matches'])} matches"
+                  + ("" if c["rms_px"] is None else f", RMS {c['rms_px']:.2f} px") + "\n" for c in res.cameras or [])
+        + f"  time ms: {t}"
     )
 
 
@@ -247,12 +255,21 @@ def run_localize(args) -> int:
 
     from linemap.camera import Camera
 
+    from matcher import cli_rig
+
+    cli_rig.check_sources(args)
     prior = _prior_options(args)
     tol = _tolerances(args)
     _input_file(args.map, "map file", "build one with 'mapkit build'")
+    if cli_rig.rig_requested(args):
+        linemap = matcher.load_map(args.map)
+        rig, lines = cli_rig.rig_frame(args, _read_lines, _read_image)
+        res = cli_rig.localize_frame(args, linemap, rig, lines, prior, tol)
+        print(json.dumps(res.to_dict()) if args.json else _human(res, sum(len(x) for x in lines)))
+        return EXIT_OK if res else EXIT_NOT_FOUND
     camera = _camera(args, Camera)
     linemap = matcher.load_map(args.map)
-    lines = _read_lines(args.lines) if args.lines else _read_image(args.image, camera)
+    lines = _read_lines(args.lines[0]) if args.lines else _read_image(args.image[0], camera)
     if prior is None:
         res = matcher.localize_global(linemap, camera, lines, tolerances=tol,
                                       progress=_region_progress if sys.stderr.isatty() else None)

@@ -3,7 +3,6 @@ with one set of lines per camera, each rendered at its camera's pose."""
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -105,3 +104,34 @@ def test_a_rig_that_sees_nothing_says_why(flat):
     rig = ring_rig(2)
     res = localize_rig(flat, rig, [np.zeros((0, 2, 2)), np.zeros((0, 2, 2))], (2.0, 2.0, 0.0), 0.5, 10)
     assert not res and "usable image lines" in res.reason
+
+
+def test_cli_localizes_a_simulated_rig_frame(tmp_path):
+    """``tools/simulate.py --rig`` writes a frame that ``matcher localize
+    --rig`` localises from a prior and lost; a wrong number of files is one
+    line and exit 2."""
+    import json
+    import subprocess
+    import sys
+
+    from linemap.rig_files import rig_to_dict
+
+    rig_file = tmp_path / "ring.json"
+    rig_file.write_text(json.dumps(rig_to_dict(ring_rig(4, hfov_deg=70.0, radius_m=0.2))))
+    out = tmp_path / "frame"
+    subprocess.run([sys.executable, "tools/simulate.py", "--rig", str(rig_file), "--peq", "3", "--seed", "2",
+                    "--out", str(out)], check=True, capture_output=True)
+    truth = json.loads((out / "truth.json").read_text())
+    lines = [str(out / c["lines"]) for c in truth["cameras"]]
+    prior = ",".join(f"{v:.4f}" for v in truth["prior"])
+    run = subprocess.run([sys.executable, "-m", "matcher", "localize", "--map", "maps/flat.lmap", "--rig",
+                          str(out / "rig.json"), "--lines", *lines, "--prior", prior, "--dt", str(truth["dt"]),
+                          "--dyaw", str(truth["dyaw"]), "--json"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    res = json.loads(run.stdout)
+    p = truth["pose"]
+    assert pose_error((res["pose"]["x"], res["pose"]["y"], res["pose"]["yaw_deg"]), (p["x"], p["y"], p["yaw_deg"]))[0] < 0.01
+    assert [c["name"] for c in res["cameras"]] == [c["name"] for c in truth["cameras"]]
+    bad = subprocess.run([sys.executable, "-m", "matcher", "localize", "--map", "maps/flat.lmap", "--rig",
+                          str(out / "rig.json"), "--lines", lines[0], "--lost"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "give one per camera" in bad.stderr
