@@ -15,11 +15,19 @@ hypothesis generation; :mod:`matcher.stage2`, verification);
     >>> res = matcher.localize(m, cam, lines, prior=(x, y, yaw_deg), dt=0.5, dyaw=20)
     >>> if res: print(res.pose)
     ... else: print(res.reason)
+
+A building (``mapkit build model.ifc -o DIR``) loads from its manifest:
+``matcher.load_map("DIR/building.json")`` gives a :class:`Building`, its
+storeys each with a map; ``localize(..., storey=NAME)`` works on one,
+``localize_global`` searches them all and names the storey
+(:mod:`matcher.building`).
 """
 
+from linemap.building import Building, Storey
+from linemap.building import load_any as load_map
 from linemap.camera import Camera, CameraError
 from linemap.errors import InputError
-from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
+from linemap.lmap import LineMap, LmapError, SegmentKind
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
@@ -27,6 +35,7 @@ from matcher.tolerances import Tolerances, Tracking
 from matcher.tracking import TrackedFrame, Tracker
 
 __all__ = [
+    "Building",
     "Camera",
     "CameraError",
     "InputError",
@@ -34,6 +43,7 @@ __all__ = [
     "LmapError",
     "LocalizeResult",
     "SegmentKind",
+    "Storey",
     "Tolerances",
     "TrackedFrame",
     "Tracker",

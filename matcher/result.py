@@ -122,6 +122,10 @@ class LocalizeResult:
     pitch_deg: float | None = None
     roll_deg: float | None = None
 
+    #: The storey of a building the pose is on (its name in the manifest),
+    #: when the map searched was a building's (:mod:`matcher.building`); else None.
+    storey: str | None = None
+
     #: :attr:`pose_std`, or the :class:`Deferred` that works it out.
     _pose_std: Deferred | tuple | None = field(default=None, repr=False, compare=False)
 
@@ -168,9 +172,11 @@ class LocalizeResult:
         }
         if self.pitch_deg is not None:  # only with a camera file that gives an attitude
             d["pitch_deg"], d["roll_deg"] = float(self.pitch_deg), float(self.roll_deg)
+        if self.storey is not None:  # only on a building
+            d["storey"] = self.storey
         if self.candidates:
-            d["candidates"] = [{k: (float(v) if k != "matches" else int(v)) for k, v in c.items()}
-                               for c in self.candidates]
+            d["candidates"] = [{k: int(v) if k == "matches" else v if k == "storey" else float(v)
+                                for k, v in c.items()} for c in self.candidates]
         if not self.ok:
             d["reason"] = self.reason
         return d
