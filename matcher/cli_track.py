@@ -142,9 +142,10 @@ def run_track(args) -> int:
         frames, odoms = _follow(tracker, source, args)
     finally:
         source.close()
-    if args.out:
-        poses = [(f["t"], f["estimate"]["x"], f["estimate"]["y"], f["estimate"]["yaw_deg"])
-                 for f in frames if f.get("estimate") and not f["skipped"]]
+    if args.out:  # on a building, z above the storey's floor
+        floor = {s.name: s.elevation_m for s in linemap.storeys} if isinstance(linemap, matcher.Building) else {}
+        poses = [(f["t"], f["estimate"]["x"], f["estimate"]["y"], f["estimate"]["yaw_deg"],
+                  floor.get(f.get("storey"), 0.0)) for f in frames if f.get("estimate") and not f["skipped"]]
         write_atomic(args.out, tum_text(poses, source.camera.height_m))
     if args.plot:
         _write_plot(args.plot, linemap, frames, odoms)

@@ -189,10 +189,13 @@ def test_matcher_track_on_a_manifest(built, building, tmp_path, capsys):
     (tmp_path / "camera.json").write_text(json.dumps(PAPER_CAMERA))
     args = ["track", "--map", str(built), "--camera", str(tmp_path / "camera.json"), "--frames", str(run)]
     assert matcher_main([*args, "--prior", "1,1,30", "--dt", "0.2", "--dyaw", "5", "--storey", UPPER, "--json",
-                         "--plot", str(tmp_path / "route.png")]) == 0
+                         "--plot", str(tmp_path / "route.png"), "--out", str(tmp_path / "traj.txt")]) == 0
     frames = [json.loads(ln) for ln in capsys.readouterr().out.splitlines()]
     assert len(frames) == 4 and all(f["ok"] and f["storey"] == UPPER for f in frames)
     assert (tmp_path / "route.png").stat().st_size > 0
+    # The trajectory's z: the camera's height above the upper floor (3 m up).
+    zs = [float(ln.split()[3]) for ln in (tmp_path / "traj.txt").read_text().splitlines()[1:]]
+    assert zs == [pytest.approx(3.0 + PAPER_CAMERA["height_m"])] * 4
     assert matcher_main([*args, "--lost", "--storey", UPPER]) == 2
     assert "--storey names the storey of --prior" in capsys.readouterr().err
 
