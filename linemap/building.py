@@ -112,9 +112,11 @@ def read_manifest(path: str | os.PathLike) -> dict:
 
 def _check_shape(doc: dict, path: Path) -> None:
     """LmapError unless ``doc`` has what readers use: a source object with
-    its name and SHA-256, a list of connections, and storeys (a non-empty
-    list) each with a unique name, finite elevation and height, and a map
-    file name beside the manifest (or null with the reason)."""
+    its name and SHA-256, storeys (a non-empty list) each with a unique
+    name, finite elevation and height, and a map file name beside the
+    manifest (or null with the reason), their counts (where given) numbers,
+    and a list of connections each with its kind, name, GlobalId and
+    storeys."""
     def bad(msg: str) -> LmapError:
         return LmapError(f"{path}: invalid building manifest: {msg}; {_REBUILD}")
 
@@ -132,8 +134,7 @@ def _check_shape(doc: dict, path: Path) -> None:
         if not isinstance(s, dict) or not isinstance(s.get("name"), str):
             raise bad(f"storey {k} must be an object with a 'name'")
         for key in ("elevation_m", "height_m"):
-            v = s.get(key)
-            if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
+            if not _finite_number(s.get(key)):
                 raise bad(f"storey {s['name']!r} lacks a finite number '{key}'")
         m = s.get("map")
         if m is not None and not (isinstance(m, str) and m.endswith(".lmap") and Path(m).name == m
@@ -143,8 +144,29 @@ def _check_shape(doc: dict, path: Path) -> None:
         if s["name"] in seen:
             raise bad(f"storey name {s['name']!r} appears twice")
         seen.add(s["name"])
+        for key in ("segments", "regions", "wall_height_m"):  # what mapkit info shows; each may be absent
+            if s.get(key) is not None and not _finite_number(s[key]):
+                raise bad(f"storey {s['name']!r}: '{key}' must be a number")
+        if not isinstance(s.get("why", ""), (str, type(None))):
+            raise bad(f"storey {s['name']!r}: 'why' must be a text")
     if not any(s.get("map") for s in storeys):
         raise bad("no storey has a map")
+    for k, c in enumerate(doc.get("connections", [])):
+        if not (isinstance(c, dict) and isinstance(c.get("kind"), str)
+                and all(isinstance(c.get(key), (str, type(None))) for key in ("name", "guid"))
+                and isinstance(c.get("storeys"), list) and all(isinstance(n, str) for n in c["storeys"])):
+            raise bad(f"connection {k} must be an object with its 'kind', 'name', 'guid' and a list of 'storeys' "
+                      "names")
+
+
+def _finite_number(v) -> bool:
+    """Is the JSON value ``v`` a finite number (not a boolean, not an integer past a float's range)?"""
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:
+        return False
 
 
 def load_building(path: str | os.PathLike) -> Building:

@@ -50,12 +50,13 @@ class StoreySearch:
 @dataclass(frozen=True)
 class _Searched:
     """What the storeys' searches gave: each searched storey with its
-    result, the frame's usable lines, whether the budget left a storey
-    unsearched, and the call's start (``time.perf_counter``)."""
+    result, the frame's usable lines, whether the budget cut a storey's
+    search short or left one unsearched, and the call's start
+    (``time.perf_counter``)."""
 
     results: list
     usable: int
-    skipped: bool
+    cut_short: bool
     t0: float
 
 
@@ -76,16 +77,17 @@ def search_storeys(building: Building, camera, lines, tolerances: Tolerances | N
     tol = from_prior.validated_types(storeys[0].map, camera, tolerances)
     usable = int(prepare_lines(camera, check_lines(lines, camera, tol), tol).usable.sum())
     total = sum(s.map.n_regions for s in storeys)
-    results, done, skipped = [], 0, False
+    results, done, cut_short = [], 0, False
     for k, on in enumerate(storeys):
         left = tol.time_budget_ms - (time.perf_counter() - t0) * 1e3
         if not left > 0:
-            skipped = True
+            cut_short = True
             break
-        res = lost.localize_global(on.map, camera, lines, replace(tol, time_budget_ms=left / (len(storeys) - k)),
-                                   first_accepted, _offset(progress, done, total),
-                                   None if regions is None else regions.get(on.name))
+        share = left / (len(storeys) - k)
+        res = lost.localize_global(on.map, camera, lines, replace(tol, time_budget_ms=share), first_accepted,
+                                   _offset(progress, done, total), None if regions is None else regions.get(on.name))
         results.append((on, res))
+        cut_short |= _cut(res, share, tol)
         done += on.map.n_regions
         if first_accepted and res:
             break
@@ -93,7 +95,19 @@ def search_storeys(building: Building, camera, lines, tolerances: Tolerances | N
         progress(total, total)
     tried = {s.name: 0 for s in storeys}
     tried.update({s.name: int(res.time_ms.get("regions_tried", 0)) for s, res in results})
-    return StoreySearch(_judged(_Searched(results, usable, skipped, t0), storeys, tol), tried)
+    return StoreySearch(_judged(_Searched(results, usable, cut_short, t0), storeys, tol), tried)
+
+
+def _cut(res: LocalizeResult, share_ms: float, tol: Tolerances) -> bool:
+    """Did the budget cut a storey's search short? Its result says so when
+    it has an answer; one with none does not carry it, so a search that
+    found nothing in more than the searching part of its share of the
+    budget (``SharedConstants.search_share``: the moment its searches
+    stop) counts as cut (at worst a search that ended just in time: the
+    verdict is then the more careful one)."""
+    if res.stage1.out_of_time:
+        return True
+    return not lost.answers_of(res) and res.time_ms.get("total", 0.0) >= tol.shared.search_share * share_ms
 
 
 def _offset(progress, done: int, total: int):
@@ -111,7 +125,7 @@ def _judged(searched: _Searched, storeys: tuple[Storey, ...], tol: Tolerances) -
     results = searched.results
     answers = [((pose + (on.name,), m, E), on, res) for on, res in results for pose, m, E in lost.answers_of(res)]
     answers.sort(key=lambda a: (-a[0][1], a[0][2]))  # stable: the lower storey first among equals
-    out_of_time = searched.skipped or any(bool(res.stage1.out_of_time) for _, res in results)
+    out_of_time = searched.cut_short
     places = sum(int(res.time_ms.get("places_tried", 0)) for _, res in results)
     regions = sum(int(res.time_ms.get("regions_tried", 0)) for _, res in results)
     times = dict(total=(time.perf_counter() - searched.t0) * 1e3, regions_tried=regions, places_tried=places)

@@ -232,6 +232,9 @@ def _flip_a_byte(folder):
     (lambda f, d: d["storeys"][1].update(elevation_m="3"), "lacks a finite number 'elevation_m'"),
     (lambda f, d: d["storeys"][1].update(name=GROUND), "appears twice"),
     (lambda f, d: d["source"].update(sha256="0" * 64), "built from another model"),
+    (lambda f, d: d["storeys"][0].update(elevation_m=10 ** 400), "lacks a finite number 'elevation_m'"),
+    (lambda f, d: d["storeys"][0].update(segments="many"), "'segments' must be a number"),
+    (lambda f, d: d["connections"].append(1), "connection 1 must be an object"),
 ])
 def test_a_bad_manifest_is_a_one_line_error(built, tmp_path, capsys, change, needle):
     path = _damaged_copy(built, tmp_path, change)
