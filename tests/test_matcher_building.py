@@ -45,10 +45,10 @@ def building(built):
     return matcher.load_map(built / "building.json")
 
 
-def _frame(building, pose=POSE, camera=None, seed=0):
-    """Image lines (M, 2, 2) of the upper storey's map seen from ``pose``, with 0.5 px of seeded noise."""
+def _frame(building, pose=POSE, camera=None, seed=0, storey=UPPER):
+    """Image lines (M, 2, 2) of the storey's map seen from ``pose``, with 0.5 px of seeded noise."""
     camera = camera or paper_camera()
-    lines, _ = visible_lines(building.storey(UPPER).map, camera, pose)
+    lines, _ = visible_lines(building.storey(storey).map, camera, pose)
     return add_noise(lines, np.random.default_rng(seed), 0.5, 0.2, 0.5, camera)
 
 
@@ -135,6 +135,25 @@ def test_a_lost_tracker_finds_its_storey_and_confirms_it(building):
     assert outs[0].to_dict()["candidates"][0]["storey"] == UPPER
     assert outs[-1] and outs[-1].storey == UPPER and outs[-1].state == "tracking"
     assert _off(outs[-1].estimate, _walk(5)[-1])[0] < 0.05
+
+
+def test_the_tracker_keeps_its_storey_until_relocalised_on_another(building):
+    """Carried upstairs (the odometry knows nothing of it): the tracker keeps
+    to the ground floor while it coasts and searches, then relocalises on
+    the upper storey."""
+    cam = paper_camera()
+    ground, upper = _walk(3), _walk(8, start=POSE, step=0.04)
+    tracker = matcher.Tracker(building, cam, prior=ground[0], dt=0.2, dyaw=5.0, storey=GROUND)
+    outs = [tracker.step(float(k), p, _frame(building, p, cam, seed=k, storey=GROUND)) for k, p in enumerate(ground)]
+    assert all(o and o.storey == GROUND for o in outs)
+    jump = (ground[-1][0] - upper[0][0], ground[-1][1] - upper[0][1])
+    for k, p in enumerate(upper, len(ground)):
+        outs.append(tracker.step(float(k), (p[0] + jump[0], p[1] + jump[1], p[2]), _frame(building, p, cam, seed=k)))
+    first_upper = next(k for k, o in enumerate(outs) if o.storey == UPPER)
+    assert first_upper > len(ground) + 1  # not on one frame's word
+    assert all(o.storey == GROUND for o in outs[:first_upper])
+    assert all(o and o.storey == UPPER for o in outs[first_upper:]) and outs[first_upper].state == "tracking"
+    assert _off(outs[-1].estimate, upper[-1])[0] < 0.05
 
 
 def _cli_files(tmp_path, building):
