@@ -20,12 +20,10 @@ from pathlib import Path
 import shapely
 from shapely.geometry import mapping
 
+# The manifest's name, format and reader are the shared core's (the matcher
+# reads buildings too); kept importable from here.
+from linemap.building import MANIFEST_FORMAT, MANIFEST_NAME, MANIFEST_VERSION, read_manifest
 from mapkit.errors import MapkitError
-
-#: The manifest's file name in the output folder, and its format's name and version.
-MANIFEST_NAME = "building.json"
-MANIFEST_FORMAT = "mapkit-building"
-MANIFEST_VERSION = 1
 
 #: Decimals of the manifest's coordinates and heights, metres (a millimetre).
 _DECIMALS = 3
@@ -166,23 +164,9 @@ def storey_file_names(names: list[str]) -> list[str]:
 
 
 def load_manifest(path: str | Path) -> dict:
-    """A building manifest, checked for its format; MapkitError otherwise."""
-    path = Path(path)
-    try:
-        doc = json.loads(path.read_bytes())
-    except (ValueError, RecursionError) as exc:
-        raise MapkitError(f"{path}: not valid JSON ({str(exc).splitlines()[0][:120]})") from None
-    if not is_manifest(doc):
-        raise MapkitError(f"{path}: not a building manifest (a '{MANIFEST_FORMAT}' JSON file 'mapkit build "
-                          "model.ifc -o DIR' writes)")
-    if doc.get("version") != MANIFEST_VERSION:
-        raise MapkitError(f"{path}: building manifest version {doc.get('version')!r}; this mapkit reads version "
-                          f"{MANIFEST_VERSION}")
-    return doc
-
-
-def is_manifest(doc) -> bool:
-    return isinstance(doc, dict) and doc.get("format") == MANIFEST_FORMAT
+    """A building manifest, checked for its format, version and shape
+    (:func:`linemap.building.read_manifest`); LmapError otherwise."""
+    return read_manifest(path)
 
 
 def _storey_options(options, name: str):

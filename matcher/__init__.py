@@ -20,11 +20,19 @@ hypothesis generation; :mod:`matcher.stage2`, verification);
 A robot with several cameras (:mod:`matcher.rig`) gives one list of lines
 per camera: ``matcher.localize_rig(m, rig, [lines0, lines1, ...], prior,
 dt, dyaw)``, and :func:`localize_rig_global` without a prior.
+
+A building (``mapkit build model.ifc -o DIR``) loads from its manifest:
+``matcher.load_map("DIR/building.json")`` gives a :class:`Building`, its
+storeys each with a map; ``localize(..., storey=NAME)`` works on one,
+``localize_global`` searches them all and names the storey
+(:mod:`matcher.building`).
 """
 
+from linemap.building import Building, Storey
+from linemap.building import load_any as load_map
 from linemap.camera import Camera, CameraError
 from linemap.errors import InputError
-from linemap.lmap import LineMap, LmapError, SegmentKind, load_map
+from linemap.lmap import LineMap, LmapError, SegmentKind
 from linemap.rig import Mount, Rig, RigCamera
 from linemap.rig_files import load_rig
 from matcher.from_prior import localize
@@ -35,6 +43,7 @@ from matcher.tolerances import Tolerances, Tracking
 from matcher.tracking import TrackedFrame, Tracker
 
 __all__ = [
+    "Building",
     "Camera",
     "CameraError",
     "InputError",
@@ -45,6 +54,7 @@ __all__ = [
     "Rig",
     "RigCamera",
     "SegmentKind",
+    "Storey",
     "Tolerances",
     "TrackedFrame",
     "Tracker",

@@ -27,7 +27,9 @@ def rivals(answers: list[tuple], work: VerdictConstants, spread: tuple[float, fl
     than ``ambiguous_deg`` and as many of its yaw's: a pose its lines fix
     loosely (a far column's corners) has near rivals along the loose
     direction, which are the same answer told imprecisely, not another
-    place. The first is always kept: one answer means no ambiguity."""
+    place. On a building, a pose's fourth item is its storey: rivals on
+    another storey are apart wherever they stand (the same room on two
+    floors). The first is always kept: one answer means no ambiguity."""
     best = answers[0]
     reach_m, reach_deg = _reach(work, spread)
     kept = [best]
@@ -68,17 +70,24 @@ def spread_of(pose_std) -> tuple[float, float, float]:
 
 
 def candidates_of(kept: list) -> list[dict]:
-    """The result's ``candidates``: dicts of x, y, yaw_deg, matches, score."""
-    return [dict(x=a[0][0], y=a[0][1], yaw_deg=a[0][2], matches=int(a[1]), score=float(a[2])) for a in kept]
+    """The result's ``candidates``: dicts of x, y, yaw_deg, matches, score
+    (and the storey, on a building: a pose's fourth item)."""
+    return [dict(x=a[0][0], y=a[0][1], yaw_deg=a[0][2], matches=int(a[1]), score=float(a[2]),
+                 **({"storey": a[0][3]} if len(a[0]) > 3 else {})) for a in kept]
 
 
 def reason(kept: list) -> str:
     """A failure's reason for ``kept`` poses that cannot be told apart."""
-    return (f"{len(kept)} poses fit the lines about equally well (each explains {kept[0][1]} lines: a symmetric "
-            "room or like rooms); the candidates name them")
+    storeys = {a[0][3] for a in kept if len(a[0]) > 3}
+    what = f"like rooms on {len(storeys)} storeys" if len(storeys) > 1 else "a symmetric room or like rooms"
+    return (f"{len(kept)} poses fit the lines about equally well (each explains {kept[0][1]} lines: {what}); "
+            "the candidates name them")
 
 
 def _apart(a, b, reach_m: float, reach_deg: float) -> bool:
-    """Are poses ``a`` and ``b`` ``(x, y, yaw_deg)`` different places?"""
+    """Are poses ``a`` and ``b`` ``(x, y, yaw_deg[, storey])`` different
+    places? Poses on two storeys of a building always are."""
+    if len(a) > 3 and len(b) > 3 and a[3] != b[3]:
+        return True
     dyaw = abs((a[2] - b[2] + 180.0) % 360.0 - 180.0)
     return math.hypot(a[0] - b[0], a[1] - b[1]) > reach_m or dyaw > reach_deg

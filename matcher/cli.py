@@ -2,12 +2,16 @@
 
     matcher localize --map MAP --camera CAM.json (--lines LINES.json | --image IMG)
                      (--prior X,Y,YAW_DEG --dt METRES --dyaw DEG | --lost)
-                     [--budget-ms MS] [--json]
+                     [--storey NAME] [--budget-ms MS] [--json]
     matcher localize --map MAP --rig RIG.json (--lines L0.json L1.json ... | --image I0 I1 ...) (...)
     matcher localize --map MAP --pano PANO.jpg --camera-height H [--pano-yaw-offset DEG] (...)
     matcher track --map MAP [--camera CAM] --frames RUN.jsonl|BAG
-                  [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost]
+                  [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost] [--storey NAME]
                   [--out TRAJ.txt] [--plot ROUTE.png] [--json]
+
+MAP is a ``.lmap`` map or a building (its ``building.json``, or the folder
+holding it): ``--storey`` names the prior's storey; ``--lost`` searches
+every storey (only ``--storey``'s, when given) and prints the storey.
 
 Human-readable output by default, one JSON object on stdout with ``--json``
 (the result shape of docs/architecture.md). Errors a user can cause (an
@@ -81,7 +85,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def add_map_and_camera(p: argparse.ArgumentParser, camera_required: bool) -> None:
     """The --map and camera options (shared by localize and track)."""
-    p.add_argument("--map", required=True, help=".lmap map built by 'mapkit build'")
+    p.add_argument("--map", required=True, help=".lmap map built by 'mapkit build', or a building's manifest "
+                   "(building.json, or its folder: 'mapkit build model.ifc -o DIR')")
+    p.add_argument("--storey", metavar="NAME", help="on a building: the storey of the prior (with --lost: search "
+                   "only it; default: every storey)")
     cam = p.add_mutually_exclusive_group(required=camera_required)
     cam.add_argument("--camera", help="camera.json (width, height, fx, fy, cx, cy, height_m, pitch_deg), an OpenCV "
                      "calibration file (YAML, XML, JSON) or a ROS camera_info YAML")
@@ -103,6 +110,28 @@ def _parse_prior(text: str) -> tuple[float, float, float]:
     if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
         raise UsageError(f"--prior must be X,Y,YAW_DEG (three numbers), got {text!r}")
     return vals[0], vals[1], vals[2]
+
+
+def _map_input(path: str) -> None:
+    """UsageError unless --map names a readable file, or a folder holding a building's manifest."""
+    from linemap.building import MANIFEST_NAME
+
+    if not (Path(path).is_dir() and (Path(path) / MANIFEST_NAME).is_file()):
+        _input_file(path, "map file", "build one with 'mapkit build'")
+
+
+def _storey_scope(linemap, storey: str | None, lost: bool):
+    """What ``--storey`` leaves to search: the map, the building, or (lost
+    mode on one storey) that storey of the building; UsageError for
+    ``--storey`` with a map of one floor."""
+    from linemap.building import Building
+
+    if not isinstance(linemap, Building):
+        if storey is not None:
+            raise UsageError(f"--storey {storey!r} is for a building (building.json); this map is one floor: "
+                             "drop --storey")
+        return linemap
+    return linemap.storey(storey) if lost and storey is not None else linemap
 
 
 def _input_file(path: str, what: str, hint: str = "check the path") -> Path:
@@ -207,12 +236,17 @@ def _human(res, n_lines: int) -> str:
     if res and res.stage1.get("out_of_time"):
         t += " (search stopped at the time budget)"
     if not res:
-        return f"not localised: {res.reason}\n  {res.hypotheses} hypotheses from {n_lines} lines; time ms: {t}"
+        text = f"not localised: {res.reason}\n  {res.hypotheses} hypotheses from {n_lines} lines; time ms: {t}"
+        if any("storey" in c for c in res.candidates):  # a building's candidates: where each is
+            text += "".join(f"\n  candidate: storey {c['storey']!r} x={c['x']:.3f} m  y={c['y']:.3f} m  "
+                            f"yaw={c['yaw_deg']:.2f} deg" for c in res.candidates)
+        return text
     x, y, yaw = res.pose
     ru = "none" if res.runner_up_score is None else f"{res.runner_up_score:.3g}"
     std = "" if res.pose_std is None else "  (std {:.3f} m, {:.3f} m, {:.2f} deg)".format(*res.pose_std)
+    on = "" if res.storey is None else f"storey {res.storey!r}  "
     return (
-        f"pose x={x:.3f} m  y={y:.3f} m  yaw={yaw:.2f} deg{std}\n"
+        f"{on}pose x={x:.3f} m  y={y:.3f} m  yaw={yaw:.2f} deg{std}\n"
         f"  score E={res.score:.3g} (runner-up {ru}), {res.hypotheses} hypotheses, "
         f"{len(res.matches)} of {n_lines} lines matched\n"
         f"  matches [segment, line]: {res.matches}\n"
@@ -260,21 +294,24 @@ def run_localize(args) -> int:
     cli_rig.check_sources(args)
     prior = _prior_options(args)
     tol = _tolerances(args)
-    _input_file(args.map, "map file", "build one with 'mapkit build'")
+    _map_input(args.map)
     if cli_rig.rig_requested(args):
-        linemap = matcher.load_map(args.map)
+        linemap = cli_rig.one_floor(matcher.load_map(args.map), args.storey)
         rig, lines = cli_rig.rig_frame(args, _read_lines, _read_image)
         res = cli_rig.localize_frame(args, linemap, rig, lines, prior, tol)
         print(json.dumps(res.to_dict()) if args.json else _human(res, sum(len(x) for x in lines)))
         return EXIT_OK if res else EXIT_NOT_FOUND
     camera = _camera(args, Camera)
     linemap = matcher.load_map(args.map)
+    scope = _storey_scope(linemap, args.storey, lost=prior is None)
     lines = _read_lines(args.lines[0]) if args.lines else _read_image(args.image[0], camera)
     if prior is None:
-        res = matcher.localize_global(linemap, camera, lines, tolerances=tol,
+        one = isinstance(scope, matcher.Storey)  # lost mode on one storey of a building
+        res = matcher.localize_global(scope.map if one else scope, camera, lines, tolerances=tol,
                                       progress=_region_progress if sys.stderr.isatty() else None)
+        res = replace(res, storey=scope.name) if one else res
     else:
-        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol)
+        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol, storey=args.storey)
     if args.json:
         print(json.dumps(res.to_dict()))
     else:

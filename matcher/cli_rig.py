@@ -108,6 +108,23 @@ def _cam0(text: str | None):
     return dict(zip(names, v))
 
 
+def one_floor(linemap, storey: str | None):
+    """The map a rig is localised on: ``linemap`` itself, or a building's
+    storey named by ``--storey`` (or its only one); a rig over every storey
+    of a building is not searched yet."""
+    from linemap.building import Building
+
+    if not isinstance(linemap, Building):
+        if storey is not None:
+            raise RigUsageError(f"--storey {storey!r} is for a building (building.json); this map is one floor: "
+                                "drop --storey")
+        return linemap
+    if storey is None and len(linemap.mapped) != 1:
+        raise RigUsageError("a rig on a building is localised on one storey: give --storey NAME "
+                            f"({', '.join(s.name for s in linemap.mapped)})")
+    return (linemap.storey(storey) if storey is not None else linemap.mapped[0]).map
+
+
 def localize_frame(args, linemap, rig, lines, prior, tol):
     """The rig's frame localised: from the prior, or lost."""
     import matcher

@@ -1,8 +1,11 @@
 """``matcher track``: follow a run (JSON Lines or a ROS bag) with :class:`matcher.Tracker`.
 
     matcher track --map MAP [--camera CAM] --frames RUN.jsonl|BAG
-                  [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost]
+                  [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost] [--storey NAME]
                   [--out TRAJ.txt] [--plot ROUTE.png] [--json]
+
+On a building (MAP its ``building.json``) ``--storey`` names the prior's
+storey; each frame names the storey the tracker is on.
 
 One line per frame on stdout (one JSON object with ``--json``: the shape of
 ``localize --json`` plus ``t``, ``state`` and ``estimate``), a progress bar
@@ -18,7 +21,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from linemap.errors import InputError
-from matcher.cli import EXIT_NOT_FOUND, EXIT_OK, UsageError, _camera, _input_file, _prior_options, _tolerances
+from matcher.cli import (EXIT_NOT_FOUND, EXIT_OK, UsageError, _camera, _input_file, _map_input, _prior_options,
+                         _storey_scope, _tolerances)
 
 
 def add_track_parser(sub) -> None:
@@ -120,7 +124,7 @@ def run_track(args) -> int:
     prior = _prior_options(args)
     tol = _tolerances(args)
     settings = _settings(args)
-    _input_file(args.map, "map file", "build one with 'mapkit build'")
+    _map_input(args.map)
     inputs = [args.map, args.frames] + ([args.camera] if args.camera else [])
     for out in (args.out, args.plot):
         if out:
@@ -128,16 +132,20 @@ def run_track(args) -> int:
     if args.plot and Path(args.plot).suffix.lower() not in (".png", ".jpg", ".jpeg"):
         raise UsageError(f"--plot {args.plot}: give a .png or .jpg file")
     linemap = matcher.load_map(args.map)
+    _storey_scope(linemap, args.storey, lost=False)
+    if args.storey is not None and prior is None:
+        raise UsageError("--storey names the storey of --prior; with --lost the tracker searches every storey")
     source = _Source(args)
     try:
         tracker = matcher.Tracker(linemap, source.camera, *(prior or (None, None, None)),
-                                  tolerances=tol, settings=settings)
+                                  tolerances=tol, settings=settings, storey=args.storey)
         frames, odoms = _follow(tracker, source, args)
     finally:
         source.close()
-    if args.out:
-        poses = [(f["t"], f["estimate"]["x"], f["estimate"]["y"], f["estimate"]["yaw_deg"])
-                 for f in frames if f.get("estimate") and not f["skipped"]]
+    if args.out:  # on a building, z above the storey's floor
+        floor = {s.name: s.elevation_m for s in linemap.storeys} if isinstance(linemap, matcher.Building) else {}
+        poses = [(f["t"], f["estimate"]["x"], f["estimate"]["y"], f["estimate"]["yaw_deg"],
+                  floor.get(f.get("storey"), 0.0)) for f in frames if f.get("estimate") and not f["skipped"]]
         write_atomic(args.out, tum_text(poses, source.camera.height_m))
     if args.plot:
         _write_plot(args.plot, linemap, frames, odoms)
@@ -174,7 +182,7 @@ def _follow(tracker, source: _Source, args) -> tuple[list[dict], list]:
 
 
 def _human(d: dict) -> str:
-    head = f"t={d['t']:.3f} {d['state']:<12}"
+    head = f"t={d['t']:.3f} {d['state']:<12}" + (f" storey {d['storey']!r}" if d.get("storey") else "")
     e = d.get("estimate")
     where = "" if not e else (f" x={e['x']:.3f} y={e['y']:.3f} yaw={e['yaw_deg']:.1f}"
                               f" (bounds {e['dt']:.2f} m, {e['dyaw_deg']:.1f} deg)")
@@ -182,11 +190,19 @@ def _human(d: dict) -> str:
 
 
 def _write_plot(path: str, linemap, frames: list[dict], odoms: list) -> None:
+    """The route picture; on a building, of the storey of the last frame
+    that names one (the first mapped storey if none does), with the frames on it."""
     import cv2
 
     from linemap.atomic import write_atomic
+    from linemap.building import Building
     from matcher.tracking.route_plot import draw_route
 
+    if isinstance(linemap, Building):
+        named = [f["storey"] for f in frames if f.get("storey")]
+        storey = linemap.storey(named[-1]) if named else linemap.mapped[0]
+        on = [k for k, f in enumerate(frames) if f.get("storey") in (None, storey.name)]
+        linemap, frames, odoms = storey.map, [frames[k] for k in on], [odoms[k] for k in on]
     img = draw_route(linemap, frames, odoms)
     ok, data = cv2.imencode(Path(path).suffix.lower(), img)
     if not ok:

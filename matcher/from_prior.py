@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from linemap.building import Building
 from linemap.camera import Camera
 from linemap.errors import InputError
 from linemap.geometry import wrap
@@ -33,16 +34,26 @@ from matcher.tolerances import DEFAULT, Tolerances
 from matcher.verdict import BY_SEARCH_BUDGET, BY_TIME, UNCUT, Evidence, decide
 
 
-def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
+def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None,
+             storey: str | None = None):
     """Localise the camera from image ``lines`` (M, 2, 2) or (M, 4) pixels of
     the ideal pinhole (as :func:`matcher.detect_lines` gives them: undistorted
     when the camera has distortion).
 
     ``prior`` is ``(x, y, yaw_deg)``; the true pose is within ``dt`` metres
-    and ``dyaw`` degrees of it. Returns a :class:`LocalizeResult`, falsy with
-    a ``reason`` when no hypothesis is accepted. Bad input (shapes, NaN,
-    ranges) raises ValueError."""
+    and ``dyaw`` degrees of it. ``linemap`` a map, or a building
+    (:class:`linemap.building.Building`) with the prior's ``storey`` named
+    (:func:`matcher.building.localize_on_storey`). Returns a
+    :class:`LocalizeResult`, falsy with a ``reason`` when no hypothesis is
+    accepted. Bad input (shapes, NaN, ranges) raises ValueError."""
     t0 = time.perf_counter()
+    if isinstance(linemap, Building):
+        from matcher.building import localize_on_storey
+
+        return localize_on_storey(linemap, camera, lines, prior, dt, dyaw, tolerances, storey)
+    if storey is not None:
+        raise InputError(f"storey={storey!r} names a storey of a building; this map is one floor (a .lmap): "
+                         "drop the storey, or load the building's manifest (building.json)")
     if attitude.applies(camera):
         # The frame's own pitch and roll (matcher.attitude): the lines moved
         # to the nominal camera, then localised as any.

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from linemap.building import Building
 from linemap.camera import Camera
 from matcher import ambiguity, attitude, from_prior
 from matcher.budget import Deadlines
@@ -54,7 +55,16 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     the whole call: regions are tried until it is spent. ``regions``: the
     region ids to try, in that order (default: all, largest first; a caller
     whose budget covers part of the map each call passes the rest next).
-    Returns a falsy result if no region gives one."""
+    Returns a falsy result if no region gives one.
+
+    On a building (:class:`linemap.building.Building`), every storey is
+    searched and the result names its storey
+    (:func:`matcher.building.search_storeys`; ``regions`` then maps a
+    storey's name to its region ids)."""
+    if isinstance(linemap, Building):
+        from matcher.building import search_storeys
+
+        return search_storeys(linemap, camera, lines, tolerances, first_accepted, progress, regions).result
     t0 = time.perf_counter()
     if attitude.applies(camera):
         # The frame's own pitch and roll (matcher.attitude); the second run,
@@ -111,7 +121,7 @@ def _localize_global(linemap, camera: Camera, image_lines, tol: Tolerances, t0: 
     # The places the frame's lines vote for first (a few narrow priors,
     # milliseconds each); the sweep of every region only when none holds.
     voted = search.run_voted(tol) or search.run_voted(wide, SOURCES)
-    best = max((a[1] for res in voted.values() for a in _answers(res)), default=0)
+    best = max((a[1] for res in voted.values() for a in answers_of(res)), default=0)
     if voted and (first_accepted or trusted(best, int(image_lines.usable.sum()), tol.lost)):
         # A voted place explains most of the image: no region can explain
         # much more, the sweep is not needed.
@@ -223,7 +233,7 @@ def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float
     if not found:
         return LocalizeResult(False, decide(Evidence(sweep=sweep, cut=cut), tol).reason, time_ms=Timings(**times))
     # Every answer: each region's pose, or the poses it could not tell apart.
-    answers = sorted(((c, res) for res in found.values() for c in _answers(res)), key=lambda a: (-a[0][1], a[0][2]))
+    answers = sorted(((c, res) for res in found.values() for c in answers_of(res)), key=lambda a: (-a[0][1], a[0][2]))
     best = answers[0][1]
     spread = Deferred(lambda: ambiguity.spread_of(best.pose_std)) if best else None
     sweep = replace(sweep, explained=len(best.matches), usable=int(search.image_lines.usable.sum()))
@@ -237,12 +247,12 @@ def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float
 def _contenders(found: dict) -> list:
     """The keys of ``found`` whose answers explain at least the most lines
     of any less one (stage 2 may add a line to a set the tree found)."""
-    most = {k: max(a[1] for a in _answers(res)) for k, res in found.items()}
+    most = {k: max(a[1] for a in answers_of(res)) for k, res in found.items()}
     top = max(most.values())
     return [k for k in found if most[k] >= top - 1]
 
 
-def _answers(res: LocalizeResult) -> list:
+def answers_of(res: LocalizeResult) -> list:
     """``(pose, matches, score)`` of a region's accepted answer, or of each
     pose it could not tell apart."""
     if res:

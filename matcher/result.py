@@ -127,6 +127,9 @@ class LocalizeResult:
     #: own list) and the RMS pixel distance of their end points to the
     #: projected segments (``rms_px``); None for a single camera.
     cameras: list[dict] | None = None
+    #: The storey of a building the pose is on (its name in the manifest),
+    #: when the map searched was a building's (:mod:`matcher.building`); else None.
+    storey: str | None = None
 
     #: :attr:`pose_std`, or the :class:`Deferred` that works it out.
     _pose_std: Deferred | tuple | None = field(default=None, repr=False, compare=False)
@@ -178,9 +181,11 @@ class LocalizeResult:
             d["cameras"] = [{"name": c["name"], "matches": [[int(a), int(b)] for a, b in c["matches"]],
                              "rms_px": None if c["rms_px"] is None else round(float(c["rms_px"]), 3)}
                             for c in self.cameras]
+        if self.storey is not None:  # only on a building
+            d["storey"] = self.storey
         if self.candidates:
-            d["candidates"] = [{k: (float(v) if k != "matches" else int(v)) for k, v in c.items()}
-                               for c in self.candidates]
+            d["candidates"] = [{k: int(v) if k == "matches" else v if k == "storey" else float(v)
+                                for k, v in c.items()} for c in self.candidates]
         if not self.ok:
             d["reason"] = self.reason
         return d

@@ -28,6 +28,7 @@ NOT_THRESHOLDS = {
     ("linemap/lmap.py", "MAX_META_BYTES"): "the loader's resource bounds on hostile files",
     ("linemap/lmap.py", "MAX_META_DEPTH"): "the loader's resource bounds on hostile files",
     ("linemap/lmap.py", "MAX_EXTENT_M"): "the loader's resource bounds on hostile files",
+    ("linemap/building.py", "MANIFEST_VERSION"): "the building manifest's format version",
     ("linemap/camera_files.py", "_MAX_CALIBRATION_CHARS"): "input size limits of a file parser",
     ("linemap/camera_files.py", "_MAX_CALIBRATION_DEPTH"): "input size limits of a file parser",
     ("linemap/small_yaml.py", "MAX_CHARS"): "input size limits of a file parser",

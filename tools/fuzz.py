@@ -45,6 +45,7 @@ def main(argv=None) -> int:
     ap.add_argument("--segments", type=int, default=40, help="segments-file cases (default 40)")
     ap.add_argument("--lmap", type=int, default=100, help=".lmap cases (default 100)")
     ap.add_argument("--matcher", type=int, default=100, help="matcher-input cases (default 100)")
+    ap.add_argument("--building", type=int, default=40, help="building manifest cases (default 40)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--workers", type=int, default=2, help="cases run at once (default 2)")
     ap.add_argument("--bound-s", type=float, default=60.0, help="time bound of one case, seconds (default 60)")
@@ -63,7 +64,7 @@ def main(argv=None) -> int:
             return 0 if out.kind in ACCEPTED else 1
         t0 = time.monotonic()
         counts = {"dxf": args.dxf, "mesh": args.mesh, "zind": args.zind, "segments": args.segments, "lmap": args.lmap,
-                  "matcher": args.matcher}
+                  "matcher": args.matcher, "building": args.building}
         table = campaign(counts, args.seed, args.workers, args.bound_s, args.mem_gb, args.save, Path(scratch),
                          minutes=args.minutes)
     print(f"seed {args.seed}, {args.workers} workers, bound {args.bound_s:g} s and {args.mem_gb:g} GiB a case")

@@ -107,10 +107,11 @@ def _building_info(args) -> int:
     lines = [f"{args.map}: building of {len(doc['storeys'])} storeys from {src['name']} ({src.get('schema', '?')}, "
              f"sha256 {src['sha256'][:12]}...)"]
     for s in doc["storeys"]:
-        what = (f"{s['map']}: {s['segments']} segments, {s['regions']} regions, walls {s['wall_height_m']:g} m"
+        walls = "?" if s.get("wall_height_m") is None else f"{s['wall_height_m']:g}"
+        what = (f"{s['map']}: {s.get('segments', '?')} segments, {s.get('regions', '?')} regions, walls {walls} m"
                 if s["map"] else f"no map ({s.get('why')})")
         lines.append(f"  {s['name']:<16} floor {s['elevation_m']:>7.3f} m, height {s['height_m']:.3f} m  {what}")
-    for c in doc["connections"]:
+    for c in doc.get("connections", []):
         lines.append(f"  {c['kind']:<6} {c['name'] or c['guid']}: {' <-> '.join(c['storeys'])}")
     print("\n".join(lines))
     return 0

@@ -5,13 +5,16 @@
 - ``zind`` (:mod:`.zind`): damaged or random ZInD floors; ``mapkit build``, ``preview``;
 - ``segments`` (:mod:`.segments`): damaged or random segments files; ``mapkit build``;
 - ``lmap`` (:mod:`.lmap_files`): damaged or crafted maps; every command that reads a map;
-- ``matcher`` (:mod:`.matcher_inputs`): odd values for every input of the matcher.
+- ``matcher`` (:mod:`.matcher_inputs`): odd values for every input of the matcher;
+- ``building`` (:mod:`.buildings`): damaged building manifests and storey maps; ``mapkit info``,
+  ``matcher localize``, ``matcher track``.
 """
 
 from __future__ import annotations
 
 import random
 
+from .buildings import building_case
 from .cases import Case
 from .dxf import dxf_case
 from .lmap_files import lmap_case
@@ -20,10 +23,10 @@ from .meshes import mesh_case
 from .segments import segments_case
 from .zind import zind_case
 
-FAMILIES = ("dxf", "mesh", "zind", "segments", "lmap", "matcher")
+FAMILIES = ("dxf", "mesh", "zind", "segments", "lmap", "matcher", "building")
 
 MAKERS = {"dxf": dxf_case, "mesh": mesh_case, "zind": zind_case, "segments": segments_case, "lmap": lmap_case,
-          "matcher": matcher_case}
+          "matcher": matcher_case, "building": building_case}
 
 
 def make_case(family: str, seed: int, i: int) -> Case:

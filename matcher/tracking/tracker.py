@@ -20,6 +20,14 @@ well sets it, one that leaves decimetres barely moves it. The tracker is in one 
   frame's word never moves the robot. The twins of a symmetric room are all
   followed until a frame tells them apart.
 
+On a building (:class:`linemap.building.Building`) the tracker is on one
+storey at a time: the prior's (``storey=``; a building of one mapped
+storey needs no name), or, with no prior, the one lost mode finds
+(searching every storey). It localises on that storey's map only and keeps
+to it until it is relocalised on another (its candidates carry their
+storey: a lift ride ends in a lost tracker that searches every storey);
+each :class:`TrackedFrame` names the storey.
+
 Settings: :class:`matcher.tolerances.Tracking`.
 """
 
@@ -31,8 +39,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from linemap.building import Building
 from linemap.camera import Camera
 from linemap.errors import InputError
+from matcher.building import search_storeys
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
@@ -66,6 +76,10 @@ class TrackedFrame:
     time_ms: float = 0.0
     #: The frame could not be used (its reason says why); the state is unchanged.
     skipped: bool = False
+    #: On a building: the storey the tracker is on (None while lost with no estimate).
+    storey: str | None = None
+    #: On a building: the storey of each of ``candidates``.
+    candidate_storeys: list[str] = field(default_factory=list)
 
     def __bool__(self) -> bool:
         return self.ok
@@ -73,7 +87,8 @@ class TrackedFrame:
     def to_dict(self) -> dict:
         """``matcher localize --json``'s shape plus ``t``, ``state``,
         ``estimate``, ``skipped`` and, while relocalising, ``candidates``
-        (docs/architecture.md). ``pose`` is set only when ``ok``."""
+        (docs/architecture.md), and on a building ``storey`` (when known).
+        ``pose`` is set only when ``ok``."""
         d = self.result.to_dict() if self.result is not None else {
             "ok": False, "pose": None, "pose_std": None, "score": None, "runner_up_score": None,
             "hypotheses": 0, "matches": [], "time_ms": {}, "out_of_time": False}
@@ -88,8 +103,14 @@ class TrackedFrame:
             "x": self.estimate[0], "y": self.estimate[1], "yaw_deg": self.estimate[2],
             "dt": self.bounds[0], "dyaw_deg": self.bounds[1]}
         d.pop("candidates", None)
+        d.pop("storey", None)  # the result's (a search's best) is not the tracker's
+        if self.storey is not None:
+            d["storey"] = self.storey
         if self.candidates:
             d["candidates"] = [{"x": c[0], "y": c[1], "yaw_deg": c[2]} for c in self.candidates]
+            if self.candidate_storeys:
+                for c, name in zip(d["candidates"], self.candidate_storeys):
+                    c["storey"] = name
         return d
 
 
@@ -102,6 +123,8 @@ class _Candidate:
     hits: int = 0
     misses: int = 0
     last: LocalizeResult | None = None
+    #: On a building: the storey it is on.
+    storey: str | None = None
 
 
 class Tracker:
@@ -117,12 +140,16 @@ class Tracker:
     camera is taken to turn about the robot's odometry point (mount it on
     the axis, or give the odometry of the camera). ``tolerances`` are the
     matcher's (:class:`~matcher.tolerances.Tolerances`), ``settings`` the
-    tracker's (:class:`~matcher.tolerances.Tracking`)."""
+    tracker's (:class:`~matcher.tolerances.Tracking`). ``linemap`` may be a
+    building, ``storey`` the name of the prior's storey (the module
+    docstring)."""
 
     def __init__(self, linemap, camera: Camera, prior: Pose | None = None, dt: float | None = None,
                  dyaw: float | None = None, tolerances: Tolerances | None = None,
-                 settings: Tracking | None = None) -> None:
-        self.linemap, self.camera = linemap, camera
+                 settings: Tracking | None = None, storey: str | None = None) -> None:
+        self.building = linemap if isinstance(linemap, Building) else None
+        self.linemap, self.storey = self._storey_map(linemap, prior, storey)
+        self.camera = camera
         self.tolerances = tolerances or DEFAULT
         self.settings = settings or TRACKING
         if prior is None:
@@ -138,13 +165,35 @@ class Tracker:
             self.state = TRACKING_STATE
         self.failed = 0
         self._last_result, self._last_reason = None, ""
-        # Lost mode's regions, largest first; a search cut by its budget
-        # leaves the rest for the next frame's.
-        self._search_order = np.argsort(-linemap.region_areas(), kind="stable").tolist()
-        self._search_from = 0
+        # Lost mode's regions, largest first (per storey of a building: key
+        # its name, else None); a search cut by its budget leaves the rest
+        # for the next frame's.
+        maps = {None: self.linemap} if self.building is None else {s.name: s.map for s in self.building.mapped}
+        self._search_order = {k: np.argsort(-m.region_areas(), kind="stable").tolist() for k, m in maps.items()}
+        self._search_from = dict.fromkeys(maps, 0)
         self.candidates: list[_Candidate] = []
         self.last_t: float | None = None
         self.last_odom: Pose | None = None
+
+    def _storey_map(self, linemap, prior, storey: str | None) -> tuple:
+        """The map the tracker starts on and its storey's name: the map
+        itself (no storey), or on a building the prior's storey (None and
+        no map until lost mode finds one, with no prior)."""
+        if self.building is None:
+            if storey is not None:
+                raise InputError(f"storey={storey!r} names a storey of a building; this map is one floor (a .lmap)")
+            return linemap, None
+        if prior is None:
+            if storey is not None:
+                raise InputError("storey= names the prior's storey; with no prior the tracker searches every storey")
+            return None, None
+        on = self.building.storey(storey)
+        return on.map, on.name
+
+    def _on_storey(self, name: str | None) -> None:
+        """Move the tracker to storey ``name`` of its building (nothing on a plain map)."""
+        if self.building is not None and name is not None:
+            self.linemap, self.storey = self.building.storey(name).map, name
 
     # ---- one frame -------------------------------------------------------
     def step(self, t: float, odom, lines) -> TrackedFrame:
@@ -268,7 +317,8 @@ class Tracker:
         last = None
         for c in self.candidates:
             dt, dyaw = c.spread.bounds(s)
-            c.last = res = _fixed(localize(self.linemap, self.camera, lines, c.pose, dt, dyaw, self.tolerances))
+            on = self.linemap if c.storey is None else self.building.storey(c.storey).map
+            c.last = res = _fixed(localize(on, self.camera, lines, c.pose, dt, dyaw, self.tolerances))
             if res and not self._explains(len(res.matches), lines):
                 res = LocalizeResult(False, f"the pose explains {len(res.matches)} of {self._usable(lines)} lines")
                 c.last = None
@@ -282,6 +332,7 @@ class Tracker:
         self._merge_twins()
         hit = [c for c in self.candidates if c.misses == 0 and c.last is not None]
         if len(hit) == 1 and hit[0].hits >= s.confirm_frames:
+            self._on_storey(hit[0].storey)
             self._accept(hit[0].last, predicted=False)
             return self._out(t, True, f"relocalised: confirmed by {hit[0].hits} frames", hit[0].last, t0)
         if hit:
@@ -298,15 +349,22 @@ class Tracker:
     def _search_map(self, t: float, lines, t0: float) -> TrackedFrame:
         s = self.settings
         tol = replace(self.tolerances, time_budget_ms=min(self.tolerances.time_budget_ms, s.relocalise_budget_ms))
-        order = self._search_order[self._search_from:] + self._search_order[:self._search_from]
-        res = localize_global(self.linemap, self.camera, lines, tol, regions=order)
+        orders = {k: o[self._search_from[k]:] + o[:self._search_from[k]] for k, o in self._search_order.items()}
+        if self.building is None:
+            res = localize_global(self.linemap, self.camera, lines, tol, regions=orders[None])
+            tried = {None: int(res.time_ms.get("regions_tried", len(orders[None])))}
+        else:  # every storey: the robot may have taken the stairs or a lift
+            search = search_storeys(self.building, self.camera, lines, tol, regions=orders)
+            res, tried = search.result, search.tried
         # The next search goes on where this one stopped.
-        tried = int(res.time_ms.get("regions_tried", len(order)))
-        self._search_from = (self._search_from + (tried if tried < len(order) else 0)) % max(len(order), 1)
-        found = [tuple(res.pose)] if res and self._explains(len(res.matches), lines) else [
-            (c["x"], c["y"], c["yaw_deg"]) for c in res.candidates if self._explains(int(c["matches"]), lines)]
+        for k, n in tried.items():
+            size = len(orders[k])
+            self._search_from[k] = (self._search_from[k] + (n if n < size else 0)) % max(size, 1)
+        found = [(tuple(res.pose), res.storey)] if res and self._explains(len(res.matches), lines) else [
+            ((c["x"], c["y"], c["yaw_deg"]), c.get("storey")) for c in res.candidates
+            if self._explains(int(c["matches"]), lines)]
         spread = Spread(s.accepted_std_floor_m, s.accepted_std_floor_deg)
-        self.candidates = [_Candidate(p, spread) for p in found[: s.max_candidates]]
+        self.candidates = [_Candidate(p, spread, storey=name) for p, name in found[: s.max_candidates]]
         if not self.candidates:
             why = res.reason if not res else (f"its best pose explains {len(res.matches)} of "
                                               f"{self._usable(lines)} lines, too few to follow")
@@ -318,17 +376,19 @@ class Tracker:
         """Candidates that have converged on one pose are one (the one with more hits)."""
         kept: list[_Candidate] = []
         for c in sorted(self.candidates, key=lambda c: -c.hits):
-            if not any(math.hypot(c.pose[0] - k.pose[0], c.pose[1] - k.pose[1]) < self.settings.min_dt_m
-                       and abs(wrap_deg(c.pose[2] - k.pose[2])) < self.settings.min_dyaw_deg for k in kept):
+            if not any(c.storey == k.storey and math.hypot(c.pose[0] - k.pose[0], c.pose[1] - k.pose[1])
+                       < self.settings.min_dt_m and abs(wrap_deg(c.pose[2] - k.pose[2])) < self.settings.min_dyaw_deg
+                       for k in kept):
                 kept.append(c)
         self.candidates = kept
 
     # ---- output ------------------------------------------------------------
     def _out(self, t, ok: bool, reason: str, res, t0: float) -> TrackedFrame:
         bounds = None if self.estimate is None else self.spread.bounds(self.settings)
+        followed = self.candidates if self.state == RELOCALISING else []
         return TrackedFrame(float(t) if _finite(t) else float("nan"), self.state, ok, reason, self.estimate, bounds,
-                            res, [c.pose for c in self.candidates] if self.state == RELOCALISING else [],
-                            (time.perf_counter() - t0) * 1e3)
+                            res, [c.pose for c in followed], (time.perf_counter() - t0) * 1e3, storey=self.storey,
+                            candidate_storeys=[c.storey for c in followed] if self.building is not None else [])
 
 
 def _fixed(res: LocalizeResult) -> LocalizeResult:

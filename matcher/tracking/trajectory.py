@@ -2,7 +2,8 @@
 
 One line per pose, ``t x y z qx qy qz qw``: seconds, metres, and the unit
 quaternion of the robot body frame (x forward, z up), here a turn about z
-by the heading. ``z`` is the camera's height (the pose is the camera's).
+by the heading. ``z`` is the camera's height (the pose is the camera's),
+on a building above the floor of the pose's storey (its elevation added).
 """
 
 from __future__ import annotations
@@ -17,8 +18,9 @@ def tum_line(t: float, x: float, y: float, yaw_deg: float, z: float = 0.0) -> st
     return f"{t:.6f} {x:.6f} {y:.6f} {z:.6f} 0 0 {math.sin(half):.9f} {math.cos(half):.9f}"
 
 
-def tum_text(poses: Iterable[tuple[float, float, float, float]], z: float = 0.0) -> str:
-    """The TUM file of ``(t, x, y, yaw_deg)`` poses, with a comment header."""
+def tum_text(poses: Iterable[tuple[float, ...]], z: float = 0.0) -> str:
+    """The TUM file of ``(t, x, y, yaw_deg)`` poses (or ``(t, x, y, yaw_deg,
+    floor_m)``: the floor's elevation, metres, added to ``z``), with a comment header."""
     lines = ["# t x y z qx qy qz qw (seconds, metres; yaw about z)"]
-    lines += [tum_line(t, x, y, yaw, z) for t, x, y, yaw in poses]
+    lines += [tum_line(*p[:4], z + (p[4] if len(p) > 4 else 0.0)) for p in poses]
     return "\n".join(lines) + "\n"
