@@ -15,6 +15,10 @@ hypothesis generation; :mod:`matcher.stage2`, verification);
     >>> res = matcher.localize(m, cam, lines, prior=(x, y, yaw_deg), dt=0.5, dyaw=20)
     >>> if res: print(res.pose)
     ... else: print(res.reason)
+
+A 360-degree panorama is a rig of virtual pinhole cameras
+(:mod:`matcher.panorama`): ``rig = matcher.panorama_rig(width, height_m)``,
+``lines = matcher.panorama_lines(image, rig)``.
 """
 
 from linemap.camera import Camera, CameraError
@@ -42,7 +46,21 @@ __all__ = [
     "load_map",
     "localize",
     "localize_global",
+    "panorama_lines",
+    "panorama_rig",
 ]
+
+#: Loaded on first use (OpenCV): ``import matcher`` stays numpy and scipy only.
+_LAZY = {"panorama_rig": "matcher.panorama", "panorama_lines": "matcher.panorama"}
+
+
+def __getattr__(name):
+    """The lazily imported names of ``__all__`` (:data:`_LAZY`)."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'matcher' has no attribute {name!r}")
 
 
 def detect_lines(image, camera=None, **kwargs):
