@@ -261,3 +261,14 @@ def test_the_render_command_writes_a_panorama(tmp_path, flat):
     assert image.shape == (128, 256)
     assert (image == render_panorama(flat, (2.0, 1.5, 30.0), 1.2, 256, -90.0, supersample=1)).all()
     assert render_main(["--pose", "2.0,1.5,30", "--pano", "255", "-o", str(out)]) == 2
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["--cuts", "8x90"], "--cuts must be"), (["--cuts", "8x30x110"], "gaps"), ([], "no zind_data.json"),
+])
+def test_the_cut_benchmark_refuses_bad_arguments_in_one_line(tmp_path, capsys, argv, says):
+    import bench_pano_cut  # tools/bench_pano_cut.py
+
+    assert bench_pano_cut.main([str(tmp_path), *argv]) == 2
+    err = capsys.readouterr().err
+    assert says in err and err.count("\n") == 1
