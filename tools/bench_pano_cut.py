@@ -2,7 +2,7 @@
 """How many map segments a panorama's cut shows: the cuts of matcher.panorama compared on a ZInD tour.
 
     python tools/bench_pano_cut.py /path/to/zind/000
-    python tools/bench_pano_cut.py TOUR --cuts 8x90x110,6x100x110 --report docs/benchmarks/pano_cut.md
+    python tools/bench_pano_cut.py TOUR --cuts 8x90x110,6x100x110 --report docs/benchmarks/pano-cut.md
 
 The floor's map is built from the tour's annotations (``mapkit build
 zind_data.json``, as ``tools/bench_real.py`` does); each panorama is cut by
@@ -36,7 +36,7 @@ from mapkit_harness.line_support import supported_segments
 from mapkit_harness.tables import Table, add_report_option, reported
 from matcher.panorama import panorama_rig
 
-DEFAULT_CUTS = "8x90x110,8x75x110,6x100x110,12x60x110,8x90x90,8x90x130,4x120x110"
+DEFAULT_CUTS = "8x90x100,8x90x90,8x90x110,8x90x130,8x75x90,8x75x110,6x100x110,12x60x90,12x60x110,4x120x110"
 
 
 def main(argv=None) -> int:
