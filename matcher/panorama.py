@@ -55,7 +55,7 @@ supported by the kept lines at the annotated pose (a line within 2 degrees
 and 3 px of the projected segment, over half of it). 4 to 12 views of 60 to
 120 degrees and 90 to 130 degrees tall all support a median of 22 to 25.5
 segments per panorama; 8 views of 90 x 100 degrees have the best tenth
-percentile (11) and the most panoramas with at least 6 (32 of 32) and 10
+percentile (11, as 8 x 75 x 90) and the most panoramas with at least 6 (32 of 32) and 10
 (31) supported, with fewer lines than the taller cuts (268 a panorama
 against 312 at 110 degrees and 535 at 130, which support no more
 segments) and lines up to 45 degrees long kept whole. On
