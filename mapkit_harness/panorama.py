@@ -8,7 +8,13 @@ the camera's pitch, sees what :func:`cut_view` resamples from it. The view's
 true pose is then ``(pano.position, yaw)``: nothing else to estimate.
 
 Used by ``tools/bench_real.py``; tested on a box room drawn into an
-equirectangular image (``tests/test_panorama_views.py``).
+equirectangular image (``tests/test_panorama_views.py``). ZInD spreads the
+full turn over ``W - 1`` columns (:meth:`ZindPano.pixel_of`), the matcher's
+own cut (:mod:`matcher.panorama`) over ``W``: a ZInD panorama of plan
+rotation ``r`` is the matcher's panorama at robot heading ``-90 - r``, and
+the two cuts sample it within half a pixel of each other
+(``tests/test_panorama.py``). This one stays ZInD's, so the benchmark's
+views are as they were.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ geometry.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import cv2
@@ -51,6 +52,10 @@ _FLOOR_REACH_M = 0.3
 #: Direction of the light that shades the walls, degrees from the x axis: off
 #: the axes, so that walls at right angles get different shades.
 LIGHT_DEG = 20.0
+#: Sigma of the Gaussian blur of a rendered panorama, pixels.
+BLUR_PX = 0.6
+#: Column blocks a panorama is cast in (each against the walls in its bearings).
+_PANO_BLOCKS = 48
 #: Pixels cast per batch (bounds the (pixels, walls) arrays).
 _CHUNK = 65536
 
@@ -84,18 +89,69 @@ def render_view(linemap, camera: Camera, pose, supersample: int = 3, blur_px: fl
     return np.clip(np.rint(grey), 0, 255).astype(np.uint8)
 
 
+def render_panorama(linemap, pose, height_m: float, width: int, yaw_offset_deg: float = 0.0, supersample: int = 2,
+                    noise: float = 2.0, rng=None) -> np.ndarray:
+    """(width / 2, width) uint8 equirectangular panorama of ``linemap`` taken
+    from ``pose`` ``(x, y, yaw_deg)`` (the robot's) at ``height_m`` metres,
+    in :mod:`matcher.panorama`'s convention (centre column along the robot's
+    heading plus ``yaw_offset_deg``, columns clockwise, up at the top).
+
+    Every (supersampled) pixel's exact direction is cast as in
+    :func:`render_view`, so a wall's edges are where the panorama shows them
+    (curves, for the horizontal ones) and a pinhole view cut from it sees
+    them straight. ``supersample``, ``noise``, ``rng`` as there; blurred by
+    ``BLUR_PX``."""
+    from matcher.panorama import pixel_directions
+
+    if supersample < 1:
+        raise ValueError(f"supersample must be >= 1, got {supersample}")
+    if width < 8 or width % 2:
+        raise ValueError(f"panorama width must be an even number of pixels >= 8, got {width}")
+    s, x, y, yaw = int(supersample), float(pose[0]), float(pose[1]), math.radians(pose[2])
+    W, H = width * s, width // 2 * s
+    u = (np.arange(W) + 0.5) / s - 0.5  # the centres of the large image's pixels, in the panorama's
+    v = (np.arange(H) + 0.5) / s - 0.5
+    c, sn = math.cos(yaw), math.sin(yaw)
+    to_world = np.array([[c, sn, 0.0], [-sn, c, 0.0], [0.0, 0.0, 1.0]])  # row vectors: robot frame -> world
+    surfaces = VisibleSurfaces(linemap, None, pose)
+    sliver = Camera.from_fov(1.0, 8, 8, height_m, 0.0)  # for the bearing test of a block's walls
+    blocks = []
+    # In blocks of columns: a block's rays meet only the walls within its
+    # bearings (a panorama sees every wall, each ray only a few).
+    for cols in np.array_split(np.arange(W), _PANO_BLOCKS):
+        uv = np.stack(np.meshgrid(u[cols], v), axis=-1).reshape(-1, 2)
+        rays = pixel_directions(uv, width, yaw_offset_deg) @ to_world
+        mid = np.arctan2(rays[:, 1].mean(), rays[:, 0].mean())
+        half = math.pi * (len(cols) + 2) / W
+        near = surfaces.subset(*surfaces.bearing_masks(sliver, (x, y, mid), half))
+        blocks.append(shade_directions(linemap, (x, y), height_m, rays, near).reshape(H, len(cols)))
+    grey = np.hstack(blocks)
+    if s > 1:
+        grey = cv2.resize(grey, (width, width // 2), interpolation=cv2.INTER_AREA)
+    # Blurred along rows with the seam wrapped (the two ends are neighbours).
+    pad = 4 * max(1, math.ceil(BLUR_PX))
+    grey = cv2.GaussianBlur(np.hstack([grey[:, -pad:], grey, grey[:, :pad]]), (0, 0), BLUR_PX)[:, pad:-pad]
+    rng = np.random.default_rng(0) if rng is None else rng
+    grey = grey + rng.normal(0.0, noise, grey.shape)
+    return np.clip(np.rint(grey), 0, 255).astype(np.uint8)
+
+
 def shade_rays(linemap, camera: Camera, pose, uv: np.ndarray) -> np.ndarray:
     """(P,) float32 grey level seen through pixels ``uv`` (P, 2) from ``pose``."""
     x, y, yaw_deg = pose
     R = camera.world2cam(math.radians(yaw_deg))
     rays = camera.pixel_rays(uv) @ R  # (P, 3) world directions (R^T ray)
-    h = camera.height_m
+    return shade_directions(linemap, (x, y), camera.height_m, rays, VisibleSurfaces(linemap, camera, pose))
+
+
+def shade_directions(linemap, xy, h: float, rays: np.ndarray, surfaces: "VisibleSurfaces") -> np.ndarray:
+    """(P,) float32 grey level seen along world directions ``rays`` (P, 3)
+    from the point ``xy`` (2,) at height ``h`` metres, among ``surfaces``."""
     top = float(linemap.meta.get("wall_height", 2.5))
-    surfaces = VisibleSurfaces(linemap, camera, pose)
     free = free_space(linemap)
-    origin = np.array([x, y])
-    out = np.empty(len(uv), dtype=np.float32)
-    for i0 in range(0, len(uv), _CHUNK):
+    origin = np.array([float(xy[0]), float(xy[1])])
+    out = np.empty(len(rays), dtype=np.float32)
+    for i0 in range(0, len(rays), _CHUNK):
         d = rays[i0:i0 + _CHUNK]
         # Floor or ceiling, whichever the ray meets (rays along the horizon
         # meet neither).
@@ -132,7 +188,8 @@ class VisibleSurfaces:
     the sills' tops and the heads' undersides, between the two faces of the
     wall. Only surfaces some pixel's ray can meet are kept."""
 
-    def __init__(self, linemap, camera: Camera, pose) -> None:
+    def __init__(self, linemap, camera: Camera | None, pose) -> None:
+        """``camera`` None: every surface (a panorama sees all round)."""
         yaw = math.radians(pose[2])
         top = float(linemap.meta.get("wall_height", 2.5))
         walls = wall_edges(linemap)
@@ -145,10 +202,32 @@ class VisibleSurfaces:
         self.panel_grey = np.concatenate([grey, pgrey]).astype(np.float32)
         z0 = np.zeros((len(self.a), 1))
         as_segments = np.stack([np.hstack([self.a, z0]), np.hstack([self.b, z0])], axis=1)
-        keep = in_field_of_view(as_segments, camera, (pose[0], pose[1], yaw), 0.0, 0.0)
+        keep = np.ones(len(self.a), dtype=bool) if camera is None else \
+            in_field_of_view(as_segments, camera, (pose[0], pose[1], yaw), 0.0, 0.0)
         self.a, self.b, self.zlo, self.zhi = self.a[keep], self.b[keep], self.zlo[keep], self.zhi[keep]
         self.panel_grey = self.panel_grey[keep]
         self.quads, self.slab_z, self.slab_grey = quads, qz, qgrey.astype(np.float32)
+
+    def bearing_masks(self, camera: Camera, pose, half_width: float) -> tuple[np.ndarray, np.ndarray]:
+        """(E,) and (Q,) bool: the panels and slabs some heading within
+        ``half_width`` radians of ``pose``'s yaw (radians) has within
+        ``camera``'s field of view (a convex slab spans the bearings of its
+        two diagonals)."""
+        def within(a, b):
+            z0 = np.zeros((len(a), 1))
+            segments = np.stack([np.hstack([a, z0]), np.hstack([b, z0])], axis=1)
+            return in_field_of_view(segments, camera, pose, 0.0, half_width)
+
+        q = self.quads
+        return within(self.a, self.b), within(q[:, 0], q[:, 2]) | within(q[:, 1], q[:, 3])
+
+    def subset(self, panels: np.ndarray, slabs: np.ndarray) -> "VisibleSurfaces":
+        """These surfaces with only the ``panels`` (E,) and ``slabs`` (Q,) kept (bool)."""
+        out = copy.copy(self)
+        out.a, out.b, out.zlo, out.zhi = self.a[panels], self.b[panels], self.zlo[panels], self.zhi[panels]
+        out.panel_grey = self.panel_grey[panels]
+        out.quads, out.slab_z, out.slab_grey = self.quads[slabs], self.slab_z[slabs], self.slab_grey[slabs]
+        return out
 
     def first_panel(self, origin: np.ndarray, h: float, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """For rays ``(origin, h) + s d`` (d (P, 3)): the smallest s > 0 at

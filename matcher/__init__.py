@@ -26,6 +26,10 @@ A building (``mapkit build model.ifc -o DIR``) loads from its manifest:
 storeys each with a map; ``localize(..., storey=NAME)`` works on one,
 ``localize_global`` searches them all and names the storey
 (:mod:`matcher.building`).
+
+A 360-degree panorama is a rig of virtual pinhole cameras
+(:mod:`matcher.panorama`): ``rig = matcher.panorama_rig(width, height_m)``,
+``lines = matcher.panorama_lines(image, rig)``, then ``localize_rig``.
 """
 
 from linemap.building import Building, Storey
@@ -66,7 +70,21 @@ __all__ = [
     "localize_global",
     "localize_rig",
     "localize_rig_global",
+    "panorama_lines",
+    "panorama_rig",
 ]
+
+#: Loaded on first use (OpenCV): ``import matcher`` stays numpy and scipy only.
+_LAZY = {"panorama_rig": "matcher.panorama", "panorama_lines": "matcher.panorama"}
+
+
+def __getattr__(name):
+    """The lazily imported names of ``__all__`` (:data:`_LAZY`)."""
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(_LAZY[name]), name)
+    raise AttributeError(f"module 'matcher' has no attribute {name!r}")
 
 
 def detect_lines(image, camera=None, **kwargs):

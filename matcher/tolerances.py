@@ -808,3 +808,47 @@ class Tracking:
 
 #: The default tracking settings.
 TRACKING = Tracking()
+
+
+@dataclass(frozen=True)
+class PanoramaCut:
+    """How :mod:`matcher.panorama` cuts an equirectangular panorama into a
+    ring of level virtual pinhole cameras. Degrees; the image sizes follow
+    from the panorama's own resolution (the same pixels per degree at each
+    view's centre). Chosen on measurement: see matcher/panorama.py."""
+
+    #: Views around the ring, evenly spaced: each keeps the lines of its own
+    #: sector, 360 / views degrees wide. 4, 6, 8 and 12 views support about
+    #: as many map segments on the ZInD sample tour (4 a few fewer); 8 with
+    #: ``hfov_deg`` 90 keeps lines up to 45 degrees long whole.
+    views: int = 8
+    #: Horizontal field of view of each view. Above the sector's width by the
+    #: overlap: a line spanning up to ``hfov_deg - 360 / views`` degrees of
+    #: azimuth lies whole in the view that keeps it.
+    hfov_deg: float = 90.0
+    #: Vertical field of view: the floor and ceiling junctions of a room in
+    #: one view (+-50 degrees at the view's centre, +-40 at its sides: the
+    #: floor from 1.2 to 1.7 m away for a camera 1.435 m high). On the ZInD
+    #: sample tour 90 to 130 degrees support as many map segments (a median
+    #: of 24 to 25 per panorama); 100 has the most panoramas with at least 6
+    #: and 10 of them, with 14 % fewer lines (clutter) than 110 and half
+    #: those of 130 (docs/benchmarks/pano-cut.md).
+    vfov_deg: float = 100.0
+    #: Pitch of every view, positive looking down (0: the ring is level and a
+    #: line's azimuth alone says whether it lies inside a view horizontally).
+    pitch_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.views, bool) or not isinstance(self.views, numbers.Integral) or not 3 <= self.views <= 64:
+            raise InputError(f"panorama views must be a whole number from 3 to 64, got {self.views!r}")
+        for name, lo, hi in (("hfov_deg", 1.0, 170.0), ("vfov_deg", 1.0, 170.0), ("pitch_deg", -60.0, 60.0)):
+            v = getattr(self, name)
+            if not _number(v) or not lo <= v <= hi:
+                raise InputError(f"panorama {name} must be a number from {lo:g} to {hi:g}, got {v!r}")
+        if self.hfov_deg <= 360.0 / self.views:
+            raise InputError(f"panorama views of {self.hfov_deg:g} degrees leave gaps between {self.views} sectors of "
+                             f"{360.0 / self.views:g} degrees: widen hfov_deg or add views")
+
+
+#: The default cut of a panorama.
+PANORAMA_CUT = PanoramaCut()
