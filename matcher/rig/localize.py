@@ -30,10 +30,10 @@ from matcher.projection import projected_end_distances
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
 from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
-from matcher.rig.seeds import distinct_poses, search_cameras, search_counts, seed_poses
-from matcher.rig.verify import RigRanked, verify_seeds
+from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
+from matcher.rig.verify import RigRanked, merged, verify_seeds
 from matcher.stage2.fit import coverage as coverage_of
-from matcher.strategy import SOURCES
+from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, decide, trusted
 
@@ -53,22 +53,70 @@ def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances:
     px = check_prior(prior, dt, dyaw)
     frame = prepare_rig_frame(rig, lines, tol)
     deadlines = Deadlines.from_budget(t0, tol.time_budget_ms, tol.shared.search_share)
-    searches = search_cameras(linemap, frame, px, tol, deadlines, SOURCES)
-    t_search = time.perf_counter()
-    counts = search_counts(searches)
-    if all(s.answer is None for s in searches):  # no camera could be searched: each one's reason
-        return _unsearched("; ".join(f"{s.view.name}: {s.why}" for s in searches), tol, t0)
-    seeds = seed_poses(searches, tol)
+    found = _prior_search(linemap, frame, px, tol, deadlines)
+    counts = search_counts(found.searches)
+    if all(s.answer is None for s in found.searches):  # no camera could be searched: each one's reason
+        return _unsearched("; ".join(f"{s.view.name}: {s.why}" for s in found.searches), tol, t0)
     cut = BY_TIME if counts["out_of_time"] else UNCUT
-    times = {"generate": (t_search - t0) * 1e3}
-    if not len(seeds):
+    times = {"generate": found.search_ms, "verify": found.verify_ms}
+    if found.ranked is None:
         verdict = decide(Evidence(n_correspondences=counts["correspondences"], cut=cut), tol)
         return LocalizeResult(False, verdict.reason, time_ms=Timings(total=(time.perf_counter() - t0) * 1e3, **times),
                               stage1=SearchStats(**counts))
-    cands = [s.cands for s in searches]
-    ranked = verify_seeds(frame.views, cands, seeds, px, tol)
-    times["verify"] = (time.perf_counter() - t_search) * 1e3
-    return rig_result(frame, cands, ranked, tol, RunInfo(t0, times, counts, cut))
+    return rig_result(frame, found.cands, found.ranked, tol, RunInfo(t0, times, counts, cut))
+
+
+@dataclass
+class PriorFound:
+    """A prior's search so far: each camera's latest ``searches`` (rig
+    order), its candidates ``cands``, the verified poses ``ranked`` (None:
+    none yet), the seeds ``tried``, the milliseconds of the searches and of
+    the verifications."""
+
+    searches: list
+    cands: list
+    ranked: RigRanked | None = None
+    tried: list = field(default_factory=list)
+    search_ms: float = 0.0
+    verify_ms: float = 0.0
+
+
+def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadlines: Deadlines) -> PriorFound:
+    """The cameras searched, those with the most usable lines first, each
+    one's new seeds verified on every camera as they come: first the
+    interpretation tree alone (:data:`~matcher.strategy.TREE_ALONE`), then,
+    unless the verified poses are accepted, the whole strategy. Stops once
+    the best verified pose explains most of the frame's usable lines
+    (``LostConstants.vote_trust_share``): the other cameras' seeds could
+    not explain much more."""
+    searches = [search_camera(linemap, v, px, tol, deadlines, ()) for v in frame.views]  # candidates only
+    found = PriorFound(searches, [s.cands for s in searches])
+    order = sorted(range(len(frame.views)), key=lambda i: -int(frame.views[i].lines.usable.sum()))
+    for sources in (TREE_ALONE, SOURCES):
+        for i in order:
+            t = time.perf_counter()
+            found.searches[i] = search_camera(linemap, frame.views[i], px, tol, deadlines, sources,
+                                              found.cands[i] if found.cands[i] is not None else searches[i].why)
+            seeds = new_poses(camera_seeds(found.searches[i], tol), found.tried, tol)
+            t_v = time.perf_counter()
+            found.search_ms += (t_v - t) * 1e3
+            if len(seeds):
+                found.tried += list(seeds)
+                found.ranked = merged(frame.views, found.cands, found.ranked,
+                                      verify_seeds(frame.views, found.cands, seeds, px, tol), px, tol)
+            found.verify_ms += (time.perf_counter() - t_v) * 1e3
+            if _settled(found.ranked, frame, tol):
+                return found
+        if found.ranked is not None and np.isfinite(found.ranked.score).any():
+            return found  # the tree's seeds gave verified poses: the verdict judges them
+    return found
+
+
+def _settled(ranked: RigRanked | None, frame: RigFrame, tol: Tolerances) -> bool:
+    """Does the best verified pose explain most of the frame's usable lines?"""
+    if ranked is None or not np.isfinite(ranked.score[ranked.order[0]]):
+        return False
+    return trusted(int(ranked.n[ranked.order[0]]), frame.usable, tol.lost)
 
 
 def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None):
@@ -286,14 +334,7 @@ def _seeds_of(res: LocalizeResult, view, tol: Tolerances, tried: list) -> np.nda
     if not poses:
         return np.zeros((0, 3))
     q = np.array([(x, y, math.radians(yaw)) for x, y, yaw in poses])
-    apart_m, apart_rad = tol.rig.same_seed_m, math.radians(tol.rig.same_seed_deg)
-    seeds = distinct_poses(view.mount.robot_poses(q), apart_m, apart_rad)
-    new = [s for s in seeds if not any(_near(s, t, apart_m, apart_rad) for t in tried)]
-    return np.array(new).reshape(-1, 3)
-
-
-def _near(a: np.ndarray, b: np.ndarray, apart_m: float, apart_rad: float) -> bool:
-    return math.hypot(a[0] - b[0], a[1] - b[1]) <= apart_m and abs(math.remainder(a[2] - b[2], 2 * math.pi)) <= apart_rad
+    return new_poses(view.mount.robot_poses(q), tried, tol)
 
 
 def _verify_lost_seed(linemap, frame: RigFrame, seed: np.ndarray, tol: Tolerances, found: LostFound) -> None:

@@ -20,7 +20,7 @@ import numpy as np
 from matcher.budget import Deadlines
 from matcher.candidates import Candidates, select_candidates
 from matcher.frame import too_few_lines
-from matcher.rig.frame import CameraView, RigFrame
+from matcher.rig.frame import CameraView
 from matcher.strategy import Answer, Problem, run_strategy
 from matcher.tolerances import Tolerances
 
@@ -38,43 +38,44 @@ class CameraSearch:
     answer: Answer | None = None
 
 
-def search_cameras(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadlines: Deadlines,
-                   sources) -> list[CameraSearch]:
-    """Every camera's search under the robot's prior ``px`` ``(xe, ye,
-    yaw_e, dt, dyaw)`` (radians) with the strategy's ``sources``, in the
-    rig's order, within the call's ``deadlines``."""
-    out = []
-    for view in frame.views:
-        cpx = view.camera_prior(px)
+def search_camera(linemap, view: CameraView, px: tuple, tol: Tolerances, deadlines: Deadlines, sources,
+                  cands: Candidates | str | None = None) -> CameraSearch:
+    """One camera's search under the robot's prior ``px`` ``(xe, ye, yaw_e,
+    dt, dyaw)`` (radians) with the strategy's ``sources`` within the call's
+    ``deadlines``; ``cands``, its candidates (or the reason it has none)
+    when already selected."""
+    cpx = view.camera_prior(px)
+    if cands is None:
         cands = select_candidates(linemap, view.camera, cpx, tol)
-        why = cands if isinstance(cands, str) else too_few_lines(view.lines, tol)
-        if why:
-            out.append(CameraSearch(view, cpx, None if isinstance(cands, str) else cands, why))
-            continue
-        answer = None
-        if deadlines.may_search():
-            answer = run_strategy(Problem(view.camera, view.lines, cands, cpx, tol, deadlines), sources)
-        out.append(CameraSearch(view, cpx, cands, "" if answer else "no time left to search", answer))
-    return out
+    why = cands if isinstance(cands, str) else too_few_lines(view.lines, tol)
+    if why:
+        return CameraSearch(view, cpx, None if isinstance(cands, str) else cands, why)
+    answer = None
+    if deadlines.may_search():
+        answer = run_strategy(Problem(view.camera, view.lines, cands, cpx, tol, deadlines), sources)
+    return CameraSearch(view, cpx, cands, "" if answer else "no time left to search", answer)
 
 
-def seed_poses(searches: list[CameraSearch], tol: Tolerances) -> np.ndarray:
-    """(S, 3) robot poses ``(x, y, theta)``: each camera's best ranked poses
-    that kept ``min_matches`` fitting matches (``seeds_per_camera`` of them,
-    best first), taken to the robot through its mount; near-duplicates
-    (``same_seed_m``, ``same_seed_deg``) kept once."""
-    seeds = []
-    for s in searches:
-        ranked = None if s.answer is None else s.answer.ranked
-        if ranked is None:
-            continue
-        n = np.bincount(ranked.matches.hyp, minlength=len(ranked.order))
-        best = [int(h) for h in ranked.order if n[h] >= tol.min_matches][:tol.rig.seeds_per_camera]
-        if best:
-            seeds.append(s.view.mount.robot_poses(ranked.poses[best]))
-    if not seeds:
+def camera_seeds(search: CameraSearch, tol: Tolerances) -> np.ndarray:
+    """(S, 3) robot poses ``(x, y, theta)`` of one camera's search: its best
+    ranked poses that kept ``min_matches`` fitting matches
+    (``seeds_per_camera`` of them, best first), taken to the robot through
+    its mount."""
+    ranked = None if search.answer is None else search.answer.ranked
+    if ranked is None:
         return np.zeros((0, 3))
-    return distinct_poses(np.concatenate(seeds), tol.rig.same_seed_m, math.radians(tol.rig.same_seed_deg))
+    n = np.bincount(ranked.matches.hyp, minlength=len(ranked.order))
+    best = [int(h) for h in ranked.order if n[h] >= tol.min_matches][:tol.rig.seeds_per_camera]
+    return search.view.mount.robot_poses(ranked.poses[best]).reshape(-1, 3)
+
+
+def new_poses(poses: np.ndarray, tried: list, tol: Tolerances) -> np.ndarray:
+    """The poses (P, 3), near-duplicates once, none near a pose of ``tried``."""
+    apart_m, apart_rad = tol.rig.same_seed_m, math.radians(tol.rig.same_seed_deg)
+    out = [p for p in distinct_poses(poses, apart_m, apart_rad)
+           if not any(math.hypot(p[0] - t[0], p[1] - t[1]) <= apart_m
+                      and abs(math.remainder(p[2] - t[2], 2 * math.pi)) <= apart_rad for t in tried)]
+    return np.array(out).reshape(-1, 3)
 
 
 def distinct_poses(poses: np.ndarray, apart_m: float, apart_rad: float) -> np.ndarray:

@@ -72,6 +72,17 @@ def verify_seeds(views, cands, seeds: np.ndarray, px: tuple, tol) -> RigRanked:
     return _ranked(views, cands, poses, tuple(per_view), px, tol)
 
 
+def merged(views, cands, a: RigRanked | None, b: RigRanked, px: tuple, tol) -> RigRanked:
+    """The verified poses of ``a`` and ``b`` (verifications of other seeds
+    under the same prior ``px``), scored and ranked together."""
+    if a is None:
+        return b
+    H = len(a.poses)
+    matches = tuple(Matches(np.concatenate([ma.hyp, mb.hyp + H]), np.concatenate([ma.local, mb.local]),
+                            np.concatenate([ma.line, mb.line])) for ma, mb in zip(a.matches, b.matches))
+    return _ranked(views, cands, np.concatenate([a.poses, b.poses]), matches, px, tol)
+
+
 def no_matches() -> Matches:
     """No match at all."""
     empty = np.zeros(0, np.int64)
