@@ -73,6 +73,9 @@ def main(argv=None) -> int:
                     help="rig mode: N cameras around each panorama's centre (a seeded heading offset, each camera's "
                          "field of view, pitch and size drawn as a single view's), localised together as one robot "
                          "(matcher.localize_rig); one frame per panorama")
+    ap.add_argument("--pano", action="store_true",
+                    help="panorama mode: each whole panorama cut by matcher.panorama (its default views) and "
+                         "localised as one robot (matcher.localize_rig); one frame per panorama")
     ap.add_argument("--peq", type=int, nargs="*", default=sorted(PEQ), help="PEQs to run (default 1 to 5)")
     ap.add_argument("--lost-every", type=int, default=4, help="lost mode on every N-th view (0: none; default 4)")
     ap.add_argument("--budget-ms", type=float, default=1000.0,
@@ -184,7 +187,10 @@ def prepare(args):
             w, h = sizes[int(rng.integers(len(sizes)))]
             cut.append({"yaw_deg": offset + k * 360.0 / per_frame, "hfov": float(rng.uniform(*hfov)),
                         "pitch": float(rng.uniform(*pitch)), "size": (w, h)})
-        if args.rig:  # one frame of N cameras, the robot heading along the first
+        if args.pano:  # the whole panorama: our convention's robot heading of ZInD's plan rotation
+            views.append({"id": len(views), "pano": pano, "image": str(image), "whole": True,
+                          "yaw_deg": (-90.0 - pano.rotation_deg + 180.0) % 360.0 - 180.0})
+        elif args.rig:  # one frame of N cameras, the robot heading along the first
             views.append({"id": len(views), "pano": pano, "image": str(image), "yaw_deg": offset, "cameras": cut})
         else:
             views += [{"id": len(views) + k, "pano": pano, "image": str(image), **c} for k, c in enumerate(cut)]
@@ -230,7 +236,7 @@ def run_pano(task):
     tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
     rows = []
     for view in views:
-        if "cameras" in view:
+        if "cameras" in view or "whole" in view:
             rows.append(run_rig_frame(view, panorama, m, tol, args))
             continue
         camera = view_camera(view, height_m)
@@ -263,14 +269,12 @@ def run_rig_frame(view, panorama, m, tol, args) -> dict:
     """One rig frame of a panorama: its cameras' views cut and their lines
     detected, the robot localised per PEQ and lost (matcher.localize_rig)."""
     height_m = float(m.meta["camera"]["height_m"])
-    cameras, lines, shown = [], [], set()
     truth = view_pose(view["pano"], view["yaw_deg"])
-    for k, c in enumerate(view["cameras"]):
-        camera = view_camera(c, height_m)
-        cameras.append(matcher.RigCamera(f"cam{k}", camera, matcher.Mount(0.0, 0.0, c["yaw_deg"] - view["yaw_deg"])))
-        lines.append(matcher.detect_lines(cut(c | {"pano": view["pano"]}, panorama, camera), camera))
-        shown |= set(visible_lines(m, camera, view_pose(view["pano"], c["yaw_deg"]))[1].tolist())
-    rig = matcher.Rig(tuple(cameras))
+    rig, lines = pano_frame(view, panorama, height_m) if "whole" in view else cut_rig(view, panorama, height_m)
+    shown = set()
+    for rc in rig:
+        pose = view_pose(view["pano"], view["yaw_deg"] + rc.mount.yaw_deg)
+        shown |= set(visible_lines(m, rc.camera, pose)[1].tolist())
     row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": sum(len(x) for x in lines),
            "shown": len(shown), "results": {}}
     rng = np.random.default_rng([args.seed, view["id"]])
@@ -286,6 +290,26 @@ def run_rig_frame(view, panorama, m, tol, args) -> dict:
         res = matcher.localize_rig_global(m, rig, lines, tolerances=tol)
         row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t)
     return row
+
+
+def cut_rig(view, panorama, height_m):
+    """``(rig, lines per camera)``: the frame's views cut from the ZInD
+    panorama (mapkit_harness.panorama, ZInD's pixels) at their headings
+    and their lines."""
+    cameras, lines = [], []
+    for k, c in enumerate(view["cameras"]):
+        camera = view_camera(c, height_m)
+        cameras.append(matcher.RigCamera(f"cam{k}", camera, matcher.Mount(0.0, 0.0, c["yaw_deg"] - view["yaw_deg"])))
+        lines.append(matcher.detect_lines(cut(c | {"pano": view["pano"]}, panorama, camera), camera))
+    return matcher.Rig(tuple(cameras)), lines
+
+
+def pano_frame(view, panorama, height_m):
+    """``(rig, lines per camera)`` of the whole panorama through
+    matcher.panorama (its default cut), as ``matcher localize --pano``
+    makes them."""
+    rig = matcher.panorama_rig(panorama.shape[1], height_m)
+    return rig, matcher.panorama_lines(panorama, rig)
 
 
 def _outcome(res, truth, seconds):
