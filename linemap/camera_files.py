@@ -49,15 +49,7 @@ def load_camera(path: str | Path, height_m: float | None = None, pitch_deg: floa
     and roll from ``height_m``, ``pitch_deg`` and ``roll_deg`` when given
     (else from the file: a camera.json has them, calibration files do not)."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise CameraError(f"camera file {path} not found") from None
-    except IsADirectoryError:
-        raise CameraError(f"camera file {path} is a directory; give the camera file in it") from None
-    except OSError as exc:
-        raise CameraError(f"camera file {path} could not be read ({exc.strerror or exc})") from None
-    text = raw.decode("utf-8", errors="replace").lstrip("\ufeff")
+    text = read_text(path, "camera file")
     ours = _our_json(text, path)
     if ours is not None:
         d = dict(ours)
@@ -69,6 +61,20 @@ def load_camera(path: str | Path, height_m: float | None = None, pitch_deg: floa
             d["roll_deg"] = roll_deg
         return Camera.from_dict(d)
     return _from_calibration(path, text, height_m, pitch_deg, roll_deg)
+
+
+def read_text(path: Path, what: str) -> str:
+    """The text of ``path`` (UTF-8, a byte-order mark dropped), or a
+    one-line CameraError naming it as ``what`` ("camera file", "rig file")."""
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise CameraError(f"{what} {path} not found") from None
+    except IsADirectoryError:
+        raise CameraError(f"{what} {path} is a directory; give the {what} in it") from None
+    except OSError as exc:
+        raise CameraError(f"{what} {path} could not be read ({exc.strerror or exc})") from None
+    return raw.decode("utf-8", errors="replace").lstrip("\ufeff")
 
 
 def camera_from_k(k: tuple[float, float, float, float], size: tuple[int, int], height_m: float,

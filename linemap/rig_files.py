@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from linemap.camera import ATTITUDE_FIELDS, Camera, CameraError, world2cam_rotation
-from linemap.camera_files import load_camera
+from linemap.camera_files import load_camera, read_text
 from linemap.rig import Mount, Rig, RigCamera
 from linemap.small_yaml import SmallYamlError
 from linemap.small_yaml import load as load_yaml
@@ -123,14 +123,7 @@ def load_rig(path: str | Path, first_mount: CameraPlacement | dict | None = None
     whose cam0 is placed on the robot by ``first_mount`` (else by the file's
     ``robot`` or ``T_robot_cam0``)."""
     path = Path(path)
-    try:
-        text = path.read_bytes().decode("utf-8", errors="replace").lstrip("\ufeff")
-    except FileNotFoundError:
-        raise CameraError(f"rig file {path} not found") from None
-    except IsADirectoryError:
-        raise CameraError(f"rig file {path} is a directory; give the rig file in it") from None
-    except OSError as exc:
-        raise CameraError(f"rig file {path} could not be read ({exc.strerror or exc})") from None
+    text = read_text(path, "rig file")
     doc = _parse(text, path)
     if isinstance(doc, dict) and "cameras" in doc:
         if first_mount is not None:

@@ -248,10 +248,7 @@ def run_pano(task):
                "shown": len(shown), "results": {}}
         rng = np.random.default_rng([args.seed, view["id"]])
         for peq in args.peq:
-            dt, dyaw = PEQ[peq]
-            r, phi = dt * math.sqrt(rng.uniform()), rng.uniform(0, 2 * math.pi)
-            prior = (truth[0] + r * math.cos(phi), truth[1] + r * math.sin(phi),
-                     truth[2] + rng.uniform(-dyaw, dyaw))
+            prior, dt, dyaw = draw_prior(truth, rng, peq)
             t = time.perf_counter()
             res = matcher.localize(m, camera, lines, prior, dt, dyaw, tolerances=tol)
             row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
@@ -263,6 +260,14 @@ def run_pano(task):
             save_failures(row, view, image, lines, camera, m, args.overlays)
         rows.append(row)
     return rows
+
+
+def draw_prior(truth, rng, peq: int):
+    """``(prior, dt, dyaw)``: a prior drawn uniformly within PEQ ``peq``'s
+    bounds of the true pose ``truth`` (x, y, yaw_deg)."""
+    dt, dyaw = PEQ[peq]
+    r, phi = dt * math.sqrt(rng.uniform()), rng.uniform(0, 2 * math.pi)
+    return (truth[0] + r * math.cos(phi), truth[1] + r * math.sin(phi), truth[2] + rng.uniform(-dyaw, dyaw)), dt, dyaw
 
 
 def run_rig_frame(view, panorama, m, tol, args) -> dict:
@@ -279,9 +284,7 @@ def run_rig_frame(view, panorama, m, tol, args) -> dict:
            "shown": len(shown), "results": {}}
     rng = np.random.default_rng([args.seed, view["id"]])
     for peq in args.peq:
-        dt, dyaw = PEQ[peq]
-        r, phi = dt * math.sqrt(rng.uniform()), rng.uniform(0, 2 * math.pi)
-        prior = (truth[0] + r * math.cos(phi), truth[1] + r * math.sin(phi), truth[2] + rng.uniform(-dyaw, dyaw))
+        prior, dt, dyaw = draw_prior(truth, rng, peq)
         t = time.perf_counter()
         res = matcher.localize_rig(m, rig, lines, prior, dt, dyaw, tolerances=tol)
         row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
