@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +17,7 @@ import matcher
 from linemap.rig import Mount, Rig, RigCamera
 from linemap.rig_files import rig_to_dict
 from matcher.cli import main as matcher_main
+from matcher.tolerances import TRACKING
 from matcher.tracking.rig_sync import instants, sync_tolerance
 from mapkit_harness.rigs import ring_rig
 from mapkit_harness.runs import simulate_run, write_run
@@ -61,6 +63,20 @@ def test_a_rig_run_is_tracked_within_a_few_cm_on_every_frame(flat, rig, rig_run)
         dist, dyaw = pose_error(out.estimate, truth)
         assert dist < 0.03 and dyaw < 0.5, (t, dist, dyaw)
         assert [c["name"] for c in out.to_dict()["cameras"]] == rig.names
+
+
+@pytest.mark.slow
+def test_a_rig_tracker_with_no_prior_searches_then_confirms(flat, rig, rig_run):
+    # A budget no machine reaches: the same search, and the same frames, everywhere.
+    tracker = matcher.Tracker(flat, rig, settings=replace(TRACKING, relocalise_budget_ms=60000))
+    out = [tracker.step(t, odom, lines) for t, odom, lines in zip(rig_run.times[:6], rig_run.odom, rig_run.lines)]
+    assert out[0].state == "relocalising" and not out[0] and "map search found" in out[0].reason
+    first = next(i for i, o in enumerate(out) if o)
+    assert first >= TRACKING.confirm_frames and "confirmed" in out[first].reason
+    assert all(o.state == "tracking" for o in out[first:])
+    for o, truth in zip(out[first:], rig_run.truth[first:]):
+        dist, dyaw = pose_error(o.estimate, truth)
+        assert dist < 0.03 and dyaw < 0.5
 
 
 def test_a_rig_frame_with_the_wrong_number_of_cameras_is_skipped_with_its_reason(flat, rig, rig_run):

@@ -160,7 +160,7 @@ class Tracker:
     building, ``storey`` the name of the prior's storey (the module
     docstring)."""
 
-    def __init__(self, linemap, camera: Camera, prior: Pose | None = None, dt: float | None = None,
+    def __init__(self, linemap, camera: Camera | Rig, prior: Pose | None = None, dt: float | None = None,
                  dyaw: float | None = None, tolerances: Tolerances | None = None,
                  settings: Tracking | None = None, storey: str | None = None) -> None:
         #: The rig, or None for one camera (``camera``).
