@@ -12,6 +12,11 @@ images rendered by :mod:`mapkit_harness.render`. ``--kidnap K`` carries the robo
 distant pose that shows at least 6 map lines before frame K, with no
 odometry for it.
 
+A run seen by a rig (:class:`linemap.rig.Rig` in place of the camera) is the
+same route and odometry, each frame one set of lines per camera, each
+camera's at its own pose through its mount
+(:func:`mapkit_harness.simulate.camera_pose`).
+
 Its command line, writing the JSON Lines file ``matcher track --frames``
 reads and the TUM truth, is ``tools/simulate_run.py``.
 """
@@ -27,16 +32,19 @@ import cv2
 import numpy as np
 
 import matcher
+from linemap.rig import Rig
 from matcher.tracking.odometry import compose, increment, wrap_deg
 
-from mapkit_harness.simulate import add_noise, clutter_lines, visible_lines
+from mapkit_harness.simulate import add_noise, camera_pose, clutter_lines, visible_lines
 
 
 @dataclass
 class Run:
     """A simulated run: per frame the time (s), true pose and odometry
     (x, y, yaw_deg), the image lines (M, 2, 2) and their true segment ids
-    (-1 clutter); ``kidnap`` the frame the robot was carried before (or None)."""
+    (-1 clutter); ``kidnap`` the frame the robot was carried before (or None).
+    A rig's run has per frame a list of lines and a list of ids, one per
+    camera in the rig's order; its poses are the robot's."""
 
     times: list[float] = field(default_factory=list)
     truth: list[tuple] = field(default_factory=list)
@@ -183,7 +191,8 @@ def simulate_run(linemap, camera, rng, frames: int = 120, step: float = 0.15, ma
                  noise_px: float = 1.0, noise_deg: float = 1.0, clutter: int = 2, dist_noise: float = 0.03,
                  drift_deg_per_m: float = 1.5, kidnap: int | None = None, dt_s: float = 0.2,
                  clearance: float = 0.22) -> Run:
-    """A run of ``frames`` frames (see the module docstring)."""
+    """A run of ``frames`` frames (see the module docstring) seen by
+    ``camera``, a :class:`~matcher.Camera` or a :class:`~linemap.rig.Rig`."""
     free = FreeSpace(linemap, clearance=clearance)
     truth = route(linemap, free, rng, frames, step, max_turn)
     if kidnap is not None and 0 < kidnap < len(truth):
@@ -200,22 +209,37 @@ def simulate_run(linemap, camera, rng, frames: int = 120, step: float = 0.15, ma
             noisy = (f * scale + rng.normal(0, dist_noise * dist), left * scale + rng.normal(0, dist_noise * dist),
                      turn + drift * dist + rng.normal(0, 0.02 * abs(turn) + 0.2 * drift_deg_per_m * dist))
             odom = compose(odom, noisy)
-        ideal, ids = visible_lines(linemap, camera, pose)
-        lines = add_noise(ideal, rng, noise_px, noise_deg, 3.0, camera) if len(ideal) else ideal
-        extra = clutter_lines(rng, clutter, camera)
+        seen = [_seen(linemap, cam, at, rng, noise_px, noise_deg, clutter) for cam, at in _views(camera, pose)]
         run.times.append(round(i * dt_s, 6))
         run.truth.append(pose)
         run.odom.append(odom)
-        run.lines.append(np.concatenate([lines, extra]))
-        run.ids.append(np.concatenate([ids, -np.ones(len(extra), dtype=np.int64)]))
+        run.lines.append(seen[0][0] if isinstance(camera, matcher.Camera) else [lines for lines, _ in seen])
+        run.ids.append(seen[0][1] if isinstance(camera, matcher.Camera) else [ids for _, ids in seen])
     return run
+
+
+def _views(camera, pose) -> list[tuple]:
+    """``(camera, its pose)`` of each camera seeing the robot at ``pose``:
+    the camera itself at ``pose``, or each camera of a rig at its own."""
+    if isinstance(camera, Rig):
+        return [(rc.camera, camera_pose(rc.mount, pose)) for rc in camera]
+    return [(camera, pose)]
+
+
+def _seen(linemap, camera, pose, rng, noise_px: float, noise_deg: float, clutter: int) -> tuple:
+    """One camera's lines (M, 2, 2) at ``pose``, with noise then clutter,
+    and their true segment ids (M,) (-1 clutter)."""
+    ideal, ids = visible_lines(linemap, camera, pose)
+    lines = add_noise(ideal, rng, noise_px, noise_deg, 3.0, camera) if len(ideal) else ideal
+    extra = clutter_lines(rng, clutter, camera)
+    return np.concatenate([lines, extra]), np.concatenate([ids, -np.ones(len(extra), dtype=np.int64)])
 
 
 def _set_down(linemap, camera, free: FreeSpace, rng, before, min_lines: int = 6, tries: int = 500) -> tuple:
     """Where a kidnapped robot is set down: a random free pose over 3 m from
     ``before`` whose view shows at least ``min_lines`` map lines (a robot set
-    down facing a bare wall tests nothing but its patience), else the last
-    pose tried."""
+    down facing a bare wall tests nothing but its patience; a rig's cameras
+    together), else the last pose tried."""
     here = np.array(before[:2])
     pose = before
     for _ in range(tries):
@@ -223,7 +247,7 @@ def _set_down(linemap, camera, free: FreeSpace, rng, before, min_lines: int = 6,
         if np.linalg.norm(p - here) <= 3.0:
             continue
         pose = (float(p[0]), float(p[1]), float(rng.uniform(-180, 180)))
-        if len(visible_lines(linemap, camera, pose)[0]) >= min_lines:
+        if sum(len(visible_lines(linemap, cam, at)[0]) for cam, at in _views(camera, pose)) >= min_lines:
             break
     return pose
 
@@ -235,13 +259,23 @@ def run_camera(linemap) -> matcher.Camera:
     return matcher.Camera.from_dict(cam) if cam else matcher.Camera.from_fov(70.0, 640, 480, 1.2, 0.0)
 
 
-def write_run(run: Run, path: Path, images: list[str] | None = None) -> None:
-    """The run as JSON Lines (``matcher track --frames``)."""
+def write_run(run: Run, path: Path, images: list | None = None) -> None:
+    """The run as JSON Lines (``matcher track --frames``): each frame's
+    ``lines`` or ``image`` (``images``, a path a frame), or for a rig's run
+    its ``cameras``, one ``{"lines": ...}`` or ``{"image": ...}`` a camera
+    (``images`` then a list of paths a frame)."""
     with open(path, "w") as f:
         for i, (t, odom) in enumerate(zip(run.times, run.odom)):
             frame = {"t": t, "odom": [round(v, 6) for v in odom]}
-            if images:
+            if isinstance(run.lines[i], list):  # a rig's frame
+                frame["cameras"] = ([{"image": p} for p in images[i]] if images else
+                                    [{"lines": _rounded(lines)} for lines in run.lines[i]])
+            elif images:
                 frame["image"] = images[i]
             else:
-                frame["lines"] = np.round(run.lines[i].reshape(-1, 4), 3).tolist()
+                frame["lines"] = _rounded(run.lines[i])
             f.write(json.dumps(frame) + "\n")
+
+
+def _rounded(lines: np.ndarray) -> list:
+    return np.round(lines.reshape(-1, 4), 3).tolist()

@@ -8,6 +8,7 @@
     matcher track --map MAP [--camera CAM] --frames RUN.jsonl|BAG
                   [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost] [--storey NAME]
                   [--out TRAJ.txt] [--plot ROUTE.png] [--json]
+    matcher track --map MAP --rig RIG [--topics T0,T1,...] --frames RUN.jsonl|BAG (...)
 
 MAP is a ``.lmap`` map or a building (its ``building.json``, or the folder
 holding it): ``--storey`` names the prior's storey; ``--lost`` searches

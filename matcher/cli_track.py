@@ -3,9 +3,13 @@
     matcher track --map MAP [--camera CAM] --frames RUN.jsonl|BAG
                   [--prior X,Y,YAW_DEG --dt M --dyaw DEG | --lost] [--storey NAME]
                   [--out TRAJ.txt] [--plot ROUTE.png] [--json]
+    matcher track --map MAP --rig RIG [--topics T0,T1,...] --frames RUN.jsonl|BAG (...)
 
 On a building (MAP its ``building.json``) ``--storey`` names the prior's
-storey; each frame names the storey the tracker is on.
+storey; each frame names the storey the tracker is on. A rig (``--rig``)
+gives frames of one camera's lines or image per camera (JSON Lines
+``"cameras"``, or one image topic a camera in a bag); it is tracked on one
+storey of a building (``--storey``, with or without a prior).
 
 One line per frame on stdout (one JSON object with ``--json``: the shape of
 ``localize --json`` plus ``t``, ``state`` and ``estimate``), a progress bar
@@ -34,7 +38,14 @@ def add_track_parser(sub) -> None:
     add_map_and_camera(p, camera_required=False)
     p.add_argument("--frames", required=True, metavar="RUN.jsonl|BAG",
                    help='JSON Lines, one frame a line: {"t": s, "odom": [x, y, yaw_deg], "lines": [[u1, v1, u2, '
-                        'v2], ...]} or "image": "path"; or a ROS 1 .bag, ROS 2 bag folder, .mcap or .db3 file')
+                        'v2], ...]} or "image": "path" (with --rig: "cameras": [{"lines": ...} or {"image": ...}, '
+                        '...], one a camera); or a ROS 1 .bag, ROS 2 bag folder, .mcap or .db3 file')
+    p.add_argument("--rig", help="rig file (JSON: cameras with their poses on the robot) or a Kalibr camchain.yaml, "
+                   "instead of a camera: each frame gives every camera's lines or image, in the rig's order")
+    p.add_argument("--cam0-pose", metavar="X,Y,YAW_DEG,HEIGHT_M[,PITCH_DEG,ROLL_DEG]",
+                   help="where a Kalibr camchain's cam0 is on the robot, unless the file says")
+    p.add_argument("--topics", metavar="T0,T1,...", help="with --rig and a bag: each camera's image topic, in the "
+                   "rig's order (default: the rig file's \"topic\" of each camera)")
     p.add_argument("--prior", help="pose at the first frame X,Y,YAW_DEG (metres, degrees)")
     p.add_argument("--dt", type=float, help="position bound of the prior, metres")
     p.add_argument("--dyaw", type=float, help="heading bound of the prior, degrees")
@@ -71,49 +82,99 @@ def _settings(args):
 
 
 class _Source:
-    """The frames of --frames and the camera they are seen with."""
+    """The frames of --frames and the camera (or rig, ``rig`` then set) they are seen with."""
 
     def __init__(self, args) -> None:
-        from linemap.camera import Camera
-        from matcher.tracking.rosbag import BagFrames, is_bag
+        from matcher.tracking.rosbag import is_bag
 
-        path = args.frames
-        self.bag = None
-        if is_bag(path):
-            if not Path(path).exists():
-                raise UsageError(f"frames {path} not found; check the path")
-            self.bag = BagFrames(path, args.image_topic, args.camera_info_topic, args.odom_topic)
-            if args.camera or args.camera_k:
-                self.camera = _camera(args, Camera)
-            else:
-                self.camera = self.bag.camera(args.height_m, args.pitch_deg, args.roll_deg)
-            self.total = len(self.bag)
+        self.path, self.bag = args.frames, None
+        self.rig = _rig(args)
+        if is_bag(self.path):
+            self._open_bag(args)
         else:
-            for opt in ("image_topic", "camera_info_topic", "odom_topic"):
+            for opt in ("image_topic", "camera_info_topic", "odom_topic", "topics"):
                 if getattr(args, opt):
-                    raise UsageError(f"--{opt.replace('_', '-')} is for bags; {path} is read as JSON Lines")
-            _input_file(path, "frames file")
-            if not (args.camera or args.camera_k):
-                raise UsageError("give the camera: --camera CAM.json (or --camera-k with --image-size)")
-            self.camera = _camera(args, Camera)
+                    raise UsageError(f"--{opt.replace('_', '-')} is for bags; {self.path} is read as JSON Lines")
+            _input_file(self.path, "frames file")
+            if self.rig is None and not (args.camera or args.camera_k):
+                raise UsageError("give the camera: --camera CAM.json (or --camera-k with --image-size), "
+                                 "or a --rig RIG")
             from matcher.tracking.frames import count_frames
 
-            self.total = count_frames(path)
-        self.path = path
+            self.total = count_frames(self.path)
+        if self.rig is not None:
+            self.camera = self.rig
+        elif self.bag is None or args.camera or args.camera_k:
+            from linemap.camera import Camera
+
+            self.camera = _camera(args, Camera)
+        else:
+            self.camera = self.bag.camera(args.height_m, args.pitch_deg, args.roll_deg)
+
+    def _open_bag(self, args) -> None:
+        from matcher.tracking.rosbag import BagFrames
+
+        if not Path(self.path).exists():
+            raise UsageError(f"frames {self.path} not found; check the path")
+        if self.rig is None:
+            if args.topics:
+                raise UsageError("--topics names a rig's image topics; give --rig (or --image-topic for one camera)")
+            self.bag = BagFrames(self.path, args.image_topic, args.camera_info_topic, args.odom_topic)
+        else:
+            for opt in ("image_topic", "camera_info_topic"):
+                if getattr(args, opt):
+                    raise UsageError(f"--{opt.replace('_', '-')} is for one camera; a rig's bag has one image topic "
+                                     "per camera (--topics T0,T1,... or each camera's \"topic\" in the rig file)")
+            self.bag = BagFrames(self.path, odom_topic=args.odom_topic, image_topics=_rig_topics(args, self.rig))
+        self.total = len(self.bag)
 
     def frames(self):
         from matcher.lines import detect_lines
 
+        rig = self.rig
         if self.bag is not None:
+            if rig is not None:
+                return self.bag.rig_frames(lambda img, k: detect_lines(img, rig[k].camera))
             return self.bag.frames(lambda img: detect_lines(img, self.camera))
         from matcher.cli import _read_image
         from matcher.tracking.frames import read_jsonl
 
+        if rig is not None:
+            return read_jsonl(self.path, lambda image_path, k: _read_image(str(image_path), rig[k].camera), rig)
         return read_jsonl(self.path, lambda image_path: _read_image(str(image_path), self.camera))
 
     def close(self) -> None:
         if self.bag is not None:
             self.bag.close()
+
+
+def _rig(args):
+    """The rig of --rig (None without it); UsageError with a camera's options."""
+    if not args.rig:
+        if args.cam0_pose:
+            raise UsageError("--cam0-pose places a Kalibr rig's first camera; it goes with --rig")
+        return None
+    given = [f"--{o.replace('_', '-')}" for o in ("camera", "camera_k", "image_size", "height_m", "pitch_deg",
+                                                  "roll_deg") if getattr(args, o) is not None]
+    if given:
+        raise UsageError(f"{', '.join(given)} describe one camera; a rig file gives each of its cameras: drop "
+                         f"{'them' if len(given) > 1 else 'it'} or --rig")
+    import matcher
+    from matcher.cli_rig import _cam0
+
+    _input_file(args.rig, "rig file")
+    return matcher.load_rig(args.rig, _cam0(args.cam0_pose))
+
+
+def _rig_topics(args, rig) -> list[str]:
+    """Each rig camera's image topic: --topics, else the rig file's ('' where it names none)."""
+    if not args.topics:
+        return [rc.topic for rc in rig]
+    topics = [t.strip() for t in args.topics.split(",")]
+    if len(topics) != len(rig) or not all(topics):
+        raise UsageError(f"--topics takes one image topic per camera of the rig, in its order ({len(rig)}: "
+                         f"{', '.join(rig.names)}), got {args.topics!r}")
+    return topics
 
 
 def run_track(args) -> int:
@@ -125,7 +186,7 @@ def run_track(args) -> int:
     tol = _tolerances(args)
     settings = _settings(args)
     _map_input(args.map)
-    inputs = [args.map, args.frames] + ([args.camera] if args.camera else [])
+    inputs = [args.map, args.frames] + [f for f in (args.camera, args.rig) if f]
     for out in (args.out, args.plot):
         if out:
             check_output_path(out, inputs)
@@ -133,7 +194,11 @@ def run_track(args) -> int:
         raise UsageError(f"--plot {args.plot}: give a .png or .jpg file")
     linemap = matcher.load_map(args.map)
     _storey_scope(linemap, args.storey, lost=False)
-    if args.storey is not None and prior is None:
+    if args.rig:  # a rig is tracked on one storey of a building
+        from matcher.cli_rig import one_floor
+
+        one_floor(linemap, args.storey)
+    elif args.storey is not None and prior is None:
         raise UsageError("--storey names the storey of --prior; with --lost the tracker searches every storey")
     source = _Source(args)
     try:
@@ -146,7 +211,8 @@ def run_track(args) -> int:
         floor = {s.name: s.elevation_m for s in linemap.storeys} if isinstance(linemap, matcher.Building) else {}
         poses = [(f["t"], f["estimate"]["x"], f["estimate"]["y"], f["estimate"]["yaw_deg"],
                   floor.get(f.get("storey"), 0.0)) for f in frames if f.get("estimate") and not f["skipped"]]
-        write_atomic(args.out, tum_text(poses, source.camera.height_m))
+        # z: the camera's height, or 0 for a rig (its poses are the robot's, on the floor)
+        write_atomic(args.out, tum_text(poses, 0.0 if source.rig is not None else source.camera.height_m))
     if args.plot:
         _write_plot(args.plot, linemap, frames, odoms)
     ok = sum(1 for f in frames if f["ok"])

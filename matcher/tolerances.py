@@ -794,6 +794,17 @@ class Tracking:
     #: A bag's image is given the odometry interpolated at its time stamp;
     #: farther than this many seconds from any odometry message, it has none.
     odom_max_gap_s: float = 0.2
+    #: A rig's bag: the images of one instant are those within this share
+    #: of the slowest camera's frame period of the instant's first image
+    #: (a half: two images of one camera never fall in one instant, the
+    #: images of one trigger always do; matcher.tracking.rig_sync).
+    rig_sync_share: float = 0.5
+    #: ...and an instant is given up waiting for a camera's image once an
+    #: image this many seconds past it has come (a camera that stopped).
+    rig_sync_wait_s: float = 1.0
+    #: The frame period of each camera of a rig's bag is measured on its
+    #: first this many images (their bag times: no image is decoded).
+    rig_period_sample: int = 20
 
     def __post_init__(self) -> None:
         for f in fields(self):

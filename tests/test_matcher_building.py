@@ -20,8 +20,9 @@ import pytest
 
 import matcher
 from linemap.lmap import LineMap, LmapError
+from linemap.rig import Mount, Rig, RigCamera
 from matcher.cli import main as matcher_main
-from mapkit_harness.simulate import PAPER_CAMERA, add_noise, paper_camera, visible_lines
+from mapkit_harness.simulate import PAPER_CAMERA, add_noise, camera_pose, paper_camera, visible_lines
 from test_ifc_import import write_model
 
 UPPER, GROUND = "Upper floor", "Ground floor"
@@ -154,6 +155,33 @@ def test_the_tracker_keeps_its_storey_until_relocalised_on_another(building):
     assert all(o.storey == GROUND for o in outs[:first_upper])
     assert all(o and o.storey == UPPER for o in outs[first_upper:]) and outs[first_upper].state == "tracking"
     assert _off(outs[-1].estimate, upper[-1])[0] < 0.05
+
+
+def _rig_frame(building, rig, pose, seed: int) -> list:
+    """Each rig camera's lines of the upper storey at its own pose, with 0.5 px of seeded noise."""
+    rng, out = np.random.default_rng(seed), []
+    for rc in rig:
+        lines, _ = visible_lines(building.storey(UPPER).map, rc.camera, camera_pose(rc.mount, pose))
+        out.append(add_noise(lines, rng, 0.5, 0.2, 0.5, rc.camera) if len(lines) else lines)
+    return out
+
+
+def test_a_rig_on_a_building_is_tracked_on_one_storey(building):
+    cam = paper_camera()
+    rig = Rig((RigCamera("front", cam, Mount(0.1, 0.0, 0.0)), RigCamera("back", cam, Mount(-0.1, 0.0, 180.0))))
+    poses = _walk()
+    with pytest.raises(matcher.InputError, match="one storey"):
+        matcher.Tracker(building, rig, prior=poses[0], dt=0.2, dyaw=5.0)
+    tracker = matcher.Tracker(building, rig, prior=poses[0], dt=0.2, dyaw=5.0, storey=UPPER)
+    for k, pose in enumerate(poses):
+        out = tracker.step(float(k), pose, _rig_frame(building, rig, pose, k))
+        assert out and out.storey == UPPER and out.to_dict()["storey"] == UPPER, out.reason
+        assert _off(out.estimate, pose)[0] < 0.05
+    # With no prior it searches the storey named (a rig's frame is localised on one storey).
+    lost = matcher.Tracker(building, rig, storey=UPPER)
+    outs = [lost.step(float(k), pose, _rig_frame(building, rig, pose, k)) for k, pose in enumerate(_walk(5))]
+    assert not outs[0] and outs[-1] and outs[-1].storey == UPPER and outs[-1].state == "tracking"
+    assert _off(outs[-1].estimate, _walk(5)[-1])[0] < 0.05
 
 
 def _cli_files(tmp_path, building):

@@ -10,6 +10,14 @@ Three topics are used, each found by its message type when not named:
 - odometry: ``nav_msgs/Odometry``, interpolated at each image's header
   time stamp (an image farther than ``Tracking.odom_max_gap_s`` from any
   odometry message is a frame with an error).
+
+A camera rig's bag has one image topic per camera (``image_topics``, in
+the rig's order; the rig file gives the cameras, so no intrinsics topic is
+read): its frames are the instants of :mod:`matcher.tracking.rig_sync`,
+one image a camera, with the odometry at the instant's time. An instant
+missing a camera's image is a frame with an error naming the camera's
+topic: the rig's verdict weighs what every camera should see, and a
+missing view would count as a camera seeing none of its map lines.
 """
 
 from __future__ import annotations
@@ -46,10 +54,16 @@ class BagFrames:
     """The frames of a bag: ``camera_info`` (``k`` = fx, fy, cx, cy, ``size``,
     ``distortion``; None without an intrinsics topic), ``len()`` the
     number of images, iteration the :class:`FrameInput` of each, with its
-    lines detected by ``detect(image array) -> lines``."""
+    lines detected by ``detect(image array) -> lines``.
+
+    A rig's bag (``image_topics``, one topic a camera in the rig's order,
+    ``''`` where the rig does not name it: an error listing the bag's image
+    topics): ``len()`` the images of its busiest camera, the frames its
+    instants, ``detect(image array, k) -> lines`` for camera ``k``."""
 
     def __init__(self, path: str | Path, image_topic: str | None = None, info_topic: str | None = None,
-                 odom_topic: str | None = None, max_gap_s: float = TRACKING.odom_max_gap_s) -> None:
+                 odom_topic: str | None = None, max_gap_s: float = TRACKING.odom_max_gap_s,
+                 image_topics: list[str] | None = None) -> None:
         try:
             from rosbags.highlevel import AnyReader
             from rosbags.typesys import Stores, get_typestore
@@ -62,10 +76,12 @@ class BagFrames:
         except Exception as exc:  # noqa: BLE001 - rosbags raises many kinds for a damaged file
             raise BagError(f"could not read the bag {path}: {exc}") from None
         try:
-            self._image = self._topic(image_topic, IMAGE_TYPES, "--image-topic", "images")
+            self._rig_topics = None if image_topics is None else self._camera_topics(image_topics)
+            self._image = self._rig_topics[0] if image_topics else self._topic(image_topic, IMAGE_TYPES,
+                                                                                "--image-topic", "images")
             self._odom = self._topic(odom_topic, (ODOM_TYPE,), "--odom-topic", "odometry")
-            self._info = self._topic(info_topic, (INFO_TYPE,), "--camera-info-topic", "camera intrinsics",
-                                     required=info_topic is not None)
+            self._info = None if image_topics is not None else self._topic(
+                info_topic, (INFO_TYPE,), "--camera-info-topic", "camera intrinsics", required=info_topic is not None)
             self._odometry = self._read_odometry()
             self.camera_info = self._read_info() if self._info else None
         except BagError:
@@ -76,7 +92,8 @@ class BagFrames:
         self._reader.close()
 
     def __len__(self) -> int:
-        return sum(c.msgcount for c in self._reader.connections if c.topic == self._image)
+        return max(sum(c.msgcount for c in self._reader.connections if c.topic == topic)
+                   for topic in (self._rig_topics or [self._image]))
 
     # ---- topics ------------------------------------------------------------
     def _topic(self, name: str | None, types: tuple[str, ...], option: str, what: str, required: bool = True):
@@ -97,11 +114,24 @@ class BagFrames:
             return None
         raise BagError(f"the bag has {len(topics)} {what} topics ({', '.join(topics)}); name one with {option}")
 
+    def _camera_topics(self, topics: list[str]) -> list[str]:
+        """A rig's image topics, each checked (BagError naming the bag's
+        image topics for one not given)."""
+        if not all(topics):
+            images = sorted({c.topic for c in self._reader.connections if c.msgtype in IMAGE_TYPES})
+            raise BagError(f"camera {topics.index('')} of the rig has no image topic: give each camera's \"topic\" "
+                           f"in the rig file or --topics T0,T1,... in the rig's order (the bag's image topics: "
+                           f"{', '.join(images) or 'none'})")
+        if len(set(topics)) != len(topics):
+            raise BagError(f"the rig's cameras must have different image topics, got {', '.join(topics)}")
+        return [self._topic(t, IMAGE_TYPES, "--topics", "images") for t in topics]
+
     def _listing(self) -> str:
         return ", ".join(sorted(f"{c.topic} ({c.msgtype})" for c in self._reader.connections)) or "none"
 
-    def _messages(self, topic: str):
-        conns = [c for c in self._reader.connections if c.topic == topic]
+    def _messages(self, topic: str | list[str]):
+        topics = [topic] if isinstance(topic, str) else topic
+        conns = [c for c in self._reader.connections if c.topic in topics]
         for conn, bag_ns, raw in self._reader.messages(connections=conns):
             try:
                 msg = self._reader.deserialize(raw, conn.msgtype)
@@ -185,6 +215,51 @@ class BagFrames:
                 yield FrameInput(t, odom, detect(decode_image(msg, conn.msgtype)), where)
             except InputError as exc:
                 yield FrameInput(t, odom, None, where, str(exc))
+
+    def rig_frames(self, detect, settings=TRACKING) -> Iterator[FrameInput]:
+        """A :class:`FrameInput` per instant of a rig's bag (the module
+        docstring), its lines one set a camera: ``detect(image, k)``."""
+        from matcher.tracking.rig_sync import instants, sync_tolerance
+
+        topics = self._rig_topics
+        tol = sync_tolerance([self._bag_times(topic, settings.rig_period_sample) for topic in topics], settings)
+        stream = ((topics.index(conn.topic), bag_ns * 1e-9 if msg is None else _stamp(msg, bag_ns),
+                   (conn, msg, err)) for conn, bag_ns, msg, err in self._messages(topics))
+        for number, (t, items) in enumerate(instants(stream, len(topics), tol, settings), 1):
+            where = f"instant {number} (t={t:.3f} s)"
+            missing = [topic for topic, item in zip(topics, items) if item is None]
+            odom = self.odometry_at(t)
+            if missing:
+                yield FrameInput(t, None, None, where, f"no image from {', '.join(missing)} within "
+                                 f"{tol * 1e3:.0f} ms (half the slowest camera's frame period); an instant needs "
+                                 "every camera")
+            elif odom is None:
+                yield FrameInput(t, None, None, where, f"no odometry within {self.max_gap_s:g} s of t={t:.3f} s")
+            else:
+                yield self._rig_frame(t, odom, where, items, detect)
+
+    def _rig_frame(self, t: float, odom, where: str, items: list, detect) -> FrameInput:
+        """The instant's frame: each camera's image decoded, its lines detected."""
+        lines = []
+        for k, (conn, msg, err) in enumerate(items):
+            if msg is None:
+                return FrameInput(t, odom, None, where, f"{conn.topic}: message could not be read ({err})")
+            try:
+                lines.append(detect(decode_image(msg, conn.msgtype), k))
+            except InputError as exc:
+                return FrameInput(t, odom, None, where, f"{conn.topic}: {exc}")
+        return FrameInput(t, odom, lines, where)
+
+    def _bag_times(self, topic: str, sample: int) -> list[float]:
+        """The bag times (seconds) of the first ``sample`` messages of
+        ``topic`` (read, not decoded)."""
+        conns = [c for c in self._reader.connections if c.topic == topic]
+        times = []
+        for _, bag_ns, _ in self._reader.messages(connections=conns):
+            times.append(bag_ns * 1e-9)
+            if len(times) >= sample:
+                break
+        return times
 
 
 def _stamp(msg, bag_ns: int) -> float:

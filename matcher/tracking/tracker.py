@@ -28,6 +28,17 @@ to it until it is relocalised on another (its candidates carry their
 storey: a lift ride ends in a lost tracker that searches every storey);
 each :class:`TrackedFrame` names the storey.
 
+A robot with a camera rig (:class:`linemap.rig.Rig` where the camera goes)
+gives each frame one set of lines per camera, in the rig's order; every
+frame is localised through :func:`matcher.localize_rig` (from the prior,
+the candidates) and :func:`matcher.localize_rig_global` (lost mode, a
+whole search within ``relocalise_budget_ms`` each time), and the poses are
+the robot's. A frame with lines for the wrong number of cameras is skipped
+with its reason. A rig on a building is on one storey for the whole run
+(``storey=``, or the building's only mapped storey), as a rig frame is
+localised on one storey (``matcher localize --rig``): its lost mode
+searches that storey.
+
 Settings: :class:`matcher.tolerances.Tracking`.
 """
 
@@ -42,10 +53,12 @@ import numpy as np
 from linemap.building import Building
 from linemap.camera import Camera
 from linemap.errors import InputError
+from linemap.rig import Rig
 from matcher.building import search_storeys
 from matcher.from_prior import localize
 from matcher.lost import localize_global
 from matcher.result import LocalizeResult
+from matcher.rig import localize_rig, localize_rig_global
 from matcher.tolerances import DEFAULT, TRACKING, Tolerances, Tracking
 from matcher.tracking.odometry import Pose, Spread, compose, fuse, increment, wrap_deg
 
@@ -138,18 +151,25 @@ class Tracker:
     With no ``prior`` the tracker starts lost (``relocalising``). ``odom``
     is the robot's ``(x, y, yaw_deg)`` in the odometry's own frame; the
     camera is taken to turn about the robot's odometry point (mount it on
-    the axis, or give the odometry of the camera). ``tolerances`` are the
+    the axis, or give the odometry of the camera). ``camera`` may be a
+    :class:`~linemap.rig.Rig` (its mounts place the cameras about the
+    robot's odometry point; each frame's ``lines`` then a list, one set a
+    camera, and the poses the robot's). ``tolerances`` are the
     matcher's (:class:`~matcher.tolerances.Tolerances`), ``settings`` the
     tracker's (:class:`~matcher.tolerances.Tracking`). ``linemap`` may be a
     building, ``storey`` the name of the prior's storey (the module
     docstring)."""
 
-    def __init__(self, linemap, camera: Camera, prior: Pose | None = None, dt: float | None = None,
+    def __init__(self, linemap, camera: Camera | Rig, prior: Pose | None = None, dt: float | None = None,
                  dyaw: float | None = None, tolerances: Tolerances | None = None,
                  settings: Tracking | None = None, storey: str | None = None) -> None:
+        #: The rig, or None for one camera (``camera``).
+        self.rig = camera if isinstance(camera, Rig) else None
+        self.camera = camera
         self.building = linemap if isinstance(linemap, Building) else None
         self.linemap, self.storey = self._storey_map(linemap, prior, storey)
-        self.camera = camera
+        if self.rig is not None and self.building is not None:
+            self.building = None  # a rig keeps to its storey: the map is that storey's
         self.tolerances = tolerances or DEFAULT
         self.settings = settings or TRACKING
         if prior is None:
@@ -183,6 +203,12 @@ class Tracker:
             if storey is not None:
                 raise InputError(f"storey={storey!r} names a storey of a building; this map is one floor (a .lmap)")
             return linemap, None
+        if self.rig is not None:  # a rig is localised on one storey (matcher.cli_rig.one_floor)
+            if storey is None and len(self.building.mapped) != 1:
+                raise InputError("a rig on a building is tracked on one storey: give storey= "
+                                 f"({', '.join(s.name for s in self.building.mapped)})")
+            on = self.building.storey(storey) if storey is not None else self.building.mapped[0]
+            return on.map, on.name
         if prior is None:
             if storey is not None:
                 raise InputError("storey= names the prior's storey; with no prior the tracker searches every storey")
@@ -199,11 +225,12 @@ class Tracker:
     def step(self, t: float, odom, lines) -> TrackedFrame:
         """Take one frame: time ``t`` (seconds), odometry ``odom`` (x, y,
         yaw_deg in the odometry frame) and image ``lines`` (M, 2, 2) or (M, 4)
-        pixels. A frame that cannot be used (time going backwards, missing
-        or invalid odometry or lines) is skipped: the state stays and the
-        returned frame says why."""
+        pixels (a rig's: a list of them, one a camera, in the rig's order).
+        A frame that cannot be used (time going backwards, missing or
+        invalid odometry or lines, lines for the wrong number of cameras)
+        is skipped: the state stays and the returned frame says why."""
         t0 = time.perf_counter()
-        why = self._unusable(t, odom)
+        why = self._unusable(t, odom) or self._not_the_rigs(lines)
         if why:
             return self._skipped(t, why, t0)
         odom = tuple(float(v) for v in odom)
@@ -244,6 +271,27 @@ class Tracker:
             return f"odometry must be three finite numbers x, y, yaw_deg, got {odom!r}"
         return ""
 
+    def _not_the_rigs(self, lines) -> str:
+        """Why a rig's frame ``lines`` are not one set of lines per camera
+        ('' when they are, and for one camera)."""
+        rig = self.rig
+        if rig is None:
+            return ""
+        if isinstance(lines, np.ndarray) or not isinstance(lines, (list, tuple)):
+            return f"a rig's frame needs a list of lines per camera ({len(rig)}: {', '.join(rig.names)})"
+        if len(lines) != len(rig):
+            return (f"the frame has lines for {len(lines)} camera{'s' * (len(lines) != 1)}, the rig has {len(rig)} "
+                    f"({', '.join(rig.names)}); give one set per camera, in the rig's order")
+        return ""
+
+    def _localize(self, linemap, lines, prior: Pose, dt: float, dyaw: float) -> LocalizeResult:
+        """The frame localised from ``prior`` on ``linemap``: the camera's
+        :func:`~matcher.localize` or the rig's :func:`~matcher.localize_rig`,
+        the pose held only if its matches fix it (:func:`_fixed`)."""
+        if self.rig is not None:
+            return _fixed(localize_rig(linemap, self.rig, lines, prior, dt, dyaw, self.tolerances))
+        return _fixed(localize(linemap, self.camera, lines, prior, dt, dyaw, self.tolerances))
+
     def _move(self, step: Pose) -> None:
         """Every pose the tracker holds moved by the odometry ``step``, its
         spread grown; lost once the estimate's bounds pass the limits (the
@@ -265,7 +313,7 @@ class Tracker:
         s = self.settings
         dt, dyaw = self.spread.bounds(s)
         dt, dyaw = min(dt, s.max_dt_m), min(dyaw, s.max_dyaw_deg)
-        res = _fixed(localize(self.linemap, self.camera, lines, self.estimate, dt, dyaw, self.tolerances))
+        res = self._localize(self.linemap, lines, self.estimate, dt, dyaw)
         if res and (self.state != RELOCALISING or self._explains(len(res.matches), lines)):
             self._accept(res)
             return res
@@ -282,12 +330,15 @@ class Tracker:
 
     def _usable(self, lines) -> int:
         """Image lines at least ``Tolerances.min_line_px`` long (the lines
-        passed ``localize``'s checks)."""
-        try:
-            arr = np.asarray(lines, dtype=float).reshape(-1, 4)
-        except (TypeError, ValueError):  # ragged or not numbers: the frame is skipped with this reason
-            raise InputError("lines must be numbers: Expected shape (M, 2, 2) or (M, 4)") from None
-        return int((np.hypot(arr[:, 2] - arr[:, 0], arr[:, 3] - arr[:, 1]) >= self.tolerances.min_line_px).sum())
+        passed ``localize``'s checks), over every camera of a rig."""
+        n = 0
+        for one in (lines if self.rig is not None else [lines]):
+            try:
+                arr = np.asarray(one, dtype=float).reshape(-1, 4)
+            except (TypeError, ValueError):  # ragged or not numbers: the frame is skipped with this reason
+                raise InputError("lines must be numbers: Expected shape (M, 2, 2) or (M, 4)") from None
+            n += int((np.hypot(arr[:, 2] - arr[:, 0], arr[:, 3] - arr[:, 1]) >= self.tolerances.min_line_px).sum())
+        return n
 
     def _telling(self, lines) -> bool:
         """Does the frame hold enough lines for a failure to count
@@ -318,7 +369,7 @@ class Tracker:
         for c in self.candidates:
             dt, dyaw = c.spread.bounds(s)
             on = self.linemap if c.storey is None else self.building.storey(c.storey).map
-            c.last = res = _fixed(localize(on, self.camera, lines, c.pose, dt, dyaw, self.tolerances))
+            c.last = res = self._localize(on, lines, c.pose, dt, dyaw)
             if res and not self._explains(len(res.matches), lines):
                 res = LocalizeResult(False, f"the pose explains {len(res.matches)} of {self._usable(lines)} lines")
                 c.last = None
@@ -350,7 +401,10 @@ class Tracker:
         s = self.settings
         tol = replace(self.tolerances, time_budget_ms=min(self.tolerances.time_budget_ms, s.relocalise_budget_ms))
         orders = {k: o[self._search_from[k]:] + o[:self._search_from[k]] for k, o in self._search_order.items()}
-        if self.building is None:
+        if self.rig is not None:  # a whole search each time: a rig's lost mode takes no region order
+            res = localize_rig_global(self.linemap, self.rig, lines, tol)
+            tried = {None: 0}
+        elif self.building is None:
             res = localize_global(self.linemap, self.camera, lines, tol, regions=orders[None])
             tried = {None: int(res.time_ms.get("regions_tried", len(orders[None])))}
         else:  # every storey: the robot may have taken the stairs or a lift

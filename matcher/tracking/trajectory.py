@@ -2,8 +2,9 @@
 
 One line per pose, ``t x y z qx qy qz qw``: seconds, metres, and the unit
 quaternion of the robot body frame (x forward, z up), here a turn about z
-by the heading. ``z`` is the camera's height (the pose is the camera's),
-on a building above the floor of the pose's storey (its elevation added).
+by the heading. ``z`` is the camera's height (the pose is the camera's;
+0 for a rig's, whose poses are the robot's on the floor), on a building
+above the floor of the pose's storey (its elevation added).
 """
 
 from __future__ import annotations
