@@ -70,7 +70,7 @@ def rig_frame(args, read_lines, read_image):
 
     if args.pano:
         return _panorama_frame(args)
-    rig = matcher.load_rig(args.rig, _cam0(args.cam0_pose))
+    rig = rig_of(args)
     files = args.lines or args.image
     if len(files) != len(rig):
         raise RigUsageError(f"the rig has {len(rig)} cameras ({', '.join(rig.names)}) and {len(files)} "
@@ -92,6 +92,13 @@ def _panorama_frame(args):
         raise RigUsageError(f"panorama {args.pano} could not be read (PNG, JPEG, ... expected)")
     rig = panorama_rig(image.shape[1], args.height_m, args.pano_yaw_offset)
     return rig, panorama_lines(image, rig)
+
+
+def rig_of(args):
+    """The rig of ``--rig``, its Kalibr cam0 placed by ``--cam0-pose``."""
+    import matcher
+
+    return matcher.load_rig(args.rig, _cam0(args.cam0_pose))
 
 
 def _cam0(text: str | None):

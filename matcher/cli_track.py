@@ -159,11 +159,10 @@ def _rig(args):
     if given:
         raise UsageError(f"{', '.join(given)} describe one camera; a rig file gives each of its cameras: drop "
                          f"{'them' if len(given) > 1 else 'it'} or --rig")
-    import matcher
-    from matcher.cli_rig import _cam0
+    from matcher.cli_rig import rig_of
 
     _input_file(args.rig, "rig file")
-    return matcher.load_rig(args.rig, _cam0(args.cam0_pose))
+    return rig_of(args)
 
 
 def _rig_topics(args, rig) -> list[str]:
