@@ -66,8 +66,6 @@ def check_sources(args) -> None:
 def rig_frame(args, read_lines, read_image):
     """``(rig, lines per camera)`` of the options: a rig file with one lines
     or image file per camera, or a panorama cut into its views."""
-    import matcher
-
     if args.pano:
         return _panorama_frame(args)
     rig = rig_of(args)
