@@ -202,7 +202,7 @@ def _evidence(ranked_h, ranked: list, problem: Problem, cut: str, pose_std: Defe
     answers = tuple((pose, int(n_fin[h]), E, float(ranked_h.cost[h])) for (E, _, pose), h in zip(ranked, ranked_h.order)
                     if math.isfinite(E))
     calibration = Deferred(lambda: calibration_doubt(camera, image_lines.lines[mine.line], cands.segments[mine.local],
-                                                     ranked_h.poses[best], tol))
+                                                     ranked_h.poses[best], tol, problem.prior))
     return Evidence(score=float(ranked_h.score[best]), unscored=ranked_h.why, coverage=coverage, explained=explained,
                     searched=int(image_lines.searched.sum()), needed=lines_needed(image_lines, tol), answers=answers,
                     spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut, calibration=calibration)

@@ -33,7 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from matcher.prior import within_prior
 from matcher.stage2 import refine
+from matcher.stage2.covariance import pose_spread
 
 #: The calibration parameters tried, in order: the focal length's scale
 #: (fx and fy alike, 1 = the file's), the camera height's offset (metres),
@@ -62,6 +64,9 @@ class CalibrationFit:
     rss_file: float
     rss: float
     n: int
+    #: The pose's spread there (:func:`~matcher.stage2.covariance.pose_spread`:
+    #: metres along its worst-fixed direction, radians), the calibration free.
+    spread: np.ndarray | None = None
 
     @property
     def drop(self) -> float:
@@ -139,10 +144,9 @@ class MatchedLines:
 def fit(data: MatchedLines, pose: np.ndarray, free: int | None, work):
     """Gauss-Newton from ``pose`` (3,) with the calibration parameter
     ``free`` (an index into :data:`PARAMETERS`; None: the file's calibration
-    throughout). Returns ``(pose (3,), calib (4,), rss, std)``: the sum of
-    squared weighted residuals at the end and the free parameter's
-    standard deviation (inf when the lines do not fix it; 0 when none is
-    free). ``work``: the iterations and finite-difference steps
+    throughout). Returns ``(pose (3,), calib (4,), rss, cov)``: the sum of
+    squared weighted residuals at the end and the covariance (k, k) of the
+    pose and the free parameter (inf where the lines do not fix them). ``work``: the iterations and finite-difference steps
     (:class:`~matcher.tolerances.VerdictConstants`)."""
     pose, calib = np.array(pose, dtype=float), _file_calibration()
     steps = work.calibration_steps
@@ -160,13 +164,11 @@ def fit(data: MatchedLines, pose: np.ndarray, free: int | None, work):
         if free is not None:
             calib[free] -= step[3]
     z = data.weighted(pose, calib)
-    std = 0.0
-    if free is not None:
-        try:
-            std = float(math.sqrt(max(np.linalg.inv(A)[3, 3], 0.0)))
-        except np.linalg.LinAlgError:
-            std = math.inf
-    return pose, calib, float(z @ z), std
+    try:
+        cov = np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        cov = np.full((k, k), math.inf)
+    return pose, calib, float(z @ z), cov
 
 
 def screened(data: MatchedLines, pose: np.ndarray, judged, work) -> np.ndarray:
@@ -215,10 +217,11 @@ def _fits(data: MatchedLines, pose, free: list, work) -> list:
     base, _, rss_file, _ = fit(data, pose, None, work)
     out = []
     for k in free:
-        p, calib, rss, std = fit(data, base, k, work)
+        p, calib, rss, cov = fit(data, base, k, work)
+        std = float(math.sqrt(max(cov[3, 3], 0.0))) if np.isfinite(cov).all() else math.inf
         out.append(CalibrationFit(PARAMETERS[k], float(calib[k]), std,
                                   (float(p[0]), float(p[1]), math.degrees(p[2])), rss_file, min(rss, rss_file),
-                                  2 * len(data)))
+                                  2 * len(data), pose_spread(cov[None, :3, :3])[0]))
     return out
 
 
@@ -235,14 +238,21 @@ def plausible(f: CalibrationFit, camera, work) -> bool:
     return bool(np.isfinite(f.std)) and abs(f.value) < 0.5 * size
 
 
-def miscalibration(camera, lines: np.ndarray, segments: np.ndarray, pose, tol) -> list:
+def miscalibration(camera, lines: np.ndarray, segments: np.ndarray, pose, tol, prior=None) -> list:
     """The calibration parameters the matched lines (``lines`` (T, 2, 2),
     ``segments`` (T, 2, 3), at ``pose`` (x, y, yaw radians)) say are wrong
     (:class:`CalibrationFit`, the clearest first; empty: none): those whose
     freeing lowers the residuals by ``calibration_min_drop`` or more,
     ``calibration_min_ratio`` times the variance left, and whose estimate
     is plausible (:func:`plausible`) and off by more than the parameter's
-    least offset (:class:`~matcher.tolerances.VerdictConstants`). Frames with fewer than ``calibration_min_lines``
+    least offset (:class:`~matcher.tolerances.VerdictConstants`), and
+    whose pose there lies within the ``prior`` bounds ``(xe, ye, yaw_e, dt,
+    dyaw)`` (radians; None: anywhere; with the slack of
+    :func:`matcher.prior.within_prior`, three of that pose's standard
+    deviations where more, as stage 2 allows its poses): the true pose does, and a parameter
+    that fits the lines only at a pose the prior excludes is making up for
+    wrong matches (the near and far faces of a jamb taken one for the
+    other), not for the calibration. Frames with fewer than ``calibration_min_lines``
     matches are not judged (too few residuals to tell a calibration from
     noise). Only the parameters whose first-order drop
     (:func:`screened`) reaches ``calibration_screen_share`` of the least
@@ -262,15 +272,23 @@ def miscalibration(camera, lines: np.ndarray, segments: np.ndarray, pose, tol) -
                  cx=work.calibration_min_centre_px, cy=work.calibration_min_centre_px)
     blamed = [f for f in _fits(data, pose, worth, work)
               if f.drop >= work.calibration_min_drop and f.ratio >= work.calibration_min_ratio and plausible(f, camera, work)
-              and abs(f.value - file[PARAMETERS.index(f.name)]) >= least[f.name]]
+              and abs(f.value - file[PARAMETERS.index(f.name)]) >= least[f.name] and _inside(f, prior, tol)]
     return sorted(blamed, key=lambda f: -f.drop)
 
 
-def doubt(camera, lines: np.ndarray, segments: np.ndarray, pose, tol) -> str:
+def _inside(f: CalibrationFit, prior, tol) -> bool:
+    """Is the pose of fit ``f`` within the ``prior`` bounds (None: no bounds)?"""
+    if prior is None:
+        return True
+    pose = np.array([[f.pose[0], f.pose[1], math.radians(f.pose[2])]])
+    return bool(within_prior(pose, prior, None, tol, f.spread[None])[0])
+
+
+def doubt(camera, lines: np.ndarray, segments: np.ndarray, pose, tol, prior=None) -> str:
     """The failure's reason when the matched lines say the camera file is
-    wrong (:func:`miscalibration`), naming each parameter that would fit
-    them and the pose there; "" when they do not."""
-    blamed = miscalibration(camera, lines, segments, pose, tol)
+    wrong (:func:`miscalibration`, within the ``prior`` bounds), naming each
+    parameter that would fit them and the pose there; "" when they do not."""
+    blamed = miscalibration(camera, lines, segments, pose, tol, prior)
     if not blamed:
         return ""
     x, y, yaw = blamed[0].pose
