@@ -354,10 +354,11 @@ class VerdictConstants(_Constants):
     #: ...and the pose is refused when freeing one lowers the sum of
     #: squared noise-weighted residuals by this much or more (chi-square of
     #: one degree of freedom: 12 is p = 0.0005 for lines as noisy as their
-    #: bounds; on tools/bench_calibration.py's tuning seeds, 96 frames
-    #: accepted with the true camera dropped 4.5 at most, their noise being
-    #: two thirds of the bounds, and 12 caught 50 of the 115 accepted and
-    #: wrong with a wrong camera file, 25 only 36)...
+    #: bounds; the 96 frames tools/bench_calibration.py accepts with the
+    #: true camera dropped 4.5 at most, their noise being two thirds of the
+    #: bounds; on its tuning seeds, with all four parameters judged, 12
+    #: caught 50 of the 115 answers accepted and wrong with a wrong camera
+    #: file, 25 only 36)...
     calibration_min_drop: float = 12.0
     #: ...this many times the residual variance it leaves (an F ratio: a
     #: misfit the parameter does not explain is not blamed on it; from 3 to
