@@ -15,14 +15,20 @@ noise as :func:`matcher.stage2.covariance.pose_information` weighs them:
 the line's offset and its turn, in pixels over their bounds), first at the
 file's calibration and then with one calibration parameter free at a time:
 the focal length's scale (fx and fy alike), the camera height, the
-principal point's column and row. A parameter that lowers the residuals
-far more than one more free parameter lowers them by chance (chi-square
-with one degree of freedom, and an F-like ratio against what is left, so
-that a misfit it does not explain is not blamed on it), and whose estimate
-is off by more than a calibration usually is, names the calibration as
-the likely fault. :func:`matcher.verdict.decide` then refuses the pose.
+principal point's row (the column is a turn of the camera to within a
+pixel, which the yaw takes up: not judged by default,
+``VerdictConstants.calibration_judged``). A parameter that lowers the
+residuals far more than one more free parameter lowers them by chance
+(chi-square with one degree of freedom, and an F-like ratio against what
+is left, so that a misfit it does not explain is not blamed on it), whose
+estimate is off by more than a calibration usually is, and whose pose lies
+within the prior bounds (wrong matches, a jamb's near face for its far
+one, are made up for by a focal length too, at a pose far away), names the
+calibration as the likely fault. :func:`matcher.verdict.decide` then
+refuses the pose.
 
-Cost: a few Gauss-Newton steps on tens of residuals, a fraction of a
+Cost: one Jacobian at the accepted pose picks the parameters worth a full
+fit (:func:`screened`; on right cameras almost never any), a fraction of a
 millisecond; run on the accepted answer only.
 """
 
