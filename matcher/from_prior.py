@@ -27,6 +27,7 @@ from matcher.candidates import select_candidates
 from matcher.input_validation import check_lines, check_prior
 from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
+from matcher.stage2.calibration_check import doubt as calibration_doubt
 from matcher.stage2.covariance import pose_std_of
 from matcher.stage2.fit import coverage as coverage_of
 from matcher.strategy import SOURCES, TREE_ALONE, Answer, Problem, run_strategy
@@ -211,6 +212,8 @@ def _evidence(ranked_h, ranked: list, problem: Problem, cut: str, pose_std: Defe
     n_fin = np.bincount(ranked_h.matches.hyp, minlength=len(ranked_h.order))
     answers = tuple((pose, int(n_fin[h]), E, float(ranked_h.cost[h])) for (E, _, pose), h in zip(ranked, ranked_h.order)
                     if math.isfinite(E))
+    calibration = Deferred(lambda: calibration_doubt(camera, image_lines.lines[mine.line], cands.segments[mine.local],
+                                                     ranked_h.poses[best], tol, problem.prior))
     return Evidence(score=float(ranked_h.score[best]), unscored=ranked_h.why, coverage=coverage, explained=explained,
                     searched=int(image_lines.searched.sum()), needed=lines_needed(image_lines, tol), answers=answers,
-                    spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut)
+                    spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut, calibration=calibration)

@@ -329,6 +329,50 @@ class VerdictConstants(_Constants):
     coverage_min_px: float = 40.0
     coverage_min_share: float = 0.25
     coverage_min_predicted: int = 8
+    #: A camera file whose calibration does not fit the lines
+    #: (matcher/stage2/calibration_check.py): the accepted pose is fitted
+    #: again with one calibration parameter free at a time (indices into
+    #: its ``PARAMETERS``: 0 focal scale, 1 height, 2 principal point
+    #: column, 3 row). Not the column: a shift of it is a turn of the
+    #: camera to within a pixel across a narrow view, and the yaw takes it
+    #: up (tools/bench_calibration.py: cx 40 px off left no answer 5
+    #: degrees wrong, and judging it refused right ones)...
+    calibration_judged: tuple = (0, 1, 3)
+    #: ...on this many matched lines at least (fewer leave too few
+    #: residuals to tell a calibration from noise)...
+    calibration_min_lines: int = 4
+    #: ...by Gauss-Newton from the accepted pose (it converges in 3 to 4
+    #: steps from there), with these finite-difference steps (a focal
+    #: scale, metres, pixels, pixels)...
+    calibration_iterations: int = 5
+    calibration_steps: tuple = (1e-4, 1e-4, 1e-2, 1e-2)
+    #: ...fitted in full only when its first-order drop (one Jacobian at
+    #: the accepted pose) reaches this share of the least drop below (the
+    #: first order underestimates a large error's drop; on right cameras it
+    #: stays far below, so the full fits rarely run)...
+    calibration_screen_share: float = 0.3
+    #: ...and the pose is refused when freeing one lowers the sum of
+    #: squared noise-weighted residuals by this much or more (chi-square of
+    #: one degree of freedom: 12 is p = 0.0005 for lines as noisy as their
+    #: bounds; the 96 frames tools/bench_calibration.py accepts with the
+    #: true camera dropped 4.5 at most, their noise being two thirds of the
+    #: bounds; on its tuning seeds, with all four parameters judged, 12
+    #: caught 50 of the 115 answers accepted and wrong with a wrong camera
+    #: file, 25 only 36)...
+    calibration_min_drop: float = 12.0
+    #: ...this many times the residual variance it leaves (an F ratio: a
+    #: misfit the parameter does not explain is not blamed on it; from 3 to
+    #: 10 it changed one catch in the tuning seeds)...
+    calibration_min_ratio: float = 5.0
+    #: ...with an estimate off the file's by this much or more: a focal
+    #: scale (a fraction), a height (metres), a principal point (pixels):
+    #: less is within what calibrations usually miss by, and harmless.
+    calibration_min_focal: float = 0.05
+    calibration_min_height_m: float = 0.05
+    calibration_min_centre_px: float = 20.0
+    #: A focal scale estimated beyond this factor either way is no estimate:
+    #: the lines do not fix the focal length and the fit ran off.
+    calibration_max_focal: float = 4.0
 
 
 @dataclass(frozen=True)

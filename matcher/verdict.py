@@ -22,7 +22,11 @@ this order, each where its evidence is given:
    elsewhere (:mod:`matcher.ambiguity`);
 7. lost mode: the best answer's own verdict in its search stands;
 8. lost mode cut short by the time budget: the best so far explains most
-   of the image (``vote_trust_share``), or it is only a candidate.
+   of the image (``vote_trust_share``), or it is only a candidate;
+9. the matched lines do not say the camera file's calibration is wrong
+   (:mod:`matcher.stage2.calibration_check`: a focal length, height or
+   principal point that fits them far better); last, as it is the dearest
+   and judges only a pose that would be accepted.
 
 The verdict carries the failure's reason (the words of the result's JSON,
 a contract) and the candidates it names; the results are built from it and
@@ -108,7 +112,10 @@ class Evidence:
     many places), the best must explain this many times the lines of the
     best answer at another place (:func:`matcher.ambiguity.rival_apart`):
     how many lines a wrong place explains by chance, measured on the frame
-    itself instead of a share fixed in advance."""
+    itself instead of a share fixed in advance.
+    ``calibration``: why the best pose's matched lines say the camera
+    file's calibration is wrong ("" when they do not), worked out when read
+    (:func:`matcher.stage2.calibration_check.doubt`)."""
 
     unsearched: str = ""
     n_correspondences: int = 0
@@ -124,6 +131,7 @@ class Evidence:
     sweep: Sweep | None = None
     cut: str = UNCUT
     clear_ratio: float | None = None
+    calibration: Deferred | None = None
 
 
 def score_accepted(score: float, tol: Tolerances) -> bool:
@@ -167,6 +175,9 @@ def decide(ev: Evidence, tol: Tolerances) -> Verdict:
                                       f"was searched; the best pose so far explains {sweep.explained} of "
                                       f"{sweep.usable} lines, too few to trust unchecked",
                        tuple(ambiguity.candidates_of([ev.answers[0]])))
+    miscalibrated = "" if ev.calibration is None else ev.calibration.get()
+    if miscalibrated:
+        return Verdict(NOT_LOCALISED, miscalibrated, score=ev.score)
     return Verdict(ACCEPTED, score=ev.score)
 
 

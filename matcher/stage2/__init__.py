@@ -13,5 +13,8 @@ structure (:mod:`~matcher.stage2.matches`):
   added back;
 - :mod:`~matcher.stage2.covariance`: how well the matches fix the pose;
 - :mod:`~matcher.stage2.rank`: all of the above in order, then the ranking
-  and the reason when nothing holds.
+  and the reason when nothing holds;
+- :mod:`~matcher.stage2.calibration_check`: the accepted pose's matches
+  fitted again with a calibration parameter free, for the verdict (is the
+  camera file wrong?).
 """
