@@ -537,7 +537,8 @@ class RigConstants(_Constants):
     #: ratios 1.2 to 49, median 2.5; every wrong one 1.06 to 1.47), with the
     #: coverage and E tests as they are: 9 right, 0 wrong of 32; held out
     #: (seed 1, other headings, fields of view and sizes): 9 right, 0 wrong
-    #: (1.3 and 1.7 gave the same on both).
+    #: (1.3 and 1.7 gave the same on both). The benchmark after it
+    #: (docs/benchmarks/real-rigs.md): 0 wrong in 224 rig and panorama calls.
     clear_ratio: float = 1.5
 
 
