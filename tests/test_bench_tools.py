@@ -65,11 +65,11 @@ def test_bench_paper_rig_table_scores_every_count_by_the_pose(tmp_path, capsys):
     # The one camera's table as without --cameras, then the rig table.
     assert out[2].startswith("| PEQ | sets found med / max |") and out[4].startswith("| 1 |")
     assert out[6].startswith("rigs of 2 such cameras, 0.15 m from the robot's centre") and "time budget none" in out[6]
-    assert out[7] == ("| cameras | PEQ | frames | lines (med) | correct first | accepted | wrong | pose err (med) "
-                      "| cut by budget | ms med / p95 |")
+    assert out[7] == ("| cameras | PEQ | frames | lines (med) | correct first | accepted | wrong (> 10 cm or 1 deg) "
+                      "| of which > 20 cm or 5 deg | pose err (med) | cut by budget | ms med / p95 |")
     one, two = ([c.strip() for c in line.strip("|").split("|")] for line in out[9:11])
     assert one[:3] == ["1", "1", "2"] and two[:3] == ["2", "1", "2"]
-    assert two[4] == "100%" and two[6] == "0%" and two[8] == "0"  # both rig frames right, none cut
+    assert two[4] == "100%" and two[6] == two[7] == "0%" and two[9] == "0"  # both rig frames right, none cut
     assert out[11].startswith("Correct first: the first ranked pose within 10 cm and 1 deg")
     rows = json.loads(js.read_text())
     assert len(rows["rows"]["1"]) == 2 and len(rows["pose_rows"]["2"]["1"]) == 2
