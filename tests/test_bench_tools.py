@@ -1,5 +1,5 @@
 """tools/bench_paper.py, tools/bench_images.py, tools/bench_budget.py and
-tools/bench_build.py end to end on a few frames: the tables, the JSON rows,
+tools/bench_build.py end to end on a few frames: the tables (bench_paper's rig table too), the JSON rows,
 the figures and the --report files (the full runs are the README's and
 docs/matcher.md's benchmarks)."""
 
@@ -53,6 +53,34 @@ def test_bench_paper_pools_seeds(tmp_path, capsys):
     assert [r["n_lines"] for r in alone] == [r["n_lines"] for r in pooled[:2]]
     assert [r["n_true"] for r in alone] == [r["n_true"] for r in pooled[:2]]
     assert sorted(p.name for p in tmp_path.glob("*.png")) == ["paper_fig5_seed0-1.png", "paper_fig6_seed0-1.png"]
+
+
+@pytest.mark.slow
+def test_bench_paper_rig_table_scores_every_count_by_the_pose(tmp_path, capsys):
+    js = tmp_path / "rows.json"
+    code = bench_paper.main(["--cameras", "1", "2", "--poses", "2", "--peq", "1", "--repeat", "1",
+                             "--baseline-poses", "0", "--budget-ms", "inf", "--out", str(tmp_path), "--json", str(js)])
+    assert code == 0
+    out = capsys.readouterr().out.splitlines()
+    # The one camera's table as without --cameras, then the rig table.
+    assert out[2].startswith("| PEQ | sets found med / max |") and out[4].startswith("| 1 |")
+    assert out[6].startswith("rigs of 2 such cameras, 0.15 m from the robot's centre") and "time budget none" in out[6]
+    assert out[7] == ("| cameras | PEQ | frames | lines (med) | correct first | accepted | wrong (> 10 cm or 1 deg) "
+                      "| of which > 20 cm or 5 deg | pose err (med) | cut by budget | ms med / p95 |")
+    one, two = ([c.strip() for c in line.strip("|").split("|")] for line in out[9:11])
+    assert one[:3] == ["1", "1", "2"] and two[:3] == ["2", "1", "2"]
+    assert two[4] == "100%" and two[6] == two[7] == "0%" and two[9] == "0"  # both rig frames right, none cut
+    assert out[11].startswith("Correct first: the first ranked pose within 10 cm and 1 deg")
+    rows = json.loads(js.read_text())
+    assert len(rows["rows"]["1"]) == 2 and len(rows["pose_rows"]["2"]["1"]) == 2
+    assert all(r["first_ok"] and r["accepted"] and not r["wrong"] for r in rows["pose_rows"]["2"]["1"])
+    # A rig alone prints the map and camera above its table; bad counts are one line.
+    assert bench_paper.main(["--cameras", "2", "--poses", "1", "--peq", "1"]) == 0
+    alone = capsys.readouterr().out.splitlines()
+    assert alone[0].startswith("map ") and alone[1].startswith("camera ") and alone[4].startswith("| cameras |")
+    assert "timing best of 1 (rigs) passes" in alone[3]
+    assert bench_paper.main(["--cameras", "0"]) == 2
+    assert capsys.readouterr().err.startswith("error: --cameras takes distinct counts of at least 1")
 
 
 @pytest.mark.slow

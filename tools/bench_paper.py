@@ -5,6 +5,7 @@
     python tools/bench_paper.py --synthetic     # on the synthetic flat instead of maps/flat.lmap
     python tools/bench_paper.py --max-hypotheses 100000 --baseline-poses 0   # stage 1 uncapped
     python tools/bench_paper.py --seed 0 1 2 3 4 --baseline-poses 0 --repeat 1   # 500 frames per PEQ, pooled
+    python tools/bench_paper.py --cameras 1 2 4 --budget-ms inf   # also rigs of 2 and 4 cameras
 
 For each PEQ (method.md section 9): ``--poses`` simulated frames (seeded),
 each localised by our matcher and, on the first ``--baseline-poses`` of
@@ -26,6 +27,22 @@ paper's figure 6), and E of the correct hypothesis against the best false
 one. On another map than maps/flat.lmap the names carry the map's name
 (``paper_fig5_synthetic.png``), and with other seeds than 0 the seeds
 (``paper_fig5_seed0-1-2.png``), so the documented figures stay as they are.
+
+Rigs (``--cameras 1 2 4``; the default, ``--cameras 1``, is the one camera
+above alone): for each count N of 2 or more, a ring of N cameras of the
+paper's model around the robot (``RIG_RADIUS_M`` from its centre, camera k
+looking out at k * 360 / N degrees from the robot's heading,
+mapkit_harness.rigs), ``--poses`` rig frames per PEQ and seed
+(mapkit_harness.simulate.make_rig_frame: one robot pose whose cameras
+together see 5 map segments or more, each camera's lines with the same
+noise and clutter, one prior of the robot within the PEQ's bounds),
+localised by ``matcher.localize_rig`` and timed in ``--rig-repeat`` passes.
+They are scored by the robot's pose, since a rig's matches per camera have
+no counterpart among one camera's truth pairs: correct first when the first
+ranked pose is within ``POSE_OK_M`` and ``POSE_OK_DEG`` of the truth (the
+bounds of the table's "best wrong pose"), wrong when an accepted pose is
+farther off. One table then shows every count, one camera's frames scored
+the same way.
 """
 
 from __future__ import annotations
@@ -43,9 +60,26 @@ import numpy as np
 import matcher
 
 from mapkit_harness.baseline import baseline_localize
+from mapkit_harness.rigs import ring_rig
 from mapkit_harness.scoring import indistinguishable, is_correct, level_view
-from mapkit_harness.simulate import PEQ, make_frame, paper_camera, pose_error
+from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera, pose_error
 from mapkit_harness.tables import add_report_option, markdown_table, reported
+
+#: A pose this far (metres, degrees) or farther from the truth is a wrong
+#: pose: the bounds of the one-camera table's "best wrong pose", and those
+#: a rig's (and, in the rig table, one camera's) answers are scored by.
+POSE_OK_M = 0.10
+POSE_OK_DEG = 1.0
+#: An accepted pose farther than this (metres, degrees) is far off: the
+#: bounds of a right answer on real photographs (tools/bench_real.py's
+#: RIGHT). Between the two bounds lie one camera's answers whose matches
+#: are right but whose few lines fix the pose loosely (3 to 12 cm, 1 to 2
+#: degrees off at 5 lines).
+POSE_FAR_M = 0.20
+POSE_FAR_DEG = 5.0
+#: The rig table's cameras sit this far from the robot's centre, metres (a
+#: ring on a small robot's mast).
+RIG_RADIUS_M = 0.15
 
 
 def simulate_peq(linemap, camera, peq, args):
@@ -60,23 +94,29 @@ def simulate_peq(linemap, camera, peq, args):
     return frames
 
 
-def time_frames(linemap, camera, frames: dict, args) -> dict:
-    """Per PEQ ``(results, times)``: our matcher on every frame of
-    ``frames`` (PEQ -> frames), in ``--repeat`` passes over all of them, as a
-    robot runs it frame after frame; ``times`` per frame, milliseconds, one
-    per pass. Each pass covers every PEQ, so a slow spell of the machine
-    (its speed drifts within minutes) falls on one pass of every PEQ, which
-    the best of the passes per frame passes over, and not on all the
-    passes of one."""
+def time_frames(frames: dict, localise, passes: int) -> dict:
+    """Per PEQ ``(results, times)``: ``localise(frame)`` (our matcher) on
+    every frame of ``frames`` (PEQ -> frames), in ``passes`` passes over all
+    of them, as a robot runs it frame after frame; ``times`` per frame,
+    milliseconds, one per pass. Each pass covers every PEQ, so a slow spell
+    of the machine (its speed drifts within minutes) falls on one pass of
+    every PEQ, which the best of the passes per frame passes over, and not
+    on all the passes of one."""
     timed = {peq: ([None] * len(fr), [[] for _ in fr]) for peq, fr in frames.items()}
-    for _ in range(args.repeat):
+    for _ in range(passes):
         for peq, peq_frames in frames.items():
             results, times = timed[peq]
             for i, fr in enumerate(peq_frames):
                 t0 = time.perf_counter()
-                results[i] = matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw, args.tolerances)
+                results[i] = localise(fr)
                 times[i].append((time.perf_counter() - t0) * 1e3)
     return timed
+
+
+def pose_ok(pose, truth, bound_m: float = POSE_OK_M, bound_deg: float = POSE_OK_DEG) -> bool:
+    """``pose`` within ``bound_m`` metres and ``bound_deg`` degrees of ``truth`` (both ``(x, y, yaw_deg)``)."""
+    dist, dyaw = pose_error(pose, truth)
+    return dist <= bound_m and dyaw <= bound_deg
 
 
 def run_peq(linemap, camera, peq, args, frames, results, times):
@@ -93,8 +133,7 @@ def run_peq(linemap, camera, peq, args, frames, results, times):
         e_true = next((E for E, mm, _ in ranked if is_correct(mm, truth, equivalent=equiv) and math.isfinite(E)), None)
         e_false = next((E for E, mm, _ in ranked if not is_correct(mm, truth, equivalent=equiv) and math.isfinite(E)),
                        None)
-        e_wrong_pose = next((E for E, mm, p in ranked if math.isfinite(E) and (
-            pose_error(p, fr.pose)[0] > 0.10 or pose_error(p, fr.pose)[1] > 1.0)), None)
+        e_wrong_pose = next((E for E, mm, p in ranked if math.isfinite(E) and not pose_ok(p, fr.pose)), None)
         finite = sorted(E for E, _, _ in ranked if math.isfinite(E))
         row = {
             "peq": peq,
@@ -222,6 +261,64 @@ def table(summary: dict) -> str:
     return markdown_table(columns, rows)
 
 
+def paper_rig(camera, n: int):
+    """A ring of ``n`` copies of ``camera`` (the paper's) around the robot,
+    ``RIG_RADIUS_M`` from its centre, camera k looking out at k * 360 / n
+    degrees from the robot's heading."""
+    from dataclasses import replace
+
+    return matcher.Rig(tuple(replace(rc, camera=camera) for rc in ring_rig(n, radius_m=RIG_RADIUS_M)))
+
+
+def simulate_rig_peq(linemap, rig, peq, args):
+    """The PEQ's ``--poses`` rig frames per seed of ``--seed``, drawn from
+    the seed, the PEQ and the rig's size (so a count's frames are the same
+    alone or beside other counts)."""
+    frames = []
+    for seed in args.seed:
+        rng = np.random.default_rng([seed, peq, len(rig)])
+        frames += [make_rig_frame(linemap, rig, rng, peq, args.noise_px, args.noise_deg, clutter=args.clutter,
+                                  roll_deg=args.roll_deg, pitch_error_deg=args.pitch_error_deg)
+                   for _ in range(args.poses)]
+    return frames
+
+
+def pose_rows(frames, results, times) -> list[dict]:
+    """Per frame, scored by the robot's pose alone (``pose_ok``): the first
+    ranked pose, the answer, its error, the lines and the best time."""
+    rows = []
+    for fr, res, t in zip(frames, results, times):
+        ranked = res.ranked
+        row = {"lines": int(sum(len(x) for x in fr.lines)) if isinstance(fr.lines, list) else len(fr.lines),
+               "first_ok": bool(ranked) and pose_ok(ranked[0][2], fr.pose),
+               "accepted": bool(res), "wrong": bool(res) and not pose_ok(res.pose, fr.pose),
+               "far": bool(res) and not pose_ok(res.pose, fr.pose, POSE_FAR_M, POSE_FAR_DEG),
+               "cut": bool(res.stage1.out_of_time), "ms": float(np.min(t)), "reason": res.reason}
+        if res:
+            row["pos_err"], row["yaw_err"] = pose_error(res.pose, fr.pose)
+        rows.append(row)
+    return rows
+
+
+def pose_table(by_count: dict) -> str:
+    """One table of ``{cameras: {peq: rows of pose_rows}}``: a row per camera count and PEQ."""
+    columns = ["cameras", "PEQ", "frames", "lines (med)", "correct first", "accepted",
+               f"wrong (> {100 * POSE_OK_M:g} cm or {POSE_OK_DEG:g} deg)",
+               f"of which > {100 * POSE_FAR_M:g} cm or {POSE_FAR_DEG:g} deg", "pose err (med)", "cut by budget",
+               "ms med / p95"]
+    out = []
+    for n, per_peq in by_count.items():
+        for peq, rows in per_peq.items():
+            a = lambda k: np.array([r[k] for r in rows if k in r], dtype=float)  # noqa: E731
+            pct = lambda k: _pct(100.0 * a(k).mean())  # noqa: E731
+            pe = "-" if not len(a("pos_err")) else (f"{100.0 * np.median(a('pos_err')):.1f} cm, "
+                                                    f"{np.median(a('yaw_err')):.2f} deg")
+            out.append([n, peq, len(rows), f"{np.median(a('lines')):.0f}", pct("first_ok"), pct("accepted"),
+                        pct("wrong"), pct("far"), pe, int(a("cut").sum()),
+                        f"{np.median(a('ms')):.1f} / {np.percentile(a('ms'), 95):.1f}"])
+    return markdown_table(columns, out)
+
+
 def plot(all_rows, summary, out_dir: Path, e_accept: float, tag: str = "") -> list[Path]:
     """Draw figures 5 and 6 into ``out_dir`` (names end in ``tag``); returns their paths."""
     import matplotlib
@@ -310,17 +407,30 @@ def main(argv=None) -> int:
     ap.add_argument("--json", help="also write all per-frame rows and the summary to this file")
     ap.add_argument("--max-hypotheses", type=int, default=matcher.Tolerances().max_hypotheses,
                     help="stage 1's cap on hypotheses (a large value shows how many pass stage 1 uncapped)")
+    ap.add_argument("--cameras", type=int, nargs="+", default=[1], metavar="N",
+                    help="1: the one camera's table (the default, alone); 2 or more: a ring rig of that many cameras "
+                         "(matcher.localize_rig), in one more table with every count scored by the robot's pose")
+    ap.add_argument("--rig-repeat", type=int, default=1,
+                    help="timing of the rig frames: best of this many runs per frame (default 1: a rig frame takes "
+                         "several times a single camera's)")
+    ap.add_argument("--budget-ms", type=float, default=matcher.Tolerances().time_budget_ms,
+                    help="time budget per call, ms (default the matcher's, %(default)g, which cuts no frame here; "
+                         "inf: none, so the answers depend on nothing but the seeds)")
     add_report_option(ap)
     args = ap.parse_args(argv)
-    args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses)
+    if min(args.cameras) < 1 or len(set(args.cameras)) != len(args.cameras) or args.rig_repeat < 1 \
+            or not args.budget_ms > 0:
+        print("error: --cameras takes distinct counts of at least 1, --rig-repeat at least 1 and --budget-ms a "
+              "positive number (inf: none)", file=sys.stderr)
+        return 2
+    args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses, time_budget_ms=args.budget_ms)
     if args.quick:
         args.poses, args.baseline_poses = 20, 5
     return reported(args.report, lambda: run(args), __file__, argv)
 
 
 def run(args) -> int:
-    """The benchmark as ``main``'s arguments say; prints the table."""
-    seeds = ", ".join(str(s) for s in args.seed)
+    """The benchmark as ``main``'s arguments say; prints the tables."""
     from mapkit_harness.plans import cached_flat_map
 
     default_map = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
@@ -344,10 +454,62 @@ def run(args) -> int:
                     roll_std_deg=args.roll_std_deg if args.roll_std_deg is not None else 0.67 * args.roll_deg)
         camera = replace(camera, **stds)
     matcher.localize(linemap, camera, [[0, 0, 10, 10]] * 3, (0, 0, 0), 0.1, 1)  # warm-up (imports, caches)
+    described = describe(linemap, map_name, camera, stds, args)
+    by_count = {}  # cameras -> PEQ -> frames scored by the robot's pose (the rig table)
+    dump = {}  # --json
+    if 1 in args.cameras:
+        all_rows, summary, by_count[1] = one_camera(linemap, camera, tag, args)
+        print(described)
+        print(table(summary))
+        dump.update(summary=summary, rows=all_rows)
+    rigs = sorted(n for n in args.cameras if n > 1)
+    if rigs:
+        print("" if 1 in args.cameras else described + "\n")
+        print(f"rigs of {', '.join(str(n) for n in rigs)} such cameras, {RIG_RADIUS_M:g} m from the robot's centre, "
+              f"camera k looking out at k * 360 / N deg from its heading; frames whose cameras see 5 map segments "
+              f"or more in all; {args.poses * len(args.seed)} rig frames per PEQ; time budget "
+              f"{'none' if math.isinf(args.budget_ms) else f'{args.budget_ms:g} ms'}; timing best of "
+              + (f"{args.repeat} (1 camera) and " if 1 in args.cameras else "")
+              + f"{args.rig_repeat} (rigs) passes per frame")
+        for n in rigs:
+            rig = paper_rig(camera, n)
+            frames = {peq: simulate_rig_peq(linemap, rig, peq, args) for peq in args.peq}
+            timed = time_frames(frames, lambda fr: matcher.localize_rig(linemap, rig, fr.lines, fr.prior, fr.dt,
+                                                                        fr.dyaw, args.tolerances), args.rig_repeat)
+            by_count[n] = {peq: pose_rows(frames[peq], *timed[peq]) for peq in args.peq}
+        print(pose_table(by_count))
+        print(f"Correct first: the first ranked pose within {100 * POSE_OK_M:g} cm and {POSE_OK_DEG:g} deg of the "
+              "robot's true pose (a rig's matches per camera have no counterpart among one camera's truth pairs, so "
+              "every count, 1 too, is scored by the pose); wrong: accepted and farther off (one camera's answers "
+              "with right matches but few lines among them); cut by budget: frames whose search the time budget cut.")
+        dump["pose_rows"] = {str(n): v for n, v in by_count.items()}
+    if args.json:
+        Path(args.json).write_text(json.dumps(dump, default=float, indent=1))
+    return 0
+
+
+def describe(linemap, map_name, camera, stds, args) -> str:
+    """The lines above the tables: the map, the camera, the frames."""
+    seeds = ", ".join(str(s) for s in args.seed)
+    return (f"map {map_name}: {linemap.n_segments} segments, {linemap.n_regions} regions\n"
+            f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
+            f"{args.noise_deg} deg; {args.clutter} clutter lines; "
+            + (f"roll within +-{args.roll_deg:g} deg, pitch error within +-{args.pitch_error_deg:g} deg, camera file "
+               f"pitch_std_deg {stds['pitch_std_deg']:g}, roll_std_deg {stds['roll_std_deg']:g}; " if stds else "")
+            + f"{args.poses * len(args.seed)} poses per PEQ; "
+            f"seed{'s' if len(args.seed) > 1 else ''} {seeds}; "
+            f"{platform.python_version()} on {platform.machine()}")
+
+
+def one_camera(linemap, camera, tag, args):
+    """The paper's experiment on one camera, as it always was: returns
+    ``(rows, summary, pose rows)`` per PEQ (``run_peq``, ``summarise``,
+    ``pose_rows``) and draws the figures."""
     # Our latency first, every PEQ, before any check or baseline run: the
     # baseline's seconds per frame would otherwise run between timed frames.
     frames = {peq: simulate_peq(linemap, camera, peq, args) for peq in args.peq}
-    timed = time_frames(linemap, camera, frames, args)
+    timed = time_frames(frames, lambda fr: matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw,
+                                                            args.tolerances), args.repeat)
     all_rows, summary = {}, {}
     for peq in args.peq:
         all_rows[peq] = run_peq(linemap, camera, peq, args, frames[peq], *timed[peq])
@@ -357,19 +519,8 @@ def run(args) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     figures = plot(all_rows, summary, out, matcher.Tolerances().e_accept, tag)
-    print(f"map {map_name}: {linemap.n_segments} segments, {linemap.n_regions} regions")
-    print(f"camera 640x480 f=900, height {args.height} m, pitch {args.pitch} deg; noise {args.noise_px} px, "
-          f"{args.noise_deg} deg; {args.clutter} clutter lines; "
-          + (f"roll within +-{args.roll_deg:g} deg, pitch error within +-{args.pitch_error_deg:g} deg, camera file "
-             f"pitch_std_deg {stds['pitch_std_deg']:g}, roll_std_deg {stds['roll_std_deg']:g}; " if stds else "")
-          + f"{args.poses * len(args.seed)} poses per PEQ; "
-          f"seed{'s' if len(args.seed) > 1 else ''} {seeds}; "
-          f"{platform.python_version()} on {platform.machine()}")
-    print(table(summary))
     print("figures: " + ", ".join(str(f) for f in figures), file=sys.stderr)
-    if args.json:
-        Path(args.json).write_text(json.dumps({"summary": summary, "rows": all_rows}, default=float, indent=1))
-    return 0
+    return all_rows, summary, {peq: pose_rows(frames[peq], *timed[peq]) for peq in args.peq}
 
 
 if __name__ == "__main__":
