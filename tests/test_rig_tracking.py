@@ -114,7 +114,9 @@ def test_track_a_rig_run_in_json_lines(tmp_path, capsys, rig, rig_run):
         f.write(json.dumps({"t": 99.5, "odom": [0, 0, 0], "lines": first["cameras"][0]["lines"]}) + "\n")
     x, y, yaw = rig_run.truth[0]
     code, out, err = _cli(capsys, "track", "--map", ROOT / "maps" / "flat.lmap", "--rig", rig_file, "--frames", frames,
-                          "--prior", f"{x},{y},{yaw}", "--dt", 0.2, "--dyaw", 10, "--json", "--out", tmp_path / "t.txt")
+                          "--prior", f"{x},{y},{yaw}", "--dt", 0.2, "--dyaw", 10, "--json", "--out", tmp_path / "t.txt",
+                          # Budgets no machine reaches: the same search, and the same poses, everywhere.
+                          "--budget-ms", 60000, "--relocalise-budget-ms", 60000)
     assert code == 0, err
     rows = [json.loads(line) for line in out.splitlines()]
     assert len(rows) == len(rig_run.times) + 2

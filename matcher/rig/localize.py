@@ -83,12 +83,13 @@ class PriorFound:
 
 def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadlines: Deadlines) -> PriorFound:
     """The cameras searched, those with the most usable lines first, each
-    one's new seeds verified on every camera as they come: first the
-    interpretation tree alone (:data:`~matcher.strategy.TREE_ALONE`), then,
-    unless the verified poses are accepted, the whole strategy. Stops once
-    the best verified pose explains most of the frame's usable lines
-    (``LostConstants.vote_trust_share``): the other cameras' seeds could
-    not explain much more."""
+    one's new seeds verified on every camera as they come: first every
+    camera with the interpretation tree alone
+    (:data:`~matcher.strategy.TREE_ALONE`), then, only if none of their
+    seeds verified, with the whole strategy. (Stopping at the first pose
+    that explains most of the frame would save the other cameras' trees,
+    but a look-alike a few centimetres off, a jamb's near face for its far
+    one, explains most of the frame too.)"""
     searches = [search_camera(linemap, v, px, tol, deadlines, ()) for v in frame.views]  # candidates only
     found = PriorFound(searches, [s.cands for s in searches])
     order = sorted(range(len(frame.views)), key=lambda i: -int(frame.views[i].lines.usable.sum()))
@@ -105,18 +106,9 @@ def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadline
                 found.ranked = merged(frame.views, found.cands, found.ranked,
                                       verify_seeds(frame.views, found.cands, seeds, px, tol), px, tol)
             found.verify_ms += (time.perf_counter() - t_v) * 1e3
-            if _settled(found.ranked, frame, tol):
-                return found
         if found.ranked is not None and np.isfinite(found.ranked.score).any():
             return found  # the tree's seeds gave verified poses: the verdict judges them
     return found
-
-
-def _settled(ranked: RigRanked | None, frame: RigFrame, tol: Tolerances) -> bool:
-    """Does the best verified pose explain most of the frame's usable lines?"""
-    if ranked is None or not np.isfinite(ranked.score[ranked.order[0]]):
-        return False
-    return trusted(int(ranked.n[ranked.order[0]]), frame.usable, tol.lost)
 
 
 def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None):
