@@ -246,16 +246,8 @@ def run_pano(task):
         shown, _ = visible_lines(m, camera, truth)
         row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": len(lines),
                "shown": len(shown), "results": {}}
-        rng = np.random.default_rng([args.seed, view["id"]])
-        for peq in args.peq:
-            prior, dt, dyaw = draw_prior(truth, rng, peq)
-            t = time.perf_counter()
-            res = matcher.localize(m, camera, lines, prior, dt, dyaw, tolerances=tol)
-            row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
-        if args.lost_every and view["id"] % args.lost_every == 0:
-            t = time.perf_counter()
-            res = matcher.localize_global(m, camera, lines, tolerances=tol)
-            row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t)
+        run_modes(row, args, lambda prior, dt, dyaw: matcher.localize(m, camera, lines, prior, dt, dyaw, tolerances=tol),
+                  lambda: matcher.localize_global(m, camera, lines, tolerances=tol))
         if args.overlays:
             save_failures(row, view, image, lines, camera, m, args.overlays)
         rows.append(row)
@@ -282,17 +274,26 @@ def run_rig_frame(view, panorama, m, tol, args) -> dict:
         shown |= set(visible_lines(m, rc.camera, pose)[1].tolist())
     row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": sum(len(x) for x in lines),
            "shown": len(shown), "results": {}}
-    rng = np.random.default_rng([args.seed, view["id"]])
+    run_modes(row, args, lambda prior, dt, dyaw: matcher.localize_rig(m, rig, lines, prior, dt, dyaw, tolerances=tol),
+              lambda: matcher.localize_rig_global(m, rig, lines, tolerances=tol))
+    return row
+
+
+def run_modes(row: dict, args, from_prior, lost) -> None:
+    """``row["results"]`` per PEQ of ``--peq`` (``from_prior(prior, dt,
+    dyaw)`` on a prior drawn from the row's seed) and, on every
+    ``--lost-every``-th row, lost (``lost()``)."""
+    truth = row["truth"]
+    rng = np.random.default_rng([args.seed, row["id"]])
     for peq in args.peq:
         prior, dt, dyaw = draw_prior(truth, rng, peq)
         t = time.perf_counter()
-        res = matcher.localize_rig(m, rig, lines, prior, dt, dyaw, tolerances=tol)
+        res = from_prior(prior, dt, dyaw)
         row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
-    if args.lost_every and view["id"] % args.lost_every == 0:
+    if args.lost_every and row["id"] % args.lost_every == 0:
         t = time.perf_counter()
-        res = matcher.localize_rig_global(m, rig, lines, tolerances=tol)
+        res = lost()
         row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t)
-    return row
 
 
 def cut_rig(view, panorama, height_m):
