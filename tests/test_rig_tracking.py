@@ -198,8 +198,9 @@ def write_rig_bag(path: Path, rig, run, images, skew_s: float = 0.0, drop: tuple
     """A ROS 1 bag: odometry and one mono8 image topic per camera (each
     camera's topic), camera k's stamps ``k * skew_s`` late; the images of
     ``drop`` ``(frame, camera)`` pairs left out."""
-    from rosbags.rosbag1 import Writer
     from rosbags.typesys import Stores, get_typestore
+
+    from test_tracking import write_ros1
 
     ts = get_typestore(Stores.ROS1_NOETIC)
     T = ts.types
@@ -213,13 +214,7 @@ def write_rig_bag(path: Path, rig, run, images, skew_s: float = 0.0, drop: tuple
                                              step=img.shape[1], data=img.ravel().copy())
             msgs.append((rc.topic, "sensor_msgs/msg/Image", msg))
     msgs.sort(key=lambda m: (m[2].header.stamp.sec, m[2].header.stamp.nanosec))
-    with Writer(path) as w:
-        conns = {}
-        for topic, mtype, msg in msgs:
-            if topic not in conns:
-                conns[topic] = w.add_connection(topic, mtype, typestore=ts)
-            stamp = msg.header.stamp
-            w.write(conns[topic], stamp.sec * 10**9 + stamp.nanosec, ts.serialize_ros1(msg, mtype))
+    write_ros1(path, ts, msgs)
 
 
 @pytest.mark.slow

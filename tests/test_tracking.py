@@ -249,21 +249,26 @@ def _ros_messages(ts, ros1: bool, cam, run, images, compressed: bool):
     return sorted(out, key=lambda m: (m[2].header.stamp.sec, m[2].header.stamp.nanosec))
 
 
+def write_ros1(path: Path, ts, msgs: list) -> None:
+    """A ROS 1 bag at ``path`` of ``msgs`` ``(topic, type, message)``
+    serialised with the typestore ``ts``, in the order given."""
+    from rosbags.rosbag1 import Writer
+
+    with Writer(path) as w:
+        conns = {}
+        for topic, mtype, msg in msgs:
+            if topic not in conns:
+                conns[topic] = w.add_connection(topic, mtype, typestore=ts)
+            stamp = msg.header.stamp
+            w.write(conns[topic], stamp.sec * 10**9 + stamp.nanosec, ts.serialize_ros1(msg, mtype))
+
+
 def write_bag(path: Path, kind: str, cam, run, images) -> None:
     from rosbags.typesys import Stores, get_typestore
 
     if kind == "ros1":
-        from rosbags.rosbag1 import Writer
-
         ts = get_typestore(Stores.ROS1_NOETIC)
-        msgs = _ros_messages(ts, True, cam, run, images, compressed=False)
-        with Writer(path) as w:
-            conns = {}
-            for topic, mtype, msg in msgs:
-                if topic not in conns:
-                    conns[topic] = w.add_connection(topic, mtype, typestore=ts)
-                stamp = msg.header.stamp
-                w.write(conns[topic], stamp.sec * 10**9 + stamp.nanosec, ts.serialize_ros1(msg, mtype))
+        write_ros1(path, ts, _ros_messages(ts, True, cam, run, images, compressed=False))
         return
     from rosbags.rosbag2 import StoragePlugin, Writer
 

@@ -12,7 +12,6 @@ where the verification on every camera's lines starts
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,7 +103,3 @@ def search_counts(searches: list[CameraSearch]) -> dict:
         out["sets_found"] += int(c.get("sets_found", len(hyps.sets)))
         out["out_of_time"] |= bool(c.get("out_of_time") or s.answer.spent)
     return out
-
-
-def elapsed_ms(t0: float) -> float:
-    return (time.perf_counter() - t0) * 1e3
