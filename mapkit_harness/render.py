@@ -6,7 +6,8 @@ occluders, :mod:`mapkit_harness.simulate`), a flat
 floor and a flat ceiling, and across the door and window openings the walls
 above their heads and below their sills, with the slabs between the wall's
 two faces (from the map's LINTEL and WINDOW segments). Each pixel's ray is
-cast against all of them; the nearest surface gives its grey level. Wall
+cast against them (in blocks of columns, each block against the surfaces
+within its bearings); the nearest surface gives its grey level. Wall
 faces are shaded by their orientation (a light from one side), so two walls
 meeting at a corner differ and the corner shows as an edge, as do the
 wall/floor and wall/ceiling junctions; a ray that leaves the building
@@ -54,8 +55,10 @@ _FLOOR_REACH_M = 0.3
 LIGHT_DEG = 20.0
 #: Sigma of the Gaussian blur of a rendered panorama, pixels.
 BLUR_PX = 0.6
-#: Column blocks a panorama is cast in (each against the walls in its bearings).
+#: Column blocks a panorama and a view are cast in (each against the walls in
+#: its bearings; more blocks, fewer walls per ray, more passes).
 _PANO_BLOCKS = 48
+_VIEW_BLOCKS = 64
 #: Pixels cast per batch (bounds the (pixels, walls) arrays).
 _CHUNK = 65536
 
@@ -78,8 +81,13 @@ def render_view(linemap, camera: Camera, pose, supersample: int = 3, blur_px: fl
     # brings each back to the centre of its camera pixel.
     u = (np.arange(W) + 0.5) / s - 0.5
     v = (np.arange(H) + 0.5) / s - 0.5
-    uv = np.stack(np.meshgrid(u, v), axis=-1).reshape(-1, 2)
-    grey = shade_rays(linemap, camera, pose, uv).reshape(H, W)
+    R = camera.world2cam(math.radians(pose[2]))
+
+    def rays_of(cols):
+        return camera.pixel_rays(np.stack(np.meshgrid(u[cols], v), axis=-1).reshape(-1, 2)) @ R  # R^T ray
+
+    surfaces = VisibleSurfaces(linemap, camera, pose)
+    grey = shade_column_blocks(linemap, pose[:2], camera.height_m, rays_of, (H, W), surfaces, _VIEW_BLOCKS)
     if s > 1:
         grey = cv2.resize(grey, (camera.width, camera.height), interpolation=cv2.INTER_AREA)
     if blur_px > 0:
@@ -114,18 +122,12 @@ def render_panorama(linemap, pose, height_m: float, width: int, yaw_offset_deg: 
     c, sn = math.cos(yaw), math.sin(yaw)
     to_world = np.array([[c, sn, 0.0], [-sn, c, 0.0], [0.0, 0.0, 1.0]])  # row vectors: robot frame -> world
     surfaces = VisibleSurfaces(linemap, None, pose)
-    sliver = Camera.from_fov(1.0, 8, 8, height_m, 0.0)  # for the bearing test of a block's walls
-    blocks = []
-    # In blocks of columns: a block's rays meet only the walls within its
-    # bearings (a panorama sees every wall, each ray only a few).
-    for cols in np.array_split(np.arange(W), _PANO_BLOCKS):
+
+    def rays_of(cols):
         uv = np.stack(np.meshgrid(u[cols], v), axis=-1).reshape(-1, 2)
-        rays = pixel_directions(uv, width, yaw_offset_deg) @ to_world
-        mid = np.arctan2(rays[:, 1].mean(), rays[:, 0].mean())
-        half = math.pi * (len(cols) + 2) / W
-        near = surfaces.subset(*surfaces.bearing_masks(sliver, (x, y, mid), half))
-        blocks.append(shade_directions(linemap, (x, y), height_m, rays, near).reshape(H, len(cols)))
-    grey = np.hstack(blocks)
+        return pixel_directions(uv, width, yaw_offset_deg) @ to_world
+
+    grey = shade_column_blocks(linemap, (x, y), height_m, rays_of, (H, W), surfaces, _PANO_BLOCKS)
     if s > 1:
         grey = cv2.resize(grey, (width, width // 2), interpolation=cv2.INTER_AREA)
     # Blurred along rows with the seam wrapped (the two ends are neighbours).
@@ -136,12 +138,32 @@ def render_panorama(linemap, pose, height_m: float, width: int, yaw_offset_deg: 
     return np.clip(np.rint(grey), 0, 255).astype(np.uint8)
 
 
-def shade_rays(linemap, camera: Camera, pose, uv: np.ndarray) -> np.ndarray:
-    """(P,) float32 grey level seen through pixels ``uv`` (P, 2) from ``pose``."""
-    x, y, yaw_deg = pose
-    R = camera.world2cam(math.radians(yaw_deg))
-    rays = camera.pixel_rays(uv) @ R  # (P, 3) world directions (R^T ray)
-    return shade_directions(linemap, (x, y), camera.height_m, rays, VisibleSurfaces(linemap, camera, pose))
+def shade_column_blocks(linemap, xy, h: float, rays_of, shape: tuple[int, int], surfaces: "VisibleSurfaces",
+                        blocks: int) -> np.ndarray:
+    """(H, W) float32 grey levels of an image of ``shape`` (H, W) whose
+    column indices ``cols`` look along the world directions ``rays_of(cols)``
+    ((H * len(cols), 3), row-major), seen from ``xy`` at height ``h``.
+
+    Cast in ``blocks`` blocks of columns, each against only the surfaces
+    within its rays' bearings: a ray meets only the walls ahead of it, and
+    the (rays, walls) arrays of a whole image against every wall are what
+    makes rendering slow. The cut is conservative (the bearings' spread plus
+    half a degree), so the image is the one cast against every surface."""
+    H, W = shape
+    sliver = Camera.from_fov(1.0, 8, 8, h, 0.0)  # the bearing test's camera: half a degree each side
+    out = []
+    for cols in np.array_split(np.arange(W), max(1, min(blocks, W))):
+        rays = rays_of(cols)
+        near = surfaces
+        level = np.hypot(rays[:, 0], rays[:, 1])
+        if level.min() > 1e-6:  # (a ray straight up or down has no bearing: that block meets everything)
+            azimuth = np.arctan2(rays[:, 1], rays[:, 0])
+            mid = math.atan2(np.sin(azimuth).sum(), np.cos(azimuth).sum())
+            half = float(np.abs(np.angle(np.exp(1j * (azimuth - mid)))).max())
+            if half < math.pi / 2:
+                near = surfaces.subset(*surfaces.bearing_masks(sliver, (xy[0], xy[1], mid), half))
+        out.append(shade_directions(linemap, xy, h, rays, near).reshape(H, len(cols)))
+    return np.hstack(out)
 
 
 def shade_directions(linemap, xy, h: float, rays: np.ndarray, surfaces: "VisibleSurfaces") -> np.ndarray:
