@@ -166,6 +166,10 @@ class VisibilityOracle:
         self.spacing = np.array(spacing)
         self.lengths = np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1)
         self.start = np.concatenate([[0], np.cumsum(counts)])
+        # Samples above one another (a vertical segment, segments over one
+        # wall line) share one sight line: each floor point is tested once.
+        self.floor_points, self.floor_point_of = np.unique(self.points[:, :2], axis=0, return_inverse=True)
+        self.floor_point_of = self.floor_point_of.ravel()
 
     def seen_samples(self, q) -> np.ndarray:
         """(P,) bool: which samples are seen from q."""
@@ -178,9 +182,12 @@ class VisibilityOracle:
         cand = np.nonzero(ok)[0]
         if len(cand) == 0:
             return ok
-        xy, inv = np.unique(self.points[cand, :2], axis=0, return_inverse=True)
-        clear = self._clear(q, xy)
-        ok[cand] = clear[inv.ravel()]
+        wanted = np.zeros(len(self.floor_points), dtype=bool)
+        wanted[self.floor_point_of[cand]] = True
+        tested = np.nonzero(wanted)[0]
+        clear = np.zeros(len(self.floor_points), dtype=bool)
+        clear[tested] = self._clear(q, self.floor_points[tested])
+        ok[cand] = clear[self.floor_point_of[cand]]
         return ok
 
     def _clear(self, q, targets) -> np.ndarray:

@@ -92,9 +92,8 @@ def test_layer_names_in_other_languages_build_as_the_english_ones(tmp_path, caps
     doc.saveas(foreign)
     code, _, err = run(capsys, "build", foreign, "-o", tmp_path / "foreign.lmap", "-q")
     assert code == 0, err
-    code, _, err = run(capsys, "build", FLAT, "-o", tmp_path / "english.lmap", "-q")
-    assert code == 0, err
-    a, b = load_map(tmp_path / "foreign.lmap"), load_map(tmp_path / "english.lmap")
+    # The English one is the committed example map (test_build_real checks it is flat.dxf's build).
+    a, b = load_map(tmp_path / "foreign.lmap"), load_map(FLAT.with_suffix(".lmap"))
     assert np.array_equal(a.segments, b.segments) and np.array_equal(a.kinds, b.kinds)
 
 

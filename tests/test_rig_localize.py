@@ -120,7 +120,7 @@ def test_cli_localizes_a_simulated_rig_frame(tmp_path):
     rig_file.write_text(json.dumps(rig_to_dict(ring_rig(4, hfov_deg=70.0, radius_m=0.2))))
     out = tmp_path / "frame"
     subprocess.run([sys.executable, "tools/simulate.py", "--rig", str(rig_file), "--peq", "3", "--seed", "2",
-                    "--out", str(out)], check=True, capture_output=True)
+                    "--no-images", "--out", str(out)], check=True, capture_output=True)
     truth = json.loads((out / "truth.json").read_text())
     lines = [str(out / c["lines"]) for c in truth["cameras"]]
     prior = ",".join(f"{v:.4f}" for v in truth["prior"])

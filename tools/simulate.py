@@ -47,6 +47,8 @@ def main(argv=None) -> int:
                     help="write camera.json, lines.json, truth.json and frame.png (the view rendered by "
                          "tools/render.py) there, for 'matcher localize'; with --rig rig.json, "
                          "lines_NAME.json and frame_NAME.png a camera, truth.json")
+    ap.add_argument("--no-images", action="store_true",
+                    help="with --out, write the lines and truth only (rendering the images is most of the time)")
     ap.add_argument("--rig", metavar="RIG",
                     help="a rig file or a Kalibr camchain placing cam0 (docs/inputs.md, Camera rigs): one robot "
                          "pose seen by each of its cameras")
@@ -78,17 +80,20 @@ def main(argv=None) -> int:
                  "pitch_deg": fr.pitch_deg, "roll_deg": fr.roll_deg,
                  "prior": list(fr.prior), "dt": fr.dt, "dyaw": fr.dyaw, "matches": fr.true_matches()}
         (out / "truth.json").write_text(json.dumps(truth))
-        # The same view as an image (walls, floor and ceiling shaded), for --image.
-        import cv2
-        from mapkit_harness.render import render_view
+        written = "camera.json, lines.json, truth.json"
+        if not args.no_images:  # the same view as an image (walls, floor and ceiling shaded), for --image
+            import cv2
+            from mapkit_harness.render import render_view
 
-        real = replace(cam, pitch_deg=fr.pitch_deg, roll_deg=fr.roll_deg, pitch_std_deg=0.0, roll_std_deg=0.0)
-        cv2.imwrite(str(out / "frame.png"), render_view(m, real, fr.pose, rng=np.random.default_rng(args.seed)))
-        print(f"wrote {out}/camera.json, lines.json, truth.json, frame.png; try:")
+            real = replace(cam, pitch_deg=fr.pitch_deg, roll_deg=fr.roll_deg, pitch_std_deg=0.0, roll_std_deg=0.0)
+            cv2.imwrite(str(out / "frame.png"), render_view(m, real, fr.pose, rng=np.random.default_rng(args.seed)))
+            written += ", frame.png"
+        print(f"wrote {out}/{written}; try:")
         common = (f"matcher localize --map {os.path.relpath(args.map)} --camera {out}/camera.json "
                   f"--prior {x:.3f},{y:.3f},{yaw:.2f} --dt {fr.dt:g} --dyaw {fr.dyaw:g}")
         print(f"  {common} --lines {out}/lines.json")
-        print(f"  {common} --image {out}/frame.png")
+        if not args.no_images:
+            print(f"  {common} --image {out}/frame.png")
     else:
         res = matcher.localize(m, cam, fr.lines, fr.prior, fr.dt, fr.dyaw)
         print(res.to_dict())
@@ -134,6 +139,9 @@ def _rig_frame(args, m, rig) -> int:
     truth = {"pose": {"x": fr.pose[0], "y": fr.pose[1], "yaw_deg": fr.pose[2]}, "prior": list(fr.prior),
              "dt": fr.dt, "dyaw": fr.dyaw, "cameras": cameras}
     (out / "truth.json").write_text(json.dumps(truth))
+    if args.no_images:
+        print(f"wrote {out}/rig.json, truth.json and, a camera each, lines_NAME.json ({', '.join(files.values())})")
+        return 0
     # Each camera's view as an image (walls, floor and ceiling shaded), for images per camera.
     import cv2
     from mapkit_harness.render import render_view
