@@ -28,11 +28,11 @@ DASK = Path(sys.executable).parent / "dask"
 
 @pytest.fixture(scope="module")
 def inputs(tmp_path_factory):
-    """Three good plans (the example flat, offices of 2 x 2 and 3 x 3 rooms) and one that is no DXF."""
+    """Three good plans (the example flat, offices of 2 x 2 rooms and of one room) and one that is no DXF."""
     d = tmp_path_factory.mktemp("inputs")
     shutil.copy(FLAT, d / "flat.dxf")
     office_grid(d / "office2.dxf", n=2)
-    office_grid(d / "office3.dxf", n=3)
+    office_grid(d / "office1.dxf", n=1)
     (d / "bad.dxf").write_text("this is no drawing\n")
     return d
 
@@ -47,7 +47,7 @@ def one_at_a_time(inputs, tmp_path_factory):
 
     out = tmp_path_factory.mktemp("single")
     maps = {}
-    for stem in ("flat", "office2", "office3"):
+    for stem in ("flat", "office2", "office1"):
         with contextlib.redirect_stdout(io.StringIO()):
             assert main(["build", str(inputs / f"{stem}.dxf"), "-o", str(out / f"{stem}.lmap"), "-q"]) == 0
         maps[stem] = (out / f"{stem}.lmap").read_bytes()
@@ -107,7 +107,7 @@ def _good_maps_equal(out: Path, expected: dict) -> None:
 
 @pytest.mark.slow
 def test_scheduler_builds_the_maps_of_one_at_a_time_builds(capsys, inputs, one_at_a_time, cluster, tmp_path):
-    plans = [inputs / "flat.dxf", inputs / "bad.dxf", inputs / "office2.dxf", inputs / "office3.dxf"]
+    plans = [inputs / "flat.dxf", inputs / "bad.dxf", inputs / "office2.dxf", inputs / "office1.dxf"]
     out = tmp_path / "maps"
     code, stdout, stderr = run(capsys, "build", *plans, "-o", out, "--scheduler", cluster)
     assert code == 2, (stdout, stderr)
@@ -115,7 +115,7 @@ def test_scheduler_builds_the_maps_of_one_at_a_time_builds(capsys, inputs, one_a
     assert len(errors) == 1 and "bad.dxf" in errors[0] and "not a DXF file" in errors[0], stderr
     assert "Traceback" not in stderr
     assert "built 3, skipped 0 unchanged, failed 1 of 4 inputs" in stdout
-    assert sorted(p.name for p in out.iterdir()) == ["flat.lmap", "office2.lmap", "office3.lmap"]
+    assert sorted(p.name for p in out.iterdir()) == ["flat.lmap", "office1.lmap", "office2.lmap"]
     _good_maps_equal(out, one_at_a_time)
 
     # A rerun: the unchanged skipped (the bad input still fails); then one input changed is the one rebuilt.
@@ -123,7 +123,7 @@ def test_scheduler_builds_the_maps_of_one_at_a_time_builds(capsys, inputs, one_a
     assert code == 2 and "built 0, skipped 3 unchanged, failed 1 of 4 inputs" in stdout, (stdout, stderr)
     changed = tmp_path / "flat.dxf"
     office_grid(changed, n=2)  # another plan under the name 'flat'
-    good = [changed, inputs / "office2.dxf", inputs / "office3.dxf"]
+    good = [changed, inputs / "office2.dxf", inputs / "office1.dxf"]
     code, stdout, stderr = run(capsys, "build", *good, "-o", out, "--scheduler", cluster)
     assert code == 0 and "built 1, skipped 2 unchanged, failed 0 of 3 inputs" in stdout, (stdout, stderr)
     assert (out / "flat.lmap").read_bytes() != one_at_a_time["flat"]
@@ -140,7 +140,7 @@ def test_local_cluster_of_two_workers(capsys, inputs, one_at_a_time, tmp_path):
     model = write_model(tmp_path / "house.ifc")
     assert run(capsys, "build", model, "-o", tmp_path / "alone", "-q")[0] == 0
     out = tmp_path / "new" / "maps"  # made, with its parent
-    plans = [inputs / "flat.dxf", inputs / "office2.dxf", inputs / "office3.dxf", model]
+    plans = [inputs / "flat.dxf", inputs / "office2.dxf", inputs / "office1.dxf", model]
     code, stdout, stderr = run(capsys, "build", *plans, "-o", out, "--workers", "2")
     assert code == 0 and "built 4, skipped 0 unchanged, failed 0 of 4 inputs" in stdout, (stdout, stderr)
     assert f"wrote {out / 'flat.lmap'}: " in stdout
@@ -196,7 +196,7 @@ def test_the_skip_rule_compares_source_options_and_version(inputs, one_at_a_time
     assert is_up_to_date(job, options)
     assert is_up_to_date(job, replace(options, jobs=1))  # a limit of work, not recorded in the map
     assert not is_up_to_date(job, replace(options, wall_height=2.6))
-    (other,) = plan_jobs([inputs / "office3.dxf"], tmp_path)
+    (other,) = plan_jobs([inputs / "office1.dxf"], tmp_path)
     shutil.copy(job.output, other.output)  # another source's map
     assert not is_up_to_date(other, options)
     job.output.write_bytes(b"LMAP damaged")
@@ -207,7 +207,7 @@ def test_the_skip_rule_compares_source_options_and_version(inputs, one_at_a_time
 def test_the_batch_benchmark_runs_and_checks_the_bytes(capsys):
     import bench_batch
 
-    assert bench_batch.main(["--floors", "2", "--rooms", "2"]) == 0
+    assert bench_batch.main(["--floors", "2", "--rooms", "1"]) == 0
     out = capsys.readouterr().out
     assert "maps byte-identical: yes" in out and "| at once (`--workers 2`) | 2 |" in out, out
 
