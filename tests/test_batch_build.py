@@ -175,6 +175,7 @@ def test_workers_must_be_positive(capsys, inputs, tmp_path):
     assert_one_line_error(code, out, err, "--workers")
 
 
+@pytest.mark.slow
 def test_one_input_to_one_map_does_not_load_dask(tmp_path):
     script = ("import sys\nfrom mapkit.cli import main\n"
               f"assert main(['build', {str(FLAT)!r}, '-o', {str(tmp_path / 'f.lmap')!r}, '-q']) == 0\n"

@@ -86,6 +86,7 @@ def _outcomes(linemap, camera, frames, tol=DEFAULT):
     return [matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw, tol) for fr in frames]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scale", [0.8, 1.25])
 def test_a_focal_length_20_percent_off_is_refused_with_its_reason(flat, cam, frames, scale):
     """Every answer that matches enough lines to tell a focal length from

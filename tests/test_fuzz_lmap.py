@@ -20,6 +20,7 @@ def _warm():
     preload()
 
 
+@pytest.mark.slow
 @fuzz_settings(examples=25)
 @given(rng=st.randoms(use_true_random=False))
 def test_a_damaged_map_is_refused_in_one_line_or_read(tmp_path_factory, rng):

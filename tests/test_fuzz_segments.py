@@ -37,6 +37,7 @@ def test_a_damaged_segments_file_ends_in_a_clean_error_or_a_map(tmp_path_factory
     ("segments.json", lambda: json.dumps(base_segments())),
     ("segments.csv", base_segments_csv),
 ])
+@pytest.mark.slow
 def test_the_undamaged_files_build(tmp_path, name, text):
     """The bases every mutation starts from build: the cases reach the
     region builder, not only the reader."""

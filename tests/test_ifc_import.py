@@ -217,6 +217,7 @@ def test_the_manifest_lists_storeys_maps_source_and_the_stair(model, building):
     assert m.meta["source"]["name"] == model.name and m.meta["build"]["floor_name"] == "Ground floor"
 
 
+@pytest.mark.slow
 def test_storey_builds_one_map_and_layers_info_preview_describe_the_model(model, building, tmp_path, capsys):
     code, out, err = run(capsys, "build", model, "--storey", "upper floor", "-o", tmp_path / "up.lmap", "-q")
     assert code == 0, err

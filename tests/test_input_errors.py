@@ -215,6 +215,7 @@ def test_the_fuzz_classifier_reads_exit_codes():
     assert classify_cli("matcher", 2, "", "matcher: error: a\nmatcher: error: b\n")[0] == BUG
 
 
+@pytest.mark.slow
 def test_a_built_map_is_read_by_every_command_that_reads_maps(tmp_path, monkeypatch):
     """The build families follow a build with info, view --html and export
     on the map it wrote; a bug in one of them is the case's bug, and so is a

@@ -84,6 +84,7 @@ def test_preview_writes_a_png_and_says_what_it_understood(capsys, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["house.png"]  # no temporary left
 
 
+@pytest.mark.slow
 def test_preview_draws_openings_and_ignored_layers(capsys, tmp_path):
     out_png = tmp_path / "pavilion.png"
     code, out, err = run(

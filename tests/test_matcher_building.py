@@ -67,6 +67,7 @@ def test_load_map_of_a_manifest_gives_the_storeys_in_order_with_their_maps(built
     assert building.storey("upper FLOOR").name == UPPER  # case aside, as mapkit build --storey
 
 
+@pytest.mark.slow
 def test_lost_mode_over_the_manifest_finds_the_upper_storey(building):
     lines = _frame(building)
     res = matcher.localize_global(building, paper_camera(), lines)
@@ -192,6 +193,7 @@ def _cli_files(tmp_path, building):
     return ["--camera", str(cam), "--lines", str(lines)]
 
 
+@pytest.mark.slow
 def test_matcher_localize_on_a_manifest(built, building, tmp_path, capsys):
     files = _cli_files(tmp_path, building)
     assert matcher_main(["localize", "--map", str(built / "building.json"), *files, "--lost"]) == 0

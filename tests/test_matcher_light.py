@@ -8,10 +8,12 @@ import sys
 import textwrap
 
 import numpy as np
+import pytest
 
 AUTHORING = ("ezdxf", "trimesh", "shapely", "viser")
 
 
+@pytest.mark.slow
 def test_no_authoring_module_after_a_localisation(tmp_path):
     from mapkit_harness.plans import make_small_flat
     from linemap.lmap import save_map

@@ -105,6 +105,7 @@ def test_hospital_junctions_are_the_outline_of_the_walls(z, kind):
     assert np.abs(seg[:, :, 2] - (0.0 if kind == K.FLOOR else 3.0)).max() < 1e-6
 
 
+@pytest.mark.slow
 def test_hospital_verticals_stand_on_wall_corners_or_openings():
     s = load_scene(HOSPITAL)
     v = s.segments[s.kinds == K.VERTICAL]

@@ -28,6 +28,7 @@ def flat():
     return matcher.load_map("maps/flat.lmap")
 
 
+@pytest.mark.slow
 def test_four_camera_rig_localised_from_a_prior(flat):
     rng = np.random.default_rng(3)
     rig = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
@@ -44,6 +45,7 @@ def test_four_camera_rig_localised_from_a_prior(flat):
         assert [c["name"] for c in d["cameras"]] == rig.names
 
 
+@pytest.mark.slow
 def test_cameras_seeing_different_places_give_one_pose(flat):
     # A front and a back camera 0.4 m apart whose views share no segment:
     # neither camera's lines are those of the other's place, one robot pose
@@ -106,6 +108,7 @@ def test_a_rig_that_sees_nothing_says_why(flat):
     assert not res and "usable image lines" in res.reason
 
 
+@pytest.mark.slow
 def test_cli_localizes_a_simulated_rig_frame(tmp_path):
     """``tools/simulate.py --rig`` writes a frame that ``matcher localize
     --rig`` localises from a prior and lost; a wrong number of files is one

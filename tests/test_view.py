@@ -450,6 +450,7 @@ def test_cli_errors_are_one_line(tmp_path, flat_path):
     assert r.returncode == 2 and "names segment 99999" in r.stderr
 
 
+@pytest.mark.slow
 def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
     out = tmp_path / "flat.html"
     r = _mapkit("view", str(flat_path), "--html", str(out))

@@ -325,6 +325,7 @@ def test_self_intersecting_walls_are_repaired_not_dropped():
     ("maps/flat.dxf", {}),
     ("tests/data/barcelona-pavilion.dxf", {"walls": ["Walls", "Columns"], "windows": ["Crystal"]}),
 ])
+@pytest.mark.slow
 def test_batched_visibility_polygons_equal_the_per_point_sweep(plan, options):
     """Bit for bit, at random free-space points and at wall vertices (rays
     through shared vertices, grazing faces) of a real plan."""
