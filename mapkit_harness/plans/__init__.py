@@ -12,7 +12,12 @@ unless said otherwise, z up):
 - :mod:`.flat_dxf`: the bundled example plan ``maps/flat.dxf`` (millimetres),
   written byte for byte reproducibly by :func:`write_flat_dxf`;
 - :mod:`.meshes`: a grid of rooms as a mesh of separate wall boxes, with the
-  count of edges it must give.
+  count of edges it must give;
+- :mod:`.grid_layout`: the one layout of a grid of rooms joined by doorways
+  (:class:`RoomGridLayout`: wall pieces, doorways and their doors, the
+  outline and the inside, the doorways' places along their walls) that
+  :func:`office_grid`, :func:`grid_flat` and :func:`room_grid` render as a
+  DXF, a LineMap and a mesh.
 
 All of them are deterministic: a seed, where there is one, is an argument.
 """
@@ -41,12 +46,13 @@ from mapkit_harness.plans.buildings import (
 )
 from mapkit_harness.plans.drawings import PlanFacts, nested_room, office_grid, open_office, zone_plan
 from mapkit_harness.plans.flat_dxf import write as write_flat_dxf
+from mapkit_harness.plans.grid_layout import RoomGridLayout
 from mapkit_harness.plans.meshes import expected_grid_edges, room_grid
 
 __all__ = [
-    "DEMO_CAMERA", "ROBOT_RADIUS", "WALL_HEIGHT", "PlanFacts", "SyntheticScene", "apartment", "cached_flat_map",
-    "expected_grid_edges", "flat_geometry", "flat_segments", "grid_flat", "l_room", "lintels", "make_box_map",
-    "make_flat_map", "make_small_flat", "nested_room", "office_grid", "open_hall", "open_office",
+    "DEMO_CAMERA", "ROBOT_RADIUS", "WALL_HEIGHT", "PlanFacts", "RoomGridLayout", "SyntheticScene", "apartment",
+    "cached_flat_map", "expected_grid_edges", "flat_geometry", "flat_segments", "grid_flat", "l_room", "lintels",
+    "make_box_map", "make_flat_map", "make_small_flat", "nested_room", "office_grid", "open_hall", "open_office",
     "outline_segments", "room_grid", "room_or_near_lists", "scene_from_walls", "single_room", "two_rooms",
     "write_flat_dxf", "zone_plan",
 ]

@@ -43,6 +43,7 @@ from mapkit.assemble import assemble_map
 from mapkit.shapes import polygon_parts, rings_of
 from mapkit.tolerances import CORNER_DEG
 
+from mapkit_harness.plans.grid_layout import RoomGridLayout, oriented
 from mapkit_harness.visibility_oracle import visible_lists
 
 WALL_HEIGHT = 2.5
@@ -377,29 +378,26 @@ def grid_flat(
     :func:`room_or_near_lists`. Its segments are what a real build gives a
     plan like it: the junctions along every wall face (outer faces too), a
     vertical at every wall vertex (a jamb where it bounds a doorway), the
-    lintels of each doorway.
+    lintels of each doorway. The rooms, walls and doorways are laid out by
+    :class:`~mapkit_harness.plans.grid_layout.RoomGridLayout`.
 
     Deterministic: the same arguments give the same map.
     """
     nx, ny = rooms
     rw, rh = room_size
     t = wall_thickness
-    width, height = nx * rw, ny * rh
-    inside = box(t, t, width - t, height - t)
-    walls = box(0, 0, width, height).difference(inside)
+    layout = RoomGridLayout(rooms, room_size, t, door_width)
+    width, height = layout.outline[2:]
+    inside = box(*layout.inside)
+    walls = box(*layout.outline).difference(inside)
     cuts, gaps = [], []  # boxes cutting the doorways (wider than the wall), the doorways themselves
-    for i in range(1, nx):  # walls between columns of rooms, one doorway per room
-        x = i * rw
-        walls = walls.union(box(x - t / 2, 0, x + t / 2, height))
-        for c in [(j + 0.5) * rh for j in range(ny)]:
-            cuts.append(box(x - t, c - door_width / 2, x + t, c + door_width / 2))
-            gaps.append(box(x - t / 2, c - door_width / 2, x + t / 2, c + door_width / 2))
-    for j in range(1, ny):
-        y = j * rh
-        walls = walls.union(box(0, y - t / 2, width, y + t / 2))
-        for c in [(i + 0.3) * rw for i in range(nx)]:
-            cuts.append(box(c - door_width / 2, y - t, c + door_width / 2, y + t))
-            gaps.append(box(c - door_width / 2, y - t / 2, c + door_width / 2, y + t / 2))
+    # The interior walls one by one, their doorways cut at the end: the
+    # order of the shapely operations fixes the vertex order of the rings.
+    for wall in (w for w in layout.walls() if not w.outer):
+        walls = walls.union(box(*wall.whole))
+        for doorway in wall.doorways:
+            cuts.append(box(*oriented(wall.between_columns, doorway.span, (wall.line - t, wall.line + t))))
+            gaps.append(box(*doorway.rect))
     door_union = shapely.union_all(cuts)
     walls = walls.difference(door_union)
     # A column in every other room: holes in the regions, more vertical corners.

@@ -41,6 +41,8 @@ import numpy as np
 import shapely
 from shapely.geometry import box
 
+from mapkit_harness.plans.grid_layout import RoomGridLayout, stretches_between
+
 #: Layer names of the open-plan office, as the real drawing spells them.
 STRUCTURE = "A-210 G - Existing Structure 4"
 PARTITIONS = "A-320G - Permanent Solid Partitions 12"
@@ -115,18 +117,6 @@ def add_rect(msp, x0, y0, x1, y1, layer: str):
     return box(min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1))
 
 
-def _pieces(lo: float, hi: float, gaps: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    """The stretches of ``[lo, hi]`` left between sorted ``gaps``."""
-    out, at = [], lo
-    for a, b in sorted(gaps):
-        if a > at:
-            out.append((at, a))
-        at = max(at, b)
-    if hi > at:
-        out.append((at, hi))
-    return out
-
-
 # --------------------------------------------------------------------------
 # (a) the generated office: n x n rooms with doors
 
@@ -140,43 +130,24 @@ def office_grid(path: str | Path, n: int = 10, room: float = 5.0, thickness: flo
     in each wall between columns (at the room's middle) and in each wall
     between rows (at 0.3 of the room), so every room is reached. Walls are
     closed outlines of the pieces between doors; doors are block inserts at
-    the hinge, turned to their wall and mirrored every other one.
+    the hinge, turned to their wall and mirrored every other one. The
+    layout is :class:`~mapkit_harness.plans.grid_layout.RoomGridLayout`'s.
     """
+    layout = RoomGridLayout((n, n), (room, room), thickness, door)
     doc = new_document()
     msp = doc.modelspace()
     block = define_door_block(doc, door)
-    side = n * room
-    h = thickness / 2.0
-    walls, gaps, doors = [], [], 0
-    # Walls between columns (x = i * room), then between rows (y = i * room);
-    # the outer ones sit inside the grid. Along a wall between columns its
-    # doors stand at the middle of each room, on its west face, swinging
-    # west; along one between rows at 0.3 of each room, on its north face,
-    # swinging north. A door's hinge alternates between its jambs.
-    for between_columns in (True, False):
-        def xy(along, across):
-            return (across, along) if between_columns else (along, across)
-
-        door_at = 0.5 if between_columns else 0.3
-        for i in range(n + 1):
-            c = i * room
-            c0, c1 = (0.0, thickness) if i == 0 else (side - thickness, side) if i == n else (c - h, c + h)
-            face = c0 if between_columns else c1
-            holes = [] if i in (0, n) else \
-                [((j + door_at) * room - door / 2, (j + door_at) * room + door / 2) for j in range(n)]
-            for a, b in _pieces(0.0, side, holes):
-                walls.append(add_rect(msp, *xy(a, c0), *xy(b, c1), wall_layer))
-            for j, (a, b) in enumerate(holes):
-                if (i + j) % 2:
-                    add_door(msp, block, xy(a, face), xy(b, face), 1, door_layer)
-                else:
-                    add_door(msp, block, xy(b, face), xy(a, face), -1, door_layer)
-                gaps.append(box(*xy(a, c0), *xy(b, c1)))
-                doors += 1
+    walls, gaps = [], []
+    # Each wall's pieces, then its doors, wall after wall: the drawing's order.
+    for wall in layout.walls():
+        walls += [add_rect(msp, *piece, wall_layer) for piece in wall.pieces]
+        for doorway in wall.doorways:
+            add_door(msp, block, doorway.hinge, doorway.latch, doorway.swing_side, door_layer)
+            gaps.append(box(*doorway.rect))
     doc.saveas(path)
     wall_geom = shapely.union_all(walls)
-    interior = box(0, 0, side, side)
-    return PlanFacts(wall_geom, interior, doors, n * n, {"door_gaps": gaps})
+    interior = box(*layout.outline)
+    return PlanFacts(wall_geom, interior, len(gaps), n * n, {"door_gaps": gaps})
 
 
 # --------------------------------------------------------------------------
@@ -227,7 +198,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
             k += 1
         if horizontal and fixed == 0.0:  # the entrance replaces the window of its bay
             holes = [g for g in holes if g[1] < entrance[0] or g[0] > entrance[1]] + [entrance]
-        for a, b in _pieces(0.0, length, holes):
+        for a, b in stretches_between(0.0, length, holes):
             walls.append(add_rect(msp, a, y0, b, y1, STRUCTURE) if horizontal else add_rect(msp, y0, a, y1, b, STRUCTURE))
         for a, b in holes:
             if (a, b) != entrance or not horizontal or fixed != 0.0:
@@ -236,7 +207,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
         # small mullion piers every ``pier_spacing`` along the wall pieces.
         inward = 1 if fixed == 0.0 else -1
         centres = [(k * bay, 0.3, 0.5) for k in range(1, int(length // bay) + 1)]
-        for a, b in _pieces(0.0, length, holes):
+        for a, b in stretches_between(0.0, length, holes):
             centres += [(c, 0.12, 0.3) for c in np.arange(a + 0.4, b - 0.3, pier_spacing) if
                         all(abs(c - k * bay) > 0.6 for k in range(int(length // bay) + 1))]
         for c, half, reach in centres:
@@ -256,7 +227,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
     north = depth - t
     front = north - 5.0
     xs = [t, 6.0, 12.0, 18.0]  # room walls; east of 18 m stays open plan
-    for a, b in _pieces(xs[0], xs[-1] + pt / 2, [(x + 1.0, x + 1.9) for x in xs[:-1]]):
+    for a, b in stretches_between(xs[0], xs[-1] + pt / 2, [(x + 1.0, x + 1.9) for x in xs[:-1]]):
         walls.append(add_rect(msp, a, front - pt / 2, b, front + pt / 2, PARTITIONS))
     for x in xs[1:]:
         walls.append(add_rect(msp, x - pt / 2, front - pt / 2, x + pt / 2, north, PARTITIONS))
@@ -274,7 +245,7 @@ def open_office(path: str | Path, width: float = 30.0, depth: float = 20.0, pier
     # ---- core: three small rooms in the middle, doors on the south side
     cx0, cy0, cx1, cy1 = 12.0, 5.0, 18.0, 9.0
     core_doors = [(cx0 + 0.5, cx0 + 1.4), (cx0 + 2.5, cx0 + 3.4), (cx0 + 4.5, cx0 + 5.4)]
-    for a, b in _pieces(cx0 - pt / 2, cx1 + pt / 2, core_doors):
+    for a, b in stretches_between(cx0 - pt / 2, cx1 + pt / 2, core_doors):
         walls.append(add_rect(msp, a, cy0 - pt / 2, b, cy0 + pt / 2, PARTITIONS))
     walls.append(add_rect(msp, cx0 - pt / 2, cy1 - pt / 2, cx1 + pt / 2, cy1 + pt / 2, PARTITIONS))
     for x in (cx0, cx0 + 2.0, cx0 + 4.0, cx1):

@@ -6,12 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from mapkit_harness.plans.grid_layout import RoomGridLayout
+
 
 def room_grid(n: int, subdivide: int, height: float = 2.5, thick: float = 0.2):
     """An n x n grid of 4 x 3 m rooms; walls are separate subdivided boxes.
 
     Walls along x span the whole grid width, walls along y sit between them,
-    so every wall/wall junction is a T or an L of touching boxes.
+    so every wall/wall junction is a T or an L of touching boxes (a
+    :class:`~mapkit_harness.plans.grid_layout.RoomGridLayout` with walls
+    after their grid lines and butt junctions, no doorways).
     """
     import trimesh
 
@@ -22,12 +26,13 @@ def room_grid(n: int, subdivide: int, height: float = 2.5, thick: float = 0.2):
             m = m.subdivide()
         return m
 
-    w, d = 4.0, 3.0
-    span_x = n * w + thick
-    parts = [box([0, j * d, 0], [span_x, j * d + thick, height]) for j in range(n + 1)]
-    for j in range(n):
-        for i in range(n + 1):
-            parts.append(box([i * w, j * d + thick, 0], [i * w + thick, (j + 1) * d, height]))
+    layout = RoomGridLayout((n, n), (4.0, 3.0), thick, placement="after_line", junctions="butt")
+    walls = layout.walls()
+    # The walls along x first (south to north), then the pieces of those
+    # along y row by row, west to east: the order the mesh was first made in.
+    pieces = [p for wall in walls if not wall.between_columns for p in wall.pieces]
+    pieces += sorted((p for wall in walls if wall.between_columns for p in wall.pieces), key=lambda r: (r[1], r[0]))
+    parts = [box([x0, y0, 0], [x1, y1, height]) for x0, y0, x1, y1 in pieces]
     return trimesh.util.concatenate(parts)
 
 
