@@ -30,6 +30,13 @@ in walls between rows, so that no two doorways of a room line up). A door
 is drawn on the wall's west face (walls between columns) or north face
 (walls between rows) and swings off that face; its hinge alternates
 between the doorway's two jambs from one doorway to the next.
+
+The renderers keep the outputs they had before sharing this layout (byte
+for byte): the DXF draws each wall's pieces then its doors, wall after
+wall; the LineMap unions each interior wall's :attr:`GridWall.whole`
+rectangle into the outer ring and then cuts every doorway at once, as
+shapely's ring vertex order depends on that sequence of operations; the
+mesh boxes the walls between rows, then the other pieces row by row.
 """
 
 from __future__ import annotations
