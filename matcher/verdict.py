@@ -113,6 +113,8 @@ class Evidence:
     best answer at another place (:func:`matcher.ambiguity.rival_apart`):
     how many lines a wrong place explains by chance, measured on the frame
     itself instead of a share fixed in advance.
+    ``e_accept``: when set (a rig), the acceptance threshold of E in place
+    of ``Tolerances.e_accept`` (``RigConstants.e_accept``).
     ``calibration``: why the best pose's matched lines say the camera
     file's calibration is wrong ("" when they do not), worked out when read
     (:func:`matcher.stage2.calibration_check.doubt`)."""
@@ -131,13 +133,14 @@ class Evidence:
     sweep: Sweep | None = None
     cut: str = UNCUT
     clear_ratio: float | None = None
+    e_accept: float | None = None
     calibration: Deferred | None = None
 
 
-def score_accepted(score: float, tol: Tolerances) -> bool:
+def score_accepted(score: float, tol: Tolerances, limit: float | None = None) -> bool:
     """Is E = ``score`` within the acceptance threshold (method.md
-    section 8; not for a NaN)?"""
-    return bool(score <= tol.e_accept)
+    section 8: ``tol.e_accept``, or ``limit`` when given; not for a NaN)?"""
+    return bool(score <= (tol.e_accept if limit is None else limit))
 
 
 def trusted(explained: int, usable: int, work: LostConstants) -> bool:
@@ -184,10 +187,10 @@ def decide(ev: Evidence, tol: Tolerances) -> Verdict:
 def _refused(ev: Evidence, tol: Tolerances, cut: str) -> Verdict | None:
     """Tests 3 to 5 on the best pose alone: its score, its coverage of the
     map in view, the lines it explains; None when it passes them."""
-    E = ev.score
-    if not score_accepted(E, tol):
+    E, limit = ev.score, tol.e_accept if ev.e_accept is None else ev.e_accept
+    if not score_accepted(E, tol, limit):
         finite = E == E and abs(E) != float("inf")
-        why = ev.unscored if not finite else f"best score E={E:.3g} is above the acceptance threshold {tol.e_accept:g}"
+        why = ev.unscored if not finite else f"best score E={E:.3g} is above the acceptance threshold {limit:g}"
         return Verdict(NOT_LOCALISED, why + cut, score=float(E) if finite else None)
     work = tol.verdict
     if ev.coverage is not None:

@@ -54,6 +54,18 @@ def test_the_score_is_tested_first_and_reported():
     assert score_accepted(TOL.e_accept, TOL) and not score_accepted(float("nan"), TOL)
 
 
+def test_a_rig_brings_its_own_score_threshold():
+    """A rig's evidence carries ``RigConstants.e_accept``: a score between
+    the single camera's threshold and the rig's passes, and a refusal names
+    the threshold that refused it."""
+    between = 0.5 * (TOL.e_accept + TOL.rig.e_accept)
+    assert TOL.e_accept < between < TOL.rig.e_accept
+    assert not decide(_good(score=between), TOL)
+    assert decide(_good(score=between, e_accept=TOL.rig.e_accept), TOL)
+    v = decide(_good(score=1.0, e_accept=TOL.rig.e_accept), TOL)
+    assert v.reason == f"best score E=1 is above the acceptance threshold {TOL.rig.e_accept:g}"
+
+
 def test_coverage_then_the_lines_explained():
     v = decide(_good(coverage=Deferred(lambda: (10, 2))), TOL)
     assert v.status == NOT_LOCALISED and v.score is None

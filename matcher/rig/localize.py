@@ -169,7 +169,7 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
         ev = Evidence(score=float(E[best]), coverage=Deferred(lambda: _coverage(frame, cands, ranked, best, tol)),
                       explained=int(ranked.explained[best]), searched=frame.searched, needed=0,
                       answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=run.cut,
-                      clear_ratio=tol.rig.clear_ratio)
+                      clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept)
     verdict = decide(ev, tol)
     times = dict(run.times, total=(time.perf_counter() - run.t0) * 1e3)
     listed = [(float(E[h]), _all_matches(frame, cands, ranked, h), _pose_deg(ranked.poses[h])) for h in finite]
