@@ -265,6 +265,21 @@ def test_a_sheet_of_two_plans_builds_one_and_names_the_other(tmp_path, capsys):
     assert code == 0 and "plans: 2 separate plans" in out and "#2  11.0 x 9.1 m at (30.0, -0.6)" in out
 
 
+def test_layers_lists_the_plans_of_a_sheet_reading_the_file_once(tmp_path, capsys, monkeypatch):
+    """'mapkit layers' found a sheet's plans by importing the drawing a
+    second time after its layer table had read it: on a large drawing the
+    listing took as long as two imports. The file is parsed once and the
+    plans are listed as before."""
+    sheet = _sheet(tmp_path)
+    reads = []
+    readfile = ezdxf.readfile
+    monkeypatch.setattr(ezdxf, "readfile", lambda *a, **k: reads.append(a[0]) or readfile(*a, **k))
+    code, out, err = run(capsys, "layers", sheet)
+    assert code == 0, err
+    assert "plans: 2 separate plans" in out and "#2  11.0 x 9.1 m at (30.0, -0.6)" in out
+    assert len(reads) == 1, reads
+
+
 def _zoned_rooms(path):
     """Two 4 x 4 m rooms in double-line walls 0.2 m thick (A-WALL), each
     also drawn as a room polygon on a room layer (a facility-management
