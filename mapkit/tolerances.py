@@ -195,7 +195,8 @@ SHEET_MIN_PLAN_AREA_SHARE = 0.5
 
 #: A plan whose walls span less than this, metres, and leave no free space
 #: is probably read in the wrong units (a gallery drawn at 1:10 in metres
-#: spans 4.6 m): the refusal names --units and --scale.
+#: spans 4.6 m): the refusal names the --units or --scale that makes it a
+#: building's size (:func:`mapkit.importers.dxf.units.rescale_hint`).
 SMALL_PLAN_M = 10.0
 
 #: Plausible building extent, metres (largest side); outside it the drawing

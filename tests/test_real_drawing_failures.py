@@ -11,7 +11,7 @@ import ezdxf
 import numpy as np
 import pytest
 import shapely
-from cli_helpers import run
+from cli_helpers import assert_one_line_error, run
 from shapely import wkt
 
 from linemap.lmap import load_map
@@ -265,6 +265,21 @@ def test_a_sheet_of_two_plans_builds_one_and_names_the_other(tmp_path, capsys):
     assert code == 0 and "plans: 2 separate plans" in out and "#2  11.0 x 9.1 m at (30.0, -0.6)" in out
 
 
+def test_layers_lists_the_plans_of_a_sheet_reading_the_file_once(tmp_path, capsys, monkeypatch):
+    """'mapkit layers' found a sheet's plans by importing the drawing a
+    second time after its layer table had read it: on a large drawing the
+    listing took as long as two imports. The file is parsed once and the
+    plans are listed as before."""
+    sheet = _sheet(tmp_path)
+    reads = []
+    readfile = ezdxf.readfile
+    monkeypatch.setattr(ezdxf, "readfile", lambda *a, **k: reads.append(a[0]) or readfile(*a, **k))
+    code, out, err = run(capsys, "layers", sheet)
+    assert code == 0, err
+    assert "plans: 2 separate plans" in out and "#2  11.0 x 9.1 m at (30.0, -0.6)" in out
+    assert len(reads) == 1, reads
+
+
 def _zoned_rooms(path):
     """Two 4 x 4 m rooms in double-line walls 0.2 m thick (A-WALL), each
     also drawn as a room polygon on a room layer (a facility-management
@@ -301,9 +316,10 @@ def test_room_fills_do_not_wall_up_the_doorways(tmp_path):
 
 @pytest.mark.slow
 def test_a_plan_too_small_for_free_space_names_the_units(tmp_path, capsys):
-    """A gallery drawn at a tenth of its size (depthmapX's test plan, 4.6 m
-    across in metres) was refused naming only the wall layers and the robot
-    radius; the refusal names --units and --scale, and with --scale it builds."""
+    """A plan drawn in centimetres that says millimetres was refused naming
+    only the wall layers and the robot radius; the refusal says what the
+    plan measures as read and names the --units that makes it a building's
+    size, and with that option it builds."""
     doc = ezdxf.readfile(FLAT)
     for e in doc.modelspace():
         try:
@@ -313,7 +329,53 @@ def test_a_plan_too_small_for_free_space_names_the_units(tmp_path, capsys):
     small = tmp_path / "small.dxf"
     doc.saveas(small)
     code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap")
-    assert code == 2 and "the walls span only 1.2 x 1.0 m read in mm: if the drawing is in other units" in err
+    assert code == 2 and ("the walls span only 1.2 x 1.0 m as read in mm (its $INSUNITS 4 says mm): if it is "
+                          "drawn in cm, give --units cm (then 12 x 10 m)") in err
     assert not (tmp_path / "small.lmap").exists()
-    code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap", "--scale", "10", "-q")
+    code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap", "--units", "cm", "-q")
     assert code == 0, err
+
+
+def _corridor_at_a_tenth(path):
+    """A 40 x 3 m corridor in double-line walls 0.2 m thick drawn at a
+    tenth of its size in a file that says metres (depthmapX's gallery, 4.6 m
+    across so read): no unit makes it a building, a scale does."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (4.0, 0), (4.0, 0.3), (0, 0.3)], close=True, dxfattribs={"layer": "A-WALL"})
+    msp.add_lwpolyline([(0.02, 0.02), (3.98, 0.02), (3.98, 0.28), (0.02, 0.28)], close=True,
+                       dxfattribs={"layer": "A-WALL"})
+    doc.saveas(path)
+    return path
+
+
+def test_a_plan_drawn_at_a_tenth_in_metres_is_refused_naming_the_scale(tmp_path, capsys):
+    """Refused with no free space, the gallery's message said only 'if the
+    drawing is in other units, give them with --units or --scale'; no unit
+    makes a 4 m plan in metres a building, so it names the --scale that
+    does, and with that scale the plan has its free space."""
+    from mapkit.importers import load_scene
+    from mapkit.options import BuildOptions
+
+    corridor = _corridor_at_a_tenth(tmp_path / "corridor.dxf")
+    code, out, err = run(capsys, "build", corridor, "-o", tmp_path / "corridor.lmap")
+    assert_one_line_error(code, out, err, "no free space left inside the walls")
+    assert ("the walls span only 4.0 x 0.3 m as read in m (its $INSUNITS 6 says m): if it is drawn at 1/10 of its "
+            "size, give --scale 10 (then 40 x 3 m)") in err
+    assert not (tmp_path / "corridor.lmap").exists()
+    scene = load_scene(corridor, BuildOptions(scale=10))
+    assert scene.free_space.area == pytest.approx((39.6 - 0.4) * (2.6 - 0.4), rel=0.01)
+
+
+@pytest.mark.parametrize("unit, insunits, override, scale, says", [
+    ("mm", 4, None, 1.0, "as read in mm (its $INSUNITS 4 says mm): if it is drawn in cm, give --units cm (then 12 x 8 m)"),
+    ("in", 1, None, 1.0, "as read in in (its $INSUNITS 1 says in): if it is drawn in ft, give --units ft (then 14 x 10 m)"),
+    ("m", 6, "m", 1.0, "as read in m (--units m): if it is drawn at 1/10 of its size, give --scale 10 (then 12 x 8 m)"),
+    ("m", 0, None, 2.0, "as read in m (assumed from its extent, $INSUNITS 0): if it is drawn at 1/10 of its size, "
+                        "give --scale 20 (then 12 x 8 m)"),
+])
+def test_the_rescale_hint_names_the_unit_of_the_same_system_or_a_scale(unit, insunits, override, scale, says):
+    from mapkit.importers.dxf.units import rescale_hint
+
+    assert rescale_hint(1.2, 0.8, unit, insunits, override, scale) == f"the walls span only 1.2 x 0.8 m {says}"

@@ -36,6 +36,7 @@ def run(args) -> int:
     if path.suffix.lower() != ".dxf":
         raise MapkitError(f"{path.name}: 'mapkit layers' reads DXF plans (.dxf), got a '{path.suffix}' file")
     doc, warnings = read_dxf(path)
+    document = (doc, list(warnings))  # as read, for the plans below: the file is parsed once
     counts = layer_counts(doc)
     try:
         roles, more = resolve_roles(counts, options)
@@ -55,7 +56,7 @@ def run(args) -> int:
         }
         for name, c in sorted(counts.items(), key=lambda kv: kv[0].casefold())
     ]
-    plans = _plans(path, options, roles)
+    plans = _plans(path, document, options, roles)
     if args.json:
         print(json.dumps({"file": path.name, "layers": rows, "plans": plans, "warnings": warnings}))
         return 0
@@ -71,8 +72,9 @@ def run(args) -> int:
     return 0
 
 
-def _plans(path, options, roles) -> list[dict]:
-    """The separate plans of the drawing's walls (:mod:`mapkit.importers.dxf.sheets`), [] without walls."""
+def _plans(path, document, options, roles) -> list[dict]:
+    """The separate plans of the drawing's walls (:mod:`mapkit.importers.dxf.sheets`), [] without walls;
+    ``document`` is the ``(ezdxf document, warnings)`` already read of ``path``."""
     import logging
 
     from mapkit.importers.dxf import load_drawing
@@ -81,7 +83,7 @@ def _plans(path, options, roles) -> list[dict]:
         return []
     logging.getLogger("mapkit").disabled = True  # the build's warnings are not this listing's
     try:
-        _, info = load_drawing(path, options)
+        _, info = load_drawing(path, options, document)
     finally:
         logging.getLogger("mapkit").disabled = False
     return info.get("plans", [])

@@ -60,9 +60,16 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
     return reconstruct_scene(drawing, options, info)
 
 
-def load_drawing(path: Path, options: BuildOptions) -> tuple[PlanDrawing, dict]:
-    """The plan's strokes per role, and ``info`` (units, layers, warnings) so far."""
-    doc, warnings = read_dxf(path)
+def load_drawing(path: Path, options: BuildOptions, document: tuple | None = None) -> tuple[PlanDrawing, dict]:
+    """The plan's strokes per role, and ``info`` (units, layers, warnings) so far.
+
+    ``document`` is the ``(ezdxf document, warnings)`` :func:`.read.read_dxf`
+    gave for ``path`` when the caller has read it already ('mapkit layers':
+    parsing a large drawing takes as long as the rest of this); read here
+    otherwise. The document is only read, its warnings list not changed.
+    """
+    doc, warnings = document if document is not None else read_dxf(path)
+    warnings = list(warnings)
     for w in warnings:
         log.warning(w)
     check_entity_count(model_space(doc), doc.blocks, options.max_entities)

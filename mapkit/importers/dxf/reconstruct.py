@@ -25,6 +25,7 @@ from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
+from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
@@ -102,8 +103,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
         x0, y0, x1, y1 = walls.bounds
         small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
-        hint = (f"; the walls span only {x1 - x0:.1f} x {y1 - y0:.1f} m read in {info.get('units', 'm')}: if the "
-                f"drawing is in other units, give them with --units or --scale" if small else "")
+        hint = ("; " + rescale_hint(x1 - x0, y1 - y0, info.get("units", "m"), info.get("insunits"), options.units,
+                                   options.scale) if small else "")
         raise NoFreeSpaceError(
             f"no free space left inside the walls (layers {layers}) after keeping {options.robot_radius:g} m "
             f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius"

@@ -22,6 +22,10 @@ INSUNITS = {1: "in", 2: "ft", 4: "mm", 5: "cm", 6: "m", 7: "km", 10: "yd", 14: "
 _GUESSES = ("m", "mm", "cm")
 _GUESSES_IMPERIAL = ("in", "ft")
 
+#: Units of the imperial system: a plan read in one of them and too small
+#: was probably drawn in another of them (``rescale_hint``).
+_IMPERIAL_UNITS = frozenset({"in", "ft", "yd", "us-ft"})
+
 
 def _plausible(extent_m: float) -> bool:
     lo, hi = PLAUSIBLE_EXTENT
@@ -64,6 +68,41 @@ def decide_units(
         f"{extent:.4g} units ({_fmt(extent * factor)}); pass --units to override"
     )
     return name, factor, warning
+
+
+def rescale_hint(width_m: float, depth_m: float, unit: str, insunits: int | None, override: str | None,
+                 scale: float) -> str:
+    """What to pass for a plan read too small for a building (its walls span
+    ``width_m`` x ``depth_m`` metres read in ``unit`` times ``scale``, the
+    ``--scale``): the unit as read and where it came from (``override``, the
+    ``--units``, or the ``insunits`` header code), then the ``--units`` of
+    the same system (metric or imperial) that puts the plan closest to a
+    typical building's size, or when none is closer than as read (a gallery
+    drawn at 1:10 in metres), the ``--scale`` by a power of ten that does.
+    One clause, e.g. "the walls span only 1.2 x 1.0 m as read in mm (its
+    $INSUNITS 4 says mm): if it is drawn in cm, give --units cm (then 12 x 10 m)".
+    """
+    if override:
+        source = f"--units {override}"
+    elif insunits in INSUNITS:
+        source = f"its $INSUNITS {insunits} says {unit}"
+    else:
+        source = f"assumed from its extent, $INSUNITS {insunits or 0}"
+    read = f"the walls span only {width_m:.1f} x {depth_m:.1f} m as read in {unit} ({source})"
+    extent = max(width_m, depth_m, ZERO.distance)
+
+    def off_typical(metres: float) -> float:
+        return abs(math.log10(max(metres, ZERO.distance) / TYPICAL_EXTENT))
+
+    system = _GUESSES_IMPERIAL if unit in _IMPERIAL_UNITS else _GUESSES
+    best = min(system, key=lambda u: off_typical(extent * UNIT_METRES[u] / UNIT_METRES[unit]))
+    ratio = UNIT_METRES[best] / UNIT_METRES[unit]
+    if best != unit and _plausible(extent * ratio) and off_typical(extent * ratio) < off_typical(extent):
+        return (f"{read}: if it is drawn in {best}, give --units {best} "
+                f"(then {width_m * ratio:.0f} x {depth_m * ratio:.0f} m)")
+    times = 10 ** max(1, round(math.log10(TYPICAL_EXTENT / extent)))
+    return (f"{read}: if it is drawn at 1/{times} of its size, give --scale {scale * times:g} "
+            f"(then {width_m * times:.0f} x {depth_m * times:.0f} m)")
 
 
 def _likely_units(extent: float, imperial: bool) -> str:
