@@ -558,6 +558,18 @@ class RigConstants(_Constants):
     #: to 14 right, 0 wrong; whole panoramas (matcher.panorama's cut) in
     #: docs/benchmarks/real-rigs.md.
     e_accept: float = 3e-3
+    #: The best pose must explain this share of the frame's searched lines
+    #: (every camera's longest, ``search_lines`` each), whatever the other
+    #: places: where the verification found no pose elsewhere, the
+    #: clear-ratio test has nothing to compare with. Far below a single
+    #: view's ``VerdictConstants.chance_fit_share`` (0.16): real rooms fill a
+    #: camera with clutter, and right rig poses on the ZInD sample tour
+    #: explain 10 to 40 % of their searched lines. Chosen on 4-camera rigs at
+    #: PEQ 3, seeds 0 and 1: right best poses explained 0.098 to 0.40 of
+    #: their searched lines, a wrong one accepted without it 0.04 (4 of
+    #: 100); held out on seed 2 and whole panoramas
+    #: (docs/benchmarks/real-rigs.md).
+    explained_min_share: float = 0.08
 
 
 #: The fields of :class:`Tolerances` that hold inner constants, and each one's class.

@@ -32,7 +32,7 @@ from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
 from matcher.rig.verify import RigRanked, merged, verify_seeds
-from matcher.stage2.fit import coverage as coverage_of
+from matcher.stage2.fit import coverage_in_sight
 from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, decide, trusted
@@ -167,7 +167,8 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
     else:
         pose_std = Deferred(lambda: _pose_std(frame, cands, ranked, best, tol))
         ev = Evidence(score=float(E[best]), coverage=Deferred(lambda: _coverage(frame, cands, ranked, best, tol)),
-                      explained=int(ranked.explained[best]), searched=frame.searched, needed=0,
+                      explained=int(ranked.explained[best]), searched=frame.searched,
+                      needed=rig_lines_needed(frame.searched, tol),
                       answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=run.cut,
                       clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept)
     verdict = decide(ev, tol)
@@ -182,6 +183,14 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
     return LocalizeResult(True, "", pose=_pose_deg(ranked.poses[best]), score=verdict.score,
                           matches=listed[0][1], cameras=_per_camera(frame, cands, ranked, best, tol), _pose_std=pose_std,
                           **common)
+
+
+def rig_lines_needed(searched: int, tol: Tolerances) -> int:
+    """How many of a rig frame's ``searched`` lines (all cameras) its best
+    pose must explain: ``min_matches`` and ``RigConstants.explained_min_share``
+    of them (the rig's clear-ratio test measures chance fits against other
+    places; this floor holds where no other place was verified)."""
+    return max(tol.min_matches, math.ceil(tol.rig.explained_min_share * searched))
 
 
 def _single_lines(rig, lines):
@@ -228,17 +237,21 @@ def _per_camera(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: To
 
 
 def _coverage(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances) -> tuple[int, int]:
-    """``(predicted, seen)`` map segments in view of every camera at pose
-    ``h`` (:func:`matcher.stage2.fit.coverage` summed over the cameras): a
-    pose must be supported around the robot, not by one camera's clutter."""
-    predicted = seen = 0
+    """``(predicted, seen)`` map segments in view of the rig's cameras at
+    pose ``h`` (:func:`matcher.stage2.fit.coverage_in_sight` of each), each
+    counted once however many cameras see it: a pose must be supported
+    around the robot, not by one camera's clutter; and the views of a
+    panorama overlap (a segment in two views and matched by a line of one
+    of them is seen, not half seen)."""
+    predicted, seen = set(), set()
     for v, c, m in zip(frame.views, cands, ranked.matches):
         if c is None:
             continue
         q = v.mount.camera_poses(ranked.poses[h])
-        p, s = coverage_of(v.camera, q, c.segments, c.label, m.local[m.hyp == h], c.walls, tol)
-        predicted, seen = predicted + p, seen + s
-    return predicted, seen
+        idx, held = coverage_in_sight(v.camera, q, c.segments, c.label, m.local[m.hyp == h], c.walls, tol)
+        predicted.update(c.ids[idx].tolist())
+        seen.update(c.ids[idx[held]].tolist())
+    return len(predicted), len(seen)
 
 
 def _pose_std(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances):

@@ -111,14 +111,31 @@ def coverage(camera, pose: np.ndarray, segments: np.ndarray, label: np.ndarray, 
     ``coverage_min_share``: it can only drop unmatched ones (the matched
     are in sight by stage 2's own test). Thresholds: ``tol.verdict``'s
     (it judges the best pose), projection and sight: ``tol.stage2``'s."""
-    work = tol.verdict
+    poses, uv, cand, held = _in_view(camera, pose, segments, label, matched, tol)
+    if held.sum() >= tol.verdict.coverage_min_share * len(cand):
+        return int(len(cand)), int(held.sum())
+    in_sight = visible(camera, poses[cand], segments[cand], uv[cand], walls, tol.stage2, tol.shared)
+    return int(in_sight.sum()), int((held & in_sight).sum())
+
+
+def coverage_in_sight(camera, pose: np.ndarray, segments: np.ndarray, label: np.ndarray, matched: np.ndarray, walls,
+                      tol) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`coverage`'s segments themselves: ``(predicted, held)``,
+    the indices into ``segments`` of those the camera should see (in plain
+    sight, always tested) and, per one of them, whether a match holds its
+    collinear group (bool). A rig counts the map segments around the robot
+    once, however many of its cameras see them."""
+    poses, uv, cand, held = _in_view(camera, pose, segments, label, matched, tol)
+    in_sight = visible(camera, poses[cand], segments[cand], uv[cand], walls, tol.stage2, tol.shared)
+    return cand[in_sight], held[in_sight]
+
+
+def _in_view(camera, pose: np.ndarray, segments: np.ndarray, label: np.ndarray, matched: np.ndarray, tol):
+    """The candidates projected long enough inside the image: ``(poses (N,
+    3), uv (N, 2, 2) clipped, cand (C,) their indices, held (C,) bool)``."""
     poses = np.broadcast_to(pose, (len(segments), 3))
     uv, ahead = project_segments(camera, poses, segments, tol.stage2.near_plane_m)
     uv, inside = clip_lines(uv, (0.0, camera.width, 0.0, camera.height))
     length = np.hypot(*(uv[:, 1] - uv[:, 0]).T)
-    cand = np.nonzero(ahead & inside & (length >= work.coverage_min_px))[0]
-    held = np.isin(label[cand], label[matched])
-    if held.sum() >= work.coverage_min_share * len(cand):
-        return int(len(cand)), int(held.sum())
-    in_sight = visible(camera, poses[cand], segments[cand], uv[cand], walls, tol.stage2, tol.shared)
-    return int(in_sight.sum()), int((held & in_sight).sum())
+    cand = np.nonzero(ahead & inside & (length >= tol.verdict.coverage_min_px))[0]
+    return poses, uv, cand, np.isin(label[cand], label[matched])
