@@ -188,8 +188,9 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
 def rig_lines_needed(searched: int, tol: Tolerances) -> int:
     """How many of a rig frame's ``searched`` lines (all cameras) its best
     pose must explain: ``min_matches`` and ``RigConstants.explained_min_share``
-    of them (the rig's clear-ratio test measures chance fits against other
-    places; this floor holds where no other place was verified)."""
+    of them, whatever the other places (the clear-ratio test measures chance
+    fits against them; where none was verified it has nothing to compare
+    with, and this floor is what holds)."""
     return max(tol.min_matches, math.ceil(tol.rig.explained_min_share * searched))
 
 
