@@ -18,6 +18,14 @@ seeds; the held-out seeds (and the second map) were looked at after.
 
     python tools/bench_calibration.py                  # flat.lmap and the synthetic flat, PEQ 2
     python tools/bench_calibration.py --poses 3 --report docs/benchmarks/calibration.md
+    python tools/bench_calibration.py --cameras 4 --poses 3   # a 4-camera ring rig, every camera file wrong alike
+
+With ``--cameras N`` (N > 1) each frame is a ring rig's
+(:func:`mapkit_harness.rigs.ring_rig`: N cameras of 70 degrees, 0.2 m
+from the robot's centre; :func:`mapkit_harness.simulate.make_rig_frame`),
+localised with every camera's file changed alike (a rig of one camera
+model) by :func:`matcher.rig.localize_rig`, whose check runs the single
+camera's on each camera (:mod:`matcher.rig.calibration`).
 """
 
 from __future__ import annotations
@@ -30,8 +38,11 @@ from pathlib import Path
 import numpy as np
 
 import matcher
-from mapkit_harness.simulate import PEQ, make_frame, paper_camera, pose_error
+from linemap.rig import Rig
+from mapkit_harness.rigs import ring_rig
+from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera, pose_error
 from mapkit_harness.tables import Table, add_report_option, reported
+from matcher.rig import localize_rig
 from matcher.tolerances import DEFAULT
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -74,8 +85,12 @@ def load_maps(names: list[str]) -> dict:
 def outcome(linemap, camera, fr, tol) -> str:
     """``"right"``, ``"wrong"`` (accepted more than 20 cm / 5 deg off;
     ``"wrong on 4"`` when the answer matches 4 lines or fewer),
-    ``"calibration"`` (refused, naming the calibration) or ``"refused"``."""
-    res = matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw, tol)
+    ``"calibration"`` (refused, naming the calibration) or ``"refused"``.
+    ``camera``: a camera model, or a :class:`~linemap.rig.Rig` for a rig's frame."""
+    if isinstance(camera, Rig):
+        res = localize_rig(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw, tol)
+    else:
+        res = matcher.localize(linemap, camera, fr.lines, fr.prior, fr.dt, fr.dyaw, tol)
     if not res:
         return "calibration" if "camera calibration" in res.reason else "refused"
     dm, ddeg = pose_error(res.pose, fr.pose)
@@ -84,11 +99,21 @@ def outcome(linemap, camera, fr, tol) -> str:
     return "wrong on 4" if len(res.matches) <= 4 else "wrong"
 
 
+def wrong_camera(truth, name: str):
+    """The camera file ``name`` of :data:`WRONG` made from ``truth`` (a
+    camera, or a rig whose every camera's file is changed alike)."""
+    if isinstance(truth, Rig):
+        return Rig(tuple(replace(rc, camera=replace(rc.camera, **WRONG[name](rc.camera))) for rc in truth.cameras))
+    return replace(truth, **WRONG[name](truth))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Frames localised with a wrong camera file: accepted, accepted and "
                                              "wrong, refused; without and with the check of the calibration.")
     ap.add_argument("--maps", nargs="+", default=["flat", "synthetic"], choices=["flat", "synthetic"])
     ap.add_argument("--peq", type=int, default=2, choices=sorted(PEQ))
+    ap.add_argument("--cameras", type=int, default=1,
+                    help="cameras of a ring rig per frame (default 1: the paper's single camera)")
     ap.add_argument("--poses", type=int, default=6, help="frames per seed (default 6)")
     ap.add_argument("--tuning", type=int, nargs="+", default=[0, 1, 2, 3], help="seeds the thresholds were tuned on")
     ap.add_argument("--held-out", type=int, nargs="+", default=[4, 5, 6, 7], help="seeds held out")
@@ -101,16 +126,17 @@ def main(argv=None) -> int:
 
 def run(args) -> int:
     """The benchmark as ``main``'s arguments say; prints the table."""
-    truth = paper_camera()
+    truth = paper_camera() if args.cameras == 1 else ring_rig(args.cameras, hfov_deg=70.0, radius_m=0.2)
     unchecked = replace(DEFAULT, verdict=replace(DEFAULT.verdict, calibration_judged=()))
     table = Table("map", "camera file", "seeds", "frames", "accepted before", "wrong before", "accepted after",
                   "wrong after", "on 4 lines", "refused for it")
     t0, calls = time.perf_counter(), 0
     for map_name, linemap in load_maps(args.maps).items():
-        frames = {seed: [make_frame(linemap, truth, rng, args.peq) for rng in [np.random.default_rng([seed, args.peq])]
+        make = make_frame if args.cameras == 1 else make_rig_frame
+        frames = {seed: [make(linemap, truth, rng, args.peq) for rng in [np.random.default_rng([seed, args.peq])]
                          for _ in range(args.poses)] for seed in args.tuning + args.held_out}
         for name in args.wrong:
-            camera = replace(truth, **WRONG[name](truth))
+            camera = wrong_camera(truth, name)
             for label, seeds in (("tuning", args.tuning), ("held out", args.held_out)):
                 before = [outcome(linemap, camera, fr, unchecked) for s in seeds for fr in frames[s]]
                 after = [outcome(linemap, camera, fr, DEFAULT) for s in seeds for fr in frames[s]]
@@ -120,7 +146,8 @@ def run(args) -> int:
                           sum(o in ("right", *wrong) for o in before), sum(o in wrong for o in before),
                           sum(o in ("right", *wrong) for o in after), sum(o in wrong for o in after),
                           after.count("wrong on 4"), after.count("calibration"))
-    print(f"\n{calls} localisations in {time.perf_counter() - t0:.0f} s; PEQ {args.peq}; wrong: accepted more than "
+    rig = "one camera" if args.cameras == 1 else f"a ring rig of {args.cameras} cameras"
+    print(f"\n{calls} localisations in {time.perf_counter() - t0:.0f} s; {rig}; PEQ {args.peq}; wrong: accepted more than "
           f"{WRONG_M * 100:.0f} cm or {WRONG_DEG:g} deg from the truth")
     return 0
 

@@ -28,6 +28,7 @@ from matcher.input_validation import check_prior
 from matcher.lost import _localize_global, localize_global
 from matcher.projection import projected_end_distances
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
+from matcher.rig.calibration import rig_doubt
 from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
@@ -63,7 +64,7 @@ def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances:
         verdict = decide(Evidence(n_correspondences=counts["correspondences"], cut=cut), tol)
         return LocalizeResult(False, verdict.reason, time_ms=Timings(total=(time.perf_counter() - t0) * 1e3, **times),
                               stage1=SearchStats(**counts))
-    return rig_result(frame, found.cands, found.ranked, tol, RunInfo(t0, times, counts, cut))
+    return rig_result(frame, found.cands, found.ranked, tol, RunInfo(t0, times, counts, cut, px))
 
 
 @dataclass
@@ -141,10 +142,11 @@ def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = Non
 
 class RunInfo:
     """A call's clock start ``t0``, its step ``times`` (ms), stage 1's
-    ``counts`` and how the search was ``cut``."""
+    ``counts``, how the search was ``cut`` and the robot's prior ``px``
+    ``(xe, ye, yaw_e, dt, dyaw)`` radians (None: lost mode)."""
 
-    def __init__(self, t0: float, times: dict, counts: dict, cut: str) -> None:
-        self.t0, self.times, self.counts, self.cut = t0, times, counts, cut
+    def __init__(self, t0: float, times: dict, counts: dict, cut: str, px: tuple | None = None) -> None:
+        self.t0, self.times, self.counts, self.cut, self.px = t0, times, counts, cut, px
 
 
 def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, run: RunInfo,
@@ -170,7 +172,8 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
                       explained=int(ranked.explained[best]), searched=frame.searched,
                       needed=rig_lines_needed(frame.searched, tol),
                       answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=run.cut,
-                      clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept)
+                      clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept,
+                      calibration=Deferred(lambda: _calibration(frame, cands, ranked, best, tol, run.px)))
     verdict = decide(ev, tol)
     times = dict(run.times, total=(time.perf_counter() - run.t0) * 1e3)
     listed = [(float(E[h]), _all_matches(frame, cands, ranked, h), _pose_deg(ranked.poses[h])) for h in finite]
@@ -253,6 +256,17 @@ def _coverage(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tole
         predicted.update(c.ids[idx].tolist())
         seen.update(c.ids[idx[held]].tolist())
     return len(predicted), len(seen)
+
+
+def _calibration(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances, px: tuple | None) -> str:
+    """Why pose ``h``'s matches say a camera file is wrong
+    (:func:`matcher.rig.calibration.rig_doubt`), "" when they do not."""
+    per_camera = []
+    for v, c, m in zip(frame.views, cands, ranked.matches):
+        sel = m.hyp == h
+        if c is not None and sel.any():
+            per_camera.append((v, v.lines.lines[m.line[sel]], c.segments[m.local[sel]]))
+    return rig_doubt(per_camera, ranked.poses[h], tol, px)
 
 
 def _pose_std(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances):

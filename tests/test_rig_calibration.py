@@ -1,0 +1,50 @@
+"""A rig whose camera files are wrong is refused, not trusted
+(matcher.rig.calibration: the single camera's check on each camera)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import matcher
+from linemap.rig import Rig
+from mapkit_harness.rigs import ring_rig
+from mapkit_harness.simulate import make_rig_frame, pose_error
+from matcher.rig import localize_rig
+from matcher.tolerances import DEFAULT
+
+
+@pytest.fixture(scope="module")
+def flat():
+    return matcher.load_map("maps/flat.lmap")
+
+
+def _scaled(rig: Rig, scale: float) -> Rig:
+    """``rig`` with every camera's focal length scaled by ``scale``."""
+    return Rig(tuple(replace(rc, camera=replace(rc.camera, fx=rc.camera.fx * scale, fy=rc.camera.fy * scale))
+                     for rc in rig.cameras))
+
+
+def test_a_rig_whose_focal_length_is_20_percent_off_is_refused_with_its_reason(flat):
+    truth = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
+    wrong = _scaled(truth, 0.8)
+    unchecked = replace(DEFAULT, verdict=replace(DEFAULT.verdict, calibration_judged=()))
+    rng = np.random.default_rng([3, 2])  # frames whose wrong answers the check must catch
+    frames = [make_rig_frame(flat, truth, rng, 2) for _ in range(2)]
+    before = [localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw, unchecked) for f in frames]
+    # Without the check these frames are accepted about half a metre off: the case the check is for.
+    assert all(r and pose_error(r.pose, f.pose)[0] > 0.3 for r, f in zip(before, frames))
+    for f in frames:
+        res = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw)
+        assert not res
+        assert "camera calibration" in res.reason and res.reason.startswith("camera cam")
+
+
+def test_a_right_rig_is_not_blamed(flat):
+    truth = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
+    f = make_rig_frame(flat, truth, np.random.default_rng([1, 2]), 2)
+    res = localize_rig(flat, truth, f.lines, f.prior, f.dt, f.dyaw)
+    assert res, res.reason
+    assert pose_error(res.pose, f.pose)[0] < 0.01
