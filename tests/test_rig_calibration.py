@@ -39,7 +39,7 @@ def test_a_rig_whose_focal_length_is_20_percent_off_is_refused_with_its_reason(f
     for f in frames:
         res = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw)
         assert not res
-        assert "camera calibration" in res.reason and res.reason.startswith("camera cam")
+        assert "camera calibration" in res.reason and "camera cam" in res.reason
 
 
 def test_a_right_rig_is_not_blamed(flat):

@@ -1,39 +1,76 @@
-"""A rig's calibration check: do a camera's matched lines say its camera
-file is wrong?
+"""A rig's calibration check: do its cameras' matched lines say the camera
+files are wrong?
 
-The single camera's check (:mod:`matcher.stage2.calibration_check`) run on
-each camera of the rig in turn, on that camera's own matches, at its pose
-on the robot's best pose, within the robot's prior carried to the camera
-(:meth:`~matcher.rig.frame.CameraView.camera_prior`).
-A rig whose camera files are all off (a focal length 20 % short in a
-shared model, a wrong camera height) moves the robot's pose to make up
-for it, as one camera does; a rig with one wrong camera file makes the
-joint fit pull between its cameras. Either way each camera's own lines fit
-far better with its focal length or height freed, and the check, on the
-accepted answer only, names the camera and the parameter.
+The single camera's check (:mod:`matcher.stage2.calibration_check`) asked
+of a rig twice, on the robot's best pose:
 
-Judged per camera, not jointly: the joint fit with one camera's
-parameter free would be stronger (the other cameras hold the pose), but
-the per-camera fit is the single camera's, whose thresholds were chosen
-and held out on its own benchmark (tools/bench_calibration.py); a camera
-with fewer than ``calibration_min_lines`` matches is not judged.
+1. **Every camera alike**: the robot's pose fitted again on all cameras'
+   matches, each through its mount, with one calibration parameter free
+   and shared by all (a focal length scale, a height offset, a principal
+   point row offset): the rig of one camera model whose file is wrong (a
+   panorama's cut views, a rig of identical cameras with one file). A
+   focal length 20 % short moves the robot half a metre to make up for it,
+   as it moves one camera; one camera's few matches do not show it, all
+   the cameras' together do.
+2. **Each camera on its own**: the single camera's check on that camera's
+   matches at its pose, within the robot's prior carried to it
+   (:meth:`~matcher.rig.frame.CameraView.camera_prior`): one camera of the
+   rig whose file is wrong.
+
+The thresholds are the single camera's (``VerdictConstants``), chosen and
+held out on its own benchmark; ``python tools/bench_calibration.py
+--cameras 4`` measures the rig's. Run on the accepted answer only.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from matcher.stage2.calibration_check import doubt
+from matcher.stage2.calibration_check import MatchedLines, blamed_parameters, doubt
+
+
+class RigMatchedLines:
+    """The rig's matches at one robot pose, for the calibration fits: each
+    camera's :class:`~matcher.stage2.calibration_check.MatchedLines` and
+    its mount; the residuals of all cameras at the camera poses of a robot
+    pose, their derivatives in the robot's pose through each mount, a
+    calibration change applied to every camera alike."""
+
+    def __init__(self, per_camera, tol) -> None:
+        self.parts = [(MatchedLines(view.camera, lines, segments, tol), view.mount)
+                      for view, lines, segments in per_camera]
+
+    def __len__(self) -> int:
+        return sum(len(data) for data, _ in self.parts)
+
+    def weighted(self, pose: np.ndarray, calib: np.ndarray, jacobian: bool = False):
+        """(2T,) noise-weighted residuals of every camera at robot ``pose``
+        (3,) and calibration ``calib`` (4,), and with ``jacobian`` their
+        (2T, 3) derivatives in the robot's pose."""
+        out = [data.weighted(mount.camera_poses(pose), calib, jacobian) for data, mount in self.parts]
+        if not jacobian:
+            return np.concatenate(out)
+        J = [Jc @ mount.jacobian(pose[2]) for (_, Jc), (_, mount) in zip(out, self.parts)]
+        return np.concatenate([r for r, _ in out]), np.concatenate(J)
 
 
 def rig_doubt(per_camera, robot_pose: np.ndarray, tol, px: tuple | None) -> str:
-    """Why the matched lines of a rig's cameras say a camera file is wrong,
-    "" when none does. ``per_camera``: one ``(view, lines, segments)`` per
-    camera with matches (its :class:`~matcher.rig.frame.CameraView`, its
-    matched pixel lines (T, 2, 2) and map segments (T, 2, 3)); ``robot_pose``
-    (3,) ``(x, y, yaw)`` radians; ``px`` the robot's prior (None in lost
-    mode). Every camera is judged; the reason names each one blamed and
-    the first one's parameters."""
+    """Why the matched lines of a rig's cameras say the camera files are
+    wrong, "" when they do not. ``per_camera``: one ``(view, lines,
+    segments)`` per camera with matches (its
+    :class:`~matcher.rig.frame.CameraView`, its matched pixel lines (T, 2,
+    2) and map segments (T, 2, 3)); ``robot_pose`` (3,) ``(x, y, yaw)``
+    radians; ``px`` the robot's prior (None in lost mode)."""
+    if not per_camera:
+        return ""
+    lowest = min((view.camera for view, _, _ in per_camera), key=lambda c: (c.height_m, c.height))
+    alike = blamed_parameters(RigMatchedLines(per_camera, tol), lowest, robot_pose, tol, px)
+    if alike:
+        f, name = alike[0], per_camera[0][0].name
+        x, y, yaw = f.pose
+        return (f"the matched lines of every camera fit the map far better with {f.off_by(per_camera[0][0].camera)} "
+                f"for camera {name}, alike in every camera's file (the pose would be {x:.2f}, {y:.2f}, {yaw:.1f} "
+                f"deg), than with the camera files' calibration: check the camera calibration")
     blamed = []
     for view, lines, segments in per_camera:
         prior = None if px is None else view.camera_prior(px)

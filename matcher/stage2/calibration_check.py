@@ -263,10 +263,19 @@ def miscalibration(camera, lines: np.ndarray, segments: np.ndarray, pose, tol, p
     noise). Only the parameters whose first-order drop
     (:func:`screened`) reaches ``calibration_screen_share`` of the least
     drop are fitted in full."""
-    work = tol.verdict
-    if len(lines) < work.calibration_min_lines or not work.calibration_judged:
+    if len(lines) < tol.verdict.calibration_min_lines or not tol.verdict.calibration_judged:
         return []
-    data = MatchedLines(camera, lines, segments, tol)
+    return blamed_parameters(MatchedLines(camera, lines, segments, tol), camera, pose, tol, prior)
+
+
+def blamed_parameters(data, camera, pose, tol, prior=None) -> list:
+    """:func:`miscalibration` of prepared matches ``data`` (a
+    :class:`MatchedLines`, or any object with its ``weighted`` and length:
+    a rig's cameras' matches at one robot pose, :mod:`matcher.rig.calibration`)
+    at ``pose``; ``camera`` the model whose bounds :func:`plausible` checks."""
+    work = tol.verdict
+    if len(data) < work.calibration_min_lines or not work.calibration_judged:
+        return []
     pose = np.asarray(pose, dtype=float)
     judged = list(work.calibration_judged)
     drops = screened(data, pose, judged, work)
