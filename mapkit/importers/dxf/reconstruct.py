@@ -1,7 +1,9 @@
 """Plan reconstruction: strokes per role -> :class:`~mapkit.scene.Scene`.
 
 1. Walls (:mod:`mapkit.importers.dxf.walls`): solids from double lines,
-   outlines, fills and columns; single lines thickened.
+   outlines, fills and columns; single lines thickened. Jamb ticks across
+   single-line walls (:mod:`mapkit.importers.dxf.jamb_ticks`) are marks,
+   not walls; two with no door drawing at them mark a doorway.
 2. Openings (:mod:`mapkit.importers.dxf.openings`): each door or window
    drawing claims the wall gap it sits in; free-standing glass becomes an
    obstacle.
@@ -22,6 +24,7 @@ from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
+from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
@@ -29,7 +32,7 @@ from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
+from mapkit.tolerances import DOUBLE_DOOR_SQUARENESS, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -39,7 +42,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
 
     warn = partial(warn_decision, warnings)
 
-    wall_result = build_walls(drawing.role("walls"), options.max_wall_thickness)
+    # Jamb ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
+    wall_strokes, ticks = split_jamb_ticks(drawing.role("walls"))
+    wall_result = build_walls(wall_strokes, options.max_wall_thickness)
     walls = wall_result.walls
     if walls.is_empty:
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
@@ -65,6 +70,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             info["zone_walls_m2"] = round(between.area, 3)
 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
+    if ticks:
+        walls = _tick_doorways(ticks, drawing, walls, openings, door_gaps, options, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
@@ -151,6 +158,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     if cuts:
         walls = MultiPolygon(polygon_parts(walls.difference(unary_union(cuts))))
         warn(f"{len(cuts)} door drawing(s) over an unbroken wall: their openings cut through it")
+        _join_double_doors(cuts, openings, door_gaps)
     if lost:
         where = ", ".join(f"({p.x:.1f}, {p.y:.1f})" for p in lost[:5]) + (" ..." if len(lost) > 5 else "")
         warn(f"{len(lost)} door drawing(s) are not in a wall gap and were ignored, at {where} m; check them in 'mapkit preview'")
@@ -164,6 +172,49 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
     return walls, openings, obstacles, door_gaps
+
+
+def _tick_doorways(ticks, drawing: PlanDrawing, walls: MultiPolygon, openings: list[Opening],
+                   door_gaps: list[Polygon], options: BuildOptions, warn) -> MultiPolygon:
+    """The walls with the doorways that jamb ticks mark and no door drawing
+    claims (:func:`.jamb_ticks.tick_doorways`) cut through them; each
+    doorway is added to ``openings`` (a door's gap, sill 0) and
+    ``door_gaps``."""
+    gaps = [g for g in tick_doorways(ticks, drawing_items(drawing.role("doors")), walls)
+            if not _claimed(g, door_gaps + [o.footprint for o in openings])]
+    if not gaps:
+        return walls
+    for gap in gaps:
+        door_gaps.append(gap)
+        openings.append(Opening(gap, "door", 0.0, options.door_height))
+    warn(f"{len(gaps)} doorway(s) marked by jamb ticks across a wall line, without a door drawing: opened")
+    return MultiPolygon(polygon_parts(walls.difference(unary_union(gaps))))
+
+
+def _join_double_doors(cuts: list[Polygon], openings: list[Opening], door_gaps: list[Polygon]) -> None:
+    """Make the two leaves of a double door drawn over an unbroken wall one
+    opening: cut openings that meet end to end in one wall (their union is a
+    rectangle, ``DOUBLE_DOOR_SQUARENESS``) become one, in ``openings`` and
+    ``door_gaps`` alike (a leaf is drawn and cut on its own; the doorway is
+    one)."""
+    cut_ids = {id(c) for c in cuts}
+    leaves = [o for o in openings if id(o.footprint) in cut_ids]
+    joined: set[int] = set()
+    for i, a in enumerate(leaves):
+        if id(a) in joined:
+            continue
+        for b in leaves[i + 1:]:
+            if id(b) in joined or a.footprint.distance(b.footprint) > MERGE:
+                continue
+            both = unary_union([a.footprint, b.footprint])
+            if not isinstance(both, Polygon) or both.area < DOUBLE_DOOR_SQUARENESS * both.minimum_rotated_rectangle.area:
+                continue
+            k = next(n for n, o in enumerate(openings) if o is a)
+            openings[k] = a = Opening(both, a.kind, a.sill, a.head)
+            openings.remove(b)
+            door_gaps[:] = [g for g in door_gaps if g is not b.footprint]
+            door_gaps.append(both)
+            joined.add(id(b))
 
 
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
