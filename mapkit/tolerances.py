@@ -168,6 +168,12 @@ DOOR_SWING_TIP_SHARE = 0.15
 DOOR_SWING_MIN_CROSSING_DEG = 50.0
 DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 
+#: A room's outline (mapkit/importers/dxf/room_outlines.py) that the walls
+#: cut into more than one part of at least this many square metres is
+#: sealed in part (smaller parts are slivers between the outline and a wall
+#: face).
+ROOM_PART_MIN_AREA = 0.5
+
 #: Jamb ticks (mapkit/importers/dxf/jamb_ticks.py): a straight wall stroke
 #: at most this long, metres, that crosses a longer wall stroke within the
 #: middle ``JAMB_TICK_MIDDLE_SHARE`` of its length, within

@@ -134,3 +134,44 @@ def test_a_double_door_over_an_unbroken_facade_is_one_opening(tmp_path):
     (door,) = _doors(scene)
     x0, _, x1, _ = door.footprint.bounds
     assert x0 == pytest.approx(1.0, abs=0.01) and x1 == pytest.approx(3.0, abs=0.01)
+
+
+def _room_plan(path, across: bool, outlines):
+    """A 6 x 4 m room of double-line walls 0.2 m thick on 'A210 - Ext Walls'
+    (mm), the architect's room outlines ``outlines`` on 'Room - ...' layers,
+    and, if ``across``, a single line on the wall layer across the room at
+    y = 1.5 m from the outer face of one wall through to the other's (the UK
+    house's utility room: an overhead line drawn on the wall layer)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 4  # mm
+    msp = doc.modelspace()
+    wall = {"layer": "A210 - Ext Walls"}
+    msp.add_lwpolyline([(0, 0), (6000, 0), (6000, 4000), (0, 4000)], close=True, dxfattribs=wall)
+    msp.add_lwpolyline([(200, 200), (5800, 200), (5800, 3800), (200, 3800)], close=True, dxfattribs=wall)
+    if across:
+        msp.add_line((0, 1500), (6000, 1500), dxfattribs=wall)
+    for name, corners in outlines:
+        msp.add_lwpolyline(corners, close=True, dxfattribs={"layer": f"Room - {name}"})
+    doc.saveas(path)
+    return path
+
+
+def test_a_wall_line_across_a_room_outline_is_no_wall(tmp_path):
+    """A single line on the wall layer across a room whose outline the
+    architect drew as one room, sealing part of it off with no door: it was
+    a wall, and the room two sealed parts. The room is one."""
+    room = [("Utility", [(200, 200), (5800, 200), (5800, 3800), (200, 3800)])]
+    scene = load_scene(_room_plan(tmp_path / "across.dxf", True, room))
+    assert _parts(scene) == 1
+    assert scene.free_space.area == pytest.approx(load_scene(_room_plan(tmp_path / "plain.dxf", False, room))
+                                                  .free_space.area, rel=0.01)
+    assert any("single wall line(s) across a room's outline" in w for w in scene.info["warnings"])
+
+
+def test_a_wall_line_between_two_room_outlines_stays(tmp_path):
+    """The same line between two rooms the architect outlined apart is their
+    wall: the two rooms stay apart (no door joins them)."""
+    rooms = [("Store", [(200, 200), (5800, 200), (5800, 1500), (200, 1500)]),
+             ("Utility", [(200, 1500), (5800, 1500), (5800, 3800), (200, 3800)])]
+    scene = load_scene(_room_plan(tmp_path / "two.dxf", True, rooms))
+    assert _parts(scene) == 2

@@ -4,6 +4,8 @@
    outlines, fills and columns; single lines thickened. Jamb ticks across
    single-line walls (:mod:`mapkit.importers.dxf.jamb_ticks`) are marks,
    not walls; two with no door drawing at them mark a doorway.
+   A single wall line that seals part of a room's outline off with no door
+   is not a wall (:mod:`mapkit.importers.dxf.room_outlines`).
 2. Openings (:mod:`mapkit.importers.dxf.openings`): each door or window
    drawing claims the wall gap it sits in; free-standing glass becomes an
    obstacle.
@@ -27,6 +29,7 @@ from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
@@ -72,6 +75,12 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     if ticks:
         walls = _tick_doorways(ticks, drawing, walls, openings, door_gaps, options, warn)
+    rooms = room_outlines([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    not_walls = lines_splitting_rooms(rooms, walls, wall_result.single_lines)
+    if not not_walls.is_empty:
+        walls = MultiPolygon(polygon_parts(walls.difference(not_walls)))
+        warn(f"{len(polygon_parts(not_walls))} single wall line(s) across a room's outline, sealing part of the "
+             "room off with no door, are taken for overhead or setting-out lines, not walls")
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
