@@ -175,3 +175,24 @@ def test_a_wall_line_between_two_room_outlines_stays(tmp_path):
              ("Utility", [(200, 1500), (5800, 1500), (5800, 3800), (200, 3800)])]
     scene = load_scene(_room_plan(tmp_path / "two.dxf", True, rooms))
     assert _parts(scene) == 2
+
+
+def test_a_short_wall_whose_ends_meet_other_lines_is_no_tick():
+    """A short stroke across a wall line is a jamb tick only with both ends
+    free: the 0.2 m side of a pier, its ends on the pier's other sides, is
+    a wall (the Chinese college's plan has such piers at wall junctions)."""
+    import numpy as np
+
+    from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks
+    from mapkit.importers.dxf.strokes import Stroke
+
+    def line(a, b):
+        return Stroke(np.array([a, b], dtype=float))
+
+    wall = line((0, 0), (5, 0))
+    tick = line((1, -0.05), (1, 0.05))
+    pier_side = line((3, -0.1), (3, 0.1))
+    pier = [line((3, 0.1), (3.2, 0.1)), line((3, -0.1), (3.2, -0.1))]
+    kept, ticks = split_jamb_ticks([wall, tick, pier_side, *pier])
+    assert [tuple(t.point) for t in ticks] == [(1.0, 0.0)]
+    assert all(s is not tick for s in kept) and any(s is pier_side for s in kept) and len(kept) == 4

@@ -14,7 +14,9 @@ door's own drawing cuts its opening).
 
 A tick: a straight stroke at most ``JAMB_TICK_MAX_LENGTH`` long that crosses
 a longer wall stroke near its own middle (``JAMB_TICK_MIDDLE_SHARE``),
-within ``JAMB_TICK_ANGLE_DEG`` of square to it.
+within ``JAMB_TICK_ANGLE_DEG`` of square to it, its two ends free (no other
+stroke within ``SNAP_GAP``: a short side of a pier or a wall's corner
+meets other lines there).
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from shapely.geometry import LineString, Point, Polygon
 
 from mapkit.importers.dxf.strokes import Stroke
 from mapkit.tolerances import (JAMB_REACH, JAMB_TICK_ANGLE_DEG, JAMB_TICK_MAX_LENGTH, JAMB_TICK_MIDDLE_SHARE,
-                               MAX_DOOR_WIDTH, MIN_OPENING_WIDTH, THIN_WALL)
+                               MAX_DOOR_WIDTH, MIN_OPENING_WIDTH, SNAP_GAP, THIN_WALL)
 
 
 @dataclass(frozen=True)
@@ -54,12 +56,16 @@ def split_jamb_ticks(strokes: list[Stroke]) -> tuple[list[Stroke], list[JambTick
     if not long_:
         return strokes, []
     tree = shapely.STRtree([geoms[k] for k in long_])
+    every = [g for g in geoms if g is not None]
+    near_tree = shapely.STRtree(every)
     sin_max = math.sin(math.radians(JAMB_TICK_ANGLE_DEG))
     found: dict[int, tuple[np.ndarray, np.ndarray, int]] = {}
     for k in candidates:
         tick = lines[k]
         a, b = (np.asarray(c, dtype=float) for c in tick.coords)
         along = (b - a) / tick.length
+        if any(len(near_tree.query(Point(p), predicate="dwithin", distance=SNAP_GAP)) > 1 for p in (a, b)):
+            continue  # an end meets other linework: a short wall (a pier's side), not a free-standing tick
         for j in tree.query(tick, predicate="intersects"):
             wall = geoms[long_[j]]
             hit = tick.intersection(wall)
