@@ -50,13 +50,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     wall_result = build_walls(wall_strokes, options.max_wall_thickness)
     walls = wall_result.walls
     if walls.is_empty:
-        layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
-        if options.walls:  # the user named them: say what is wrong with them, not to name them
-            hint = ("they hold no lines or outlines that form walls (text, points and blocks of other things "
-                    "do not); check the choice with 'mapkit layers PLAN' and 'mapkit preview PLAN'")
-        else:
-            hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
-        raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
+        _refuse_no_walls(info, options)
 
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     if not zones.is_empty:
@@ -75,12 +69,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     if ticks:
         walls = _tick_doorways(ticks, drawing, walls, openings, door_gaps, options, warn)
-    rooms = room_outlines([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
-    not_walls = lines_splitting_rooms(rooms, walls, wall_result.single_lines)
-    if not not_walls.is_empty:
-        walls = MultiPolygon(polygon_parts(walls.difference(not_walls)))
-        warn(f"{len(polygon_parts(not_walls))} single wall line(s) across a room's outline, sealing part of the "
-             "room off with no door, are taken for overhead or setting-out lines, not walls")
+    walls = _without_lines_splitting_rooms(drawing, walls, wall_result.single_lines, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
@@ -128,6 +117,29 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             scene,
         )
     return scene
+
+
+def _refuse_no_walls(info: dict, options: BuildOptions):
+    """Raise the NoWallsError of a plan whose wall layers form no walls."""
+    layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
+    if options.walls:  # the user named them: say what is wrong with them, not to name them
+        hint = ("they hold no lines or outlines that form walls (text, points and blocks of other things "
+                "do not); check the choice with 'mapkit layers PLAN' and 'mapkit preview PLAN'")
+    else:
+        hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
+    raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
+
+
+def _without_lines_splitting_rooms(drawing: PlanDrawing, walls: MultiPolygon, single_lines, warn) -> MultiPolygon:
+    """The walls less the single wall lines that seal part of a room's
+    outline off with no door (:mod:`.room_outlines`), with a warning."""
+    rooms = room_outlines([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    not_walls = lines_splitting_rooms(rooms, walls, single_lines)
+    if not_walls.is_empty:
+        return walls
+    warn(f"{len(polygon_parts(not_walls))} single wall line(s) across a room's outline, sealing part of the "
+         "room off with no door, are taken for overhead or setting-out lines, not walls")
+    return MultiPolygon(polygon_parts(walls.difference(not_walls)))
 
 
 def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
