@@ -168,6 +168,22 @@ DOOR_SWING_TIP_SHARE = 0.15
 DOOR_SWING_MIN_CROSSING_DEG = 50.0
 DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 
+#: A room's outline (mapkit/importers/dxf/room_outlines.py) that the walls
+#: cut into more than one part of at least this many square metres is
+#: sealed in part (smaller parts are slivers between the outline and a wall
+#: face).
+ROOM_PART_MIN_AREA = 0.5
+
+#: Jamb ticks (mapkit/importers/dxf/jamb_ticks.py): a straight wall stroke
+#: at most this long, metres, that crosses a longer wall stroke within the
+#: middle ``JAMB_TICK_MIDDLE_SHARE`` of its length, within
+#: ``JAMB_TICK_ANGLE_DEG`` of square, marks an opening's jamb (hal9k's plan:
+#: 8 to 11 cm ticks across single-line walls), not a wall. A wall joining
+#: another ends on it; the shortest walls are longer than this.
+JAMB_TICK_MAX_LENGTH = 0.25
+JAMB_TICK_MIDDLE_SHARE = 0.5
+JAMB_TICK_ANGLE_DEG = 20.0
+
 #: A door drawn over an unbroken wall (mapkit/importers/dxf/openings.py,
 #: ``cut_opening``) cuts an opening at most this wide, metres (a double
 #: door; wider drawings over a wall are something else), whose footprint
@@ -180,6 +196,10 @@ CUT_MIN_WALL_SHARE = 0.5
 #: drawing (hal9k's plan: 0.39); a door drawn against a wall's face only
 #: touches it (0).
 CUT_MIN_REACH = 0.3
+#: Two such cut openings that meet end to end are the leaves of one double
+#: door when their union fills at least this share of its rotated bounding
+#: box (in line, one wall; two doors meeting at a corner fill about half).
+DOUBLE_DOOR_SQUARENESS = 0.95
 
 #: Sheets (mapkit/importers/dxf/sheets.py): wall linework closer than
 #: this, metres, belongs to one plan (the widest opening in a facade is a

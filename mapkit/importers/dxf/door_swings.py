@@ -16,7 +16,12 @@ wall that a rounded corner joins runs along it). People draw swings
 loosely (an arc through three points, its centre off the hinge; a leaf
 longer than the radius), so the leaf's length is only bounded
 (``DOOR_SWING_LEAF_LENGTH`` times the radius) and its start may miss the
-arc's end by ``DOOR_SWING_TIP_SHARE`` of the radius.
+arc's end by ``DOOR_SWING_TIP_SHARE`` of the radius. Looser still
+(:func:`_loose_leaf_of`): a leaf from the arc's centre to a point inside
+its sweep (the arc overshoots the open leaf), or a leaf whose tip is at one
+end of a three-point arc whose other end, the latch, lies a leaf's length
+from the hinge (the arc's centre far off the hinge, its radius half the
+leaf's).
 """
 
 from __future__ import annotations
@@ -47,6 +52,8 @@ def find_door_swings(entities, metres_per_unit: float) -> list[tuple[object, obj
         if not (DOOR_SWING_RADIUS[0] <= radius <= DOOR_SWING_RADIUS[1]) or not 0 < sweep <= DOOR_SWING_MAX_SWEEP_DEG:
             continue
         leaf = _leaf_of(arc, radius, starts, ends, metres_per_unit, used)
+        if leaf is None:
+            leaf = _loose_leaf_of(arc, radius, starts, ends, metres_per_unit, used)
         if leaf is not None:
             used.add(leaf)
             pairs.append((arc, lines[leaf]))
@@ -74,4 +81,53 @@ def _leaf_of(arc, radius: float, starts: np.ndarray, ends: np.ndarray, metres_pe
             for k in np.nonzero(ok)[0]:
                 if int(k) not in used and gap[k] < best_gap:
                     best, best_gap = int(k), float(gap[k])
+    return best
+
+
+def _loose_leaf_of(arc, radius: float, starts: np.ndarray, ends: np.ndarray, metres_per_unit: float,
+                   used: set[int]) -> int | None:
+    """Index of the line that is ``arc``'s leaf in a swing drawn more loosely
+    than :func:`_leaf_of` accepts, or None:
+
+    - a radial leaf: from the arc's centre (the hinge) to a point of the
+      arc, inside its sweep, where the arc overshoots the leaf's tip (hal9k's
+      plan: a tip 12 cm from the arc's end);
+    - an arc through three points, its centre far off the hinge: the leaf's
+      tip at one end of the arc (within ``DOOR_SWING_TIP_SHARE`` of the
+      leaf's length), across it, and the arc's other end, where the closed
+      door's latch is, as far from the hinge as the leaf is long.
+    """
+    centre = np.array([arc.dxf.center.x, arc.dxf.center.y], dtype=float) * metres_per_unit
+    start, end = float(arc.dxf.start_angle), float(arc.dxf.end_angle)
+    sweep = (end - start) % 360.0
+    tips = [centre + radius * np.array([math.cos(math.radians(a)), math.sin(math.radians(a))]) for a in (start, end)]
+    cos_cross = math.cos(math.radians(DOOR_SWING_MIN_CROSSING_DEG))
+    best, best_err = None, math.inf
+    for hinge, tip in ((starts, ends), (ends, starts)):
+        d = tip - hinge
+        length = np.linalg.norm(d, axis=1)
+        snap = np.maximum(DOOR_SWING_SNAP, DOOR_SWING_TIP_SHARE * length)
+        door_wide = (length >= DOOR_SWING_RADIUS[0]) & (length <= DOOR_SWING_RADIUS[1])
+        # Radial: the hinge on the centre, the tip on the arc inside its sweep.
+        from_centre = np.linalg.norm(hinge - centre, axis=1)
+        to_tip = tip - centre
+        angle = np.degrees(np.arctan2(to_tip[:, 1], to_tip[:, 0]))
+        inside = (angle - start) % 360.0 <= sweep
+        radial = door_wide & (from_centre <= snap) & (np.abs(length - radius) <= DOOR_SWING_TIP_SHARE * radius) & inside
+        for k in np.nonzero(radial)[0]:
+            err = float(from_centre[k])
+            if int(k) not in used and err < best_err:
+                best, best_err = int(k), err
+        # Through three points: the tip at one end of the arc, the latch at the other.
+        for near, far in ((tips[0], tips[1]), (tips[1], tips[0])):
+            gap = np.linalg.norm(tip - near, axis=1)
+            latch = np.abs(np.linalg.norm(far - hinge, axis=1) - length)
+            a = math.atan2(near[1] - centre[1], near[0] - centre[0])
+            tangent = np.array([-math.sin(a), math.cos(a)])
+            across = np.abs(d @ tangent) <= cos_cross * length
+            ok = door_wide & (gap <= snap) & (latch <= snap) & across
+            for k in np.nonzero(ok)[0]:
+                err = float(gap[k] + latch[k])
+                if int(k) not in used and err < best_err:
+                    best, best_err = int(k), err
     return best

@@ -1,7 +1,11 @@
 """Plan reconstruction: strokes per role -> :class:`~mapkit.scene.Scene`.
 
 1. Walls (:mod:`mapkit.importers.dxf.walls`): solids from double lines,
-   outlines, fills and columns; single lines thickened.
+   outlines, fills and columns; single lines thickened. Jamb ticks across
+   single-line walls (:mod:`mapkit.importers.dxf.jamb_ticks`) are marks,
+   not walls; two with no door drawing at them mark a doorway.
+   A single wall line that seals part of a room's outline off with no door
+   is not a wall (:mod:`mapkit.importers.dxf.room_outlines`).
 2. Openings (:mod:`mapkit.importers.dxf.openings`): each door or window
    drawing claims the wall gap it sits in; free-standing glass becomes an
    obstacle.
@@ -22,14 +26,16 @@ from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
+from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
+from mapkit.tolerances import DOUBLE_DOOR_SQUARENESS, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -39,16 +45,12 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
 
     warn = partial(warn_decision, warnings)
 
-    wall_result = build_walls(drawing.role("walls"), options.max_wall_thickness)
+    # Jamb ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
+    wall_strokes, ticks = split_jamb_ticks(drawing.role("walls"))
+    wall_result = build_walls(wall_strokes, options.max_wall_thickness)
     walls = wall_result.walls
     if walls.is_empty:
-        layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
-        if options.walls:  # the user named them: say what is wrong with them, not to name them
-            hint = ("they hold no lines or outlines that form walls (text, points and blocks of other things "
-                    "do not); check the choice with 'mapkit layers PLAN' and 'mapkit preview PLAN'")
-        else:
-            hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
-        raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
+        _refuse_no_walls(info, options)
 
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     if not zones.is_empty:
@@ -65,6 +67,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             info["zone_walls_m2"] = round(between.area, 3)
 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
+    if ticks:
+        walls = _tick_doorways(ticks, drawing, walls, openings, door_gaps, options, warn)
+    walls = _without_lines_splitting_rooms(drawing, walls, wall_result.single_lines, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
@@ -114,6 +119,29 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     return scene
 
 
+def _refuse_no_walls(info: dict, options: BuildOptions):
+    """Raise the NoWallsError of a plan whose wall layers form no walls."""
+    layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
+    if options.walls:  # the user named them: say what is wrong with them, not to name them
+        hint = ("they hold no lines or outlines that form walls (text, points and blocks of other things "
+                "do not); check the choice with 'mapkit layers PLAN' and 'mapkit preview PLAN'")
+    else:
+        hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
+    raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
+
+
+def _without_lines_splitting_rooms(drawing: PlanDrawing, walls: MultiPolygon, single_lines, warn) -> MultiPolygon:
+    """The walls less the single wall lines that seal part of a room's
+    outline off with no door (:mod:`.room_outlines`), with a warning."""
+    rooms = room_outlines([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    not_walls = lines_splitting_rooms(rooms, walls, single_lines)
+    if not_walls.is_empty:
+        return walls
+    warn(f"{len(polygon_parts(not_walls))} single wall line(s) across a room's outline, sealing part of the "
+         "room off with no door, are taken for overhead or setting-out lines, not walls")
+    return MultiPolygon(polygon_parts(walls.difference(not_walls)))
+
+
 def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
     """The walls (with the openings of doors drawn over unbroken walls cut
     through them), openings, obstacles (windows, glass) and door gap
@@ -151,6 +179,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     if cuts:
         walls = MultiPolygon(polygon_parts(walls.difference(unary_union(cuts))))
         warn(f"{len(cuts)} door drawing(s) over an unbroken wall: their openings cut through it")
+        _join_double_doors(cuts, openings, door_gaps)
     if lost:
         where = ", ".join(f"({p.x:.1f}, {p.y:.1f})" for p in lost[:5]) + (" ..." if len(lost) > 5 else "")
         warn(f"{len(lost)} door drawing(s) are not in a wall gap and were ignored, at {where} m; check them in 'mapkit preview'")
@@ -164,6 +193,49 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
     return walls, openings, obstacles, door_gaps
+
+
+def _tick_doorways(ticks, drawing: PlanDrawing, walls: MultiPolygon, openings: list[Opening],
+                   door_gaps: list[Polygon], options: BuildOptions, warn) -> MultiPolygon:
+    """The walls with the doorways that jamb ticks mark and no door drawing
+    claims (:func:`.jamb_ticks.tick_doorways`) cut through them; each
+    doorway is added to ``openings`` (a door's gap, sill 0) and
+    ``door_gaps``."""
+    gaps = [g for g in tick_doorways(ticks, drawing_items(drawing.role("doors")), walls)
+            if not _claimed(g, door_gaps + [o.footprint for o in openings])]
+    if not gaps:
+        return walls
+    for gap in gaps:
+        door_gaps.append(gap)
+        openings.append(Opening(gap, "door", 0.0, options.door_height))
+    warn(f"{len(gaps)} doorway(s) marked by jamb ticks across a wall line, without a door drawing: opened")
+    return MultiPolygon(polygon_parts(walls.difference(unary_union(gaps))))
+
+
+def _join_double_doors(cuts: list[Polygon], openings: list[Opening], door_gaps: list[Polygon]) -> None:
+    """Make the two leaves of a double door drawn over an unbroken wall one
+    opening: cut openings that meet end to end in one wall (their union is a
+    rectangle, ``DOUBLE_DOOR_SQUARENESS``) become one, in ``openings`` and
+    ``door_gaps`` alike (a leaf is drawn and cut on its own; the doorway is
+    one)."""
+    cut_ids = {id(c) for c in cuts}
+    leaves = [o for o in openings if id(o.footprint) in cut_ids]
+    joined: set[int] = set()
+    for i, a in enumerate(leaves):
+        if id(a) in joined:
+            continue
+        for b in leaves[i + 1:]:
+            if id(b) in joined or a.footprint.distance(b.footprint) > MERGE:
+                continue
+            both = unary_union([a.footprint, b.footprint])
+            if not isinstance(both, Polygon) or both.area < DOUBLE_DOOR_SQUARENESS * both.minimum_rotated_rectangle.area:
+                continue
+            k = next(n for n, o in enumerate(openings) if o is a)
+            openings[k] = a = Opening(both, a.kind, a.sill, a.head)
+            openings.remove(b)
+            door_gaps[:] = [g for g in door_gaps if g is not b.footprint]
+            door_gaps.append(both)
+            joined.add(id(b))
 
 
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:

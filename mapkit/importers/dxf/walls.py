@@ -17,7 +17,7 @@ Fills (hatches, SOLIDs) are solids as drawn.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
@@ -37,13 +37,16 @@ class WallResult:
     """Walls and what was learnt on the way (for openings, interior and info).
 
     ``walls``: all wall solids (MultiPolygon, metres); ``rooms``: faces
-    classified as rooms; ``lines``: the noded, cleaned linework.
+    classified as rooms; ``lines``: the noded, cleaned linework;
+    ``single_lines``: the part of ``walls`` that is single wall lines
+    thickened to ``THIN_WALL`` (lines that bound no double-line wall).
     """
 
     walls: MultiPolygon
     rooms: list[Polygon]
     lines: MultiLineString
     counts: dict
+    single_lines: Polygon | MultiPolygon = field(default_factory=Polygon)
 
 
 def build_walls(strokes: list[Stroke], max_wall_thickness: float) -> WallResult:
@@ -93,7 +96,7 @@ def build_walls(strokes: list[Stroke], max_wall_thickness: float) -> WallResult:
     thin = loose.buffer(THIN_WALL / 2.0, cap_style="square", join_style="mitre") if not loose.is_empty else Polygon()
     walls = _as_multi(unary_union([solid, thin]).buffer(0))
     counts |= {"faces": len(all_faces), "wall_faces": len(material), "solid_blocks": len(solids), "rooms": len(rooms)}
-    return WallResult(walls, rooms, _as_multiline(noded), counts)
+    return WallResult(walls, rooms, _as_multiline(noded), counts, thin)
 
 
 def _as_line(stroke: Stroke) -> LineString | None:
