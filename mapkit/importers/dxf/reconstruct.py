@@ -6,8 +6,10 @@
    drawing claims the wall gap it sits in; free-standing glass becomes an
    obstacle.
 3. Free space: the interior (what closed outlines enclose once door and
-   window gaps are shut; for open plans a floor layer's extent or the walls'
-   convex hull) minus walls and obstacles, shrunk by the robot radius.
+   window gaps are shut; for open plans a floor layer's extent, else the
+   footprint closed from the walls, :mod:`.closure`) minus walls and
+   obstacles, shrunk by the robot radius. A plan that none of these closes
+   is refused.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from shapely.ops import unary_union
 from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
+from mapkit.importers.dxf.closure import closed_footprint
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
@@ -29,7 +32,7 @@ from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
+from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP, SMALL_PLAN_M, SNAP_GAP, ZERO
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -67,8 +70,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
-    if interior_source == "convex hull":
-        warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
+    if interior_source == "closed from the walls":
+        warn(f"no closed outline encloses the plan and there is no floor layer; the building's outline is closed "
+             f"from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
 
     free = interior.difference(walls)
     if not obstacles.is_empty:
@@ -99,10 +103,17 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         ignored=ignored,
         info=info,
     )
+    x0, y0, x1, y1 = walls.bounds
+    small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
+    if interior_source == "open" and not small:  # (a plan of a room's size: its scale is what is wrong, below)
+        raise NoFreeSpaceError(
+            f"the walls enclose no building: no closed outline, no floor layer, and the outer walls stay open across "
+            f"a gap wider than {OUTLINE_MAX_GAP:g} m; outline the building on a layer of its own and name it with "
+            f"--floor, or choose the wall layers with --walls (check them with 'mapkit preview')",
+            scene,
+        )
     if free.is_empty:
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
-        x0, y0, x1, y1 = walls.bounds
-        small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
         hint = ("; " + rescale_hint(x1 - x0, y1 - y0, info.get("units", "m"), info.get("insunits"), options.units,
                                    options.scale) if small else "")
         raise NoFreeSpaceError(
@@ -181,8 +192,10 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     room on both sides then join the interior (the robot passes through
     them; a bridge to the outside stays shut). A floor layer, when there is
     one, says where the inside is. Plans still open after that (the holes
-    cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) take
-    the hull.
+    cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) are
+    closed from their outer walls (:func:`.closure.closed_footprint`); if
+    that encloses too little as well, the source is ``"open"`` and the
+    inside empty (the caller refuses the plan).
     """
     bridges = bridges or []
     shut = unary_union([walls, obstacles, *door_gaps, *bridges])
@@ -197,7 +210,11 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     elif enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
         inside, source = enclosed, "enclosed"
     else:
-        inside, source = hull, "convex hull"
+        footprint = closed_footprint(shut)
+        if footprint.difference(shut).area >= OPEN_PLAN_FRACTION * hull.area:
+            inside, source = unary_union([enclosed, footprint]), "closed from the walls"
+        else:
+            return Polygon(), "open"
     # The robot walks through doors: their gaps join the rooms they connect.
     # A small closing seals hairline slits where a gap meets a room (they
     # would block the passage once the free space is shrunk); walls are

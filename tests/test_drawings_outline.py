@@ -1,0 +1,102 @@
+"""Plans without a closed outline: the building is closed from its walls
+(no convex hull), and a plan whose outer walls stay open is refused.
+
+The drawings are small DXF files written here with ezdxf, single wall
+lines on layer ``WALLS`` as many real plans draw them, and read through
+the whole importer (``load_scene``)."""
+
+from __future__ import annotations
+
+import ezdxf
+import pytest
+from shapely.geometry import Point, Polygon, box
+
+from mapkit.errors import NoFreeSpaceError
+from mapkit.importers import load_scene
+from mapkit.options import BuildOptions
+from mapkit.tolerances import OUTLINE_MAX_GAP, THIN_WALL
+
+#: The L: a 12 x 5 m wing along x and a 5 x 7 m wing up from its right end,
+#: metres. The notch of the L ([0, 7] x [5, 12]) is outside.
+L_SHAPE = [(0, 0), (12, 0), (12, 12), (7, 12), (7, 5), (0, 5)]
+
+
+def write_plan(path, walls, doors=()):
+    """A DXF in metres: wall lines on ``WALLS``, door swings (leaf + arc) on ``DOORS``."""
+    doc = ezdxf.new(setup=False)
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    doc.layers.add("WALLS")
+    doc.layers.add("DOORS")
+    for a, b in walls:
+        msp.add_line(a, b, dxfattribs={"layer": "WALLS"})
+    for hinge, width in doors:  # hinged at (x, y) on a wall along x, opening up
+        x, y = hinge
+        msp.add_line((x, y), (x, y + width), dxfattribs={"layer": "DOORS"})
+        msp.add_arc((x, y), width, 0, 90, dxfattribs={"layer": "DOORS"})
+    doc.saveas(path)
+    return path
+
+
+def l_plan_walls(entrance: tuple[float, float], partition: bool = True):
+    """The L's outer walls as lines, the bottom wall broken for the entrance
+    ``(x0, x1)`` next to the left corner (no wall end faces its left jamb:
+    the left wall runs on past it), and one partition splitting the long
+    wing into two rooms, its doorway beside the outer wall (no wall end
+    faces the partition's across it either): nothing is enclosed."""
+    x0, x1 = entrance
+    pts = L_SHAPE + [L_SHAPE[0]]
+    walls = [(pts[i], pts[i + 1]) for i in range(len(pts) - 1)]
+    walls[0] = ((x1, 0), (12, 0))  # the bottom wall starts after the entrance
+    if x0 > 0:
+        walls.append(((0, 0), (x0, 0)))
+    if partition:
+        walls.append(((5, 0), (5, 4)))  # 1 m doorway at its top end (y 4..5)
+    return walls
+
+
+def test_l_shaped_plan_with_an_entrance_gap_is_closed_along_its_walls(tmp_path):
+    # The entrance: 1.5 m beside the left corner (0, 0): the left wall's end
+    # faces nothing across it, so only the closing of the outline bridges it.
+    plan = write_plan(tmp_path / "l.dxf", l_plan_walls((0.0, 1.5)))
+    scene = load_scene(plan, BuildOptions(robot_radius=0.2))
+    assert scene.info["interior"] == "closed from the walls"
+    assert any("closed from its outer walls" in w for w in scene.info["warnings"])
+    assert not any("convex hull" in w for w in scene.info["warnings"])
+    building = Polygon(L_SHAPE)
+    free = scene.free_space
+    # Inside the building only: nothing in the L's notch, nothing beyond the entrance.
+    assert free.difference(building).area < 1e-6
+    assert not free.intersects(Point(3.5, 8.5).buffer(2.0))
+    # All of the inside (less the robot radius and the thin walls): both
+    # rooms and the wing, connected through the partition's doorway.
+    assert len(free.geoms) == 1
+    keep = THIN_WALL / 2 + 0.2  # half a thickened wall line and the robot radius
+    partition = box(5 - keep, 0, 5 + keep, 4 + keep)
+    expected = building.buffer(-keep, join_style="mitre").difference(partition).area
+    assert free.area == pytest.approx(expected, rel=0.01)
+
+
+def test_plan_whose_outer_wall_has_a_gap_too_wide_is_refused(tmp_path):
+    # One room, the L, its entrance 5 m wide: no wall surrounds anything.
+    wide = OUTLINE_MAX_GAP + 2.0
+    plan = write_plan(tmp_path / "open.dxf", l_plan_walls((0.0, wide), partition=False))
+    with pytest.raises(NoFreeSpaceError, match=r"enclose no building.* --floor") as exc:
+        load_scene(plan, BuildOptions(robot_radius=0.2))
+    message = str(exc.value)
+    assert "\n" not in message
+    assert f"{OUTLINE_MAX_GAP:g} m" in message
+    # The preview still sees what was understood: the walls, no free space.
+    assert exc.value.scene is not None and exc.value.scene.free_space.is_empty
+    assert not exc.value.scene.walls.is_empty
+
+
+def test_refusal_is_a_one_line_cli_error(tmp_path, capsys):
+    from mapkit.cli import main
+
+    plan = write_plan(tmp_path / "open.dxf", l_plan_walls((0.0, OUTLINE_MAX_GAP + 2.0), partition=False))
+    code = main(["build", str(plan), "-o", str(tmp_path / "open.lmap")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and "--floor" in err and "Traceback" not in err
+    assert not (tmp_path / "open.lmap").exists()
