@@ -130,6 +130,18 @@ OUTLINE_MAX_GAP = 3.0
 #: stay square; sharper ones are bevelled rather than spiking far out.
 OUTLINE_MITRE_LIMIT = 2.0
 
+#: Room fills (zone layers) leave the walls between them implicit: the thin
+#: strips between fills are walls. Where the drawn walls already cover at
+#: least this share of those strips, the walls are drawn and the rest of
+#: the strips are doorways and openings (a facility-management plan's room
+#: hatches stop at the wall faces and across the doors): no strip is added.
+ZONE_WALLS_DRAWN_SHARE = 0.5
+
+#: A pocket door's leaf (one line inside a wall, running to its end) is at
+#: most this long, metres (a wide single leaf); a longer line in a wall on
+#: the door layer is something else (:mod:`mapkit.importers.dxf.pocket_doors`).
+POCKET_DOOR_MAX_LEAF = 1.5
+
 #: Wall ends are "in line" and "facing" within this many degrees; an end
 #: face is square to its wall within it too.
 BRIDGE_ANGLE_DEG = 15.0

@@ -100,3 +100,65 @@ def test_refusal_is_a_one_line_cli_error(tmp_path, capsys):
     assert code == 2
     assert len(err.splitlines()) == 1 and "--floor" in err and "Traceback" not in err
     assert not (tmp_path / "open.lmap").exists()
+
+
+# ---- a facility-management plan: walls drawn, room fills, a floor outline beside it ----------
+
+
+def write_fm_plan(path, *, floor_outside: bool = False, pocket: bool = False):
+    """Two 4 x 4 m rooms in double-line walls 0.2 m thick (``A-WALL``),
+    each also a room fill on ``Rooms-Color`` stopping at the wall faces.
+    The shared wall (x 4.1..4.3) stops 1 m short of the top wall: a doorway
+    (y 3.1..4.1) with no door swing. ``floor_outside``: an ``A-FLOR``
+    outline of 6 x 4 m beside the building (x -7..-1), as the university
+    floor's. ``pocket``: the doorway's door slides into the shared wall,
+    its leaf a line inside it on ``A-DOOR``."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, room = {"layer": "A-WALL"}, {"layer": "Rooms-Color"}
+    msp.add_lwpolyline([(0, 0), (8.4, 0), (8.4, 4.3), (0, 4.3)], close=True, dxfattribs=wall)
+    msp.add_lwpolyline([(0.2, 0.2), (8.2, 0.2), (8.2, 4.1), (0.2, 4.1)], close=True, dxfattribs=wall)
+    msp.add_lwpolyline([(4.1, 0.2), (4.1, 3.1), (4.3, 3.1), (4.3, 0.2)], dxfattribs=wall)
+    for x0, x1 in ((0.2, 4.1), (4.3, 8.2)):
+        msp.add_lwpolyline([(x0, 0.2), (x1, 0.2), (x1, 4.1), (x0, 4.1)], close=True, dxfattribs=room)
+    if floor_outside:
+        msp.add_lwpolyline([(-7, 0), (-1, 0), (-1, 4), (-7, 4)], close=True, dxfattribs={"layer": "A-FLOR"})
+    if pocket:
+        msp.add_line((4.2, 2.15), (4.2, 3.05), dxfattribs={"layer": "A-DOOR"})
+    doc.saveas(path)
+    return path
+
+
+def test_a_floor_outline_beyond_the_walls_adds_no_free_space(tmp_path):
+    """The university floor's A-FLOR held an outline beside the building:
+    its 97 m2 were free space outside the walls."""
+    plan = write_fm_plan(tmp_path / "fm.dxf", floor_outside=True)
+    scene = load_scene(plan, BuildOptions(robot_radius=0.2))
+    building = box(0, 0, 8.4, 4.3)
+    assert scene.free_space.difference(building).area < 1e-6
+    assert scene.free_space.area < 2 * 3.5 * 3.5 + 1.0  # the two rooms and their doorway
+
+
+def test_room_fills_beside_drawn_walls_leave_a_doorway_open(tmp_path):
+    """The strips between room fills were walls even where the walls as
+    drawn leave a doorway open (a vestibule, an alcove, a pocket door's
+    gap): the university floor's rooms were sealed in 6 parts."""
+    plan = write_fm_plan(tmp_path / "fm.dxf")
+    scene = load_scene(plan, BuildOptions(robot_radius=0.2))
+    assert len(scene.free_space.geoms) == 1
+    assert scene.free_space.area == pytest.approx(2 * 3.5 * 3.5 + 0.6 * 0.2, rel=0.02)
+
+
+def test_a_pocket_door_leaf_inside_a_wall_is_the_door_of_the_gap_beside_it(tmp_path):
+    """A pocket door's leaf lies inside the wall, running to its end: it was
+    'not in a wall gap' and ignored (or cut through the wall where it lies)."""
+    plan = write_fm_plan(tmp_path / "fm.dxf", pocket=True)
+    scene = load_scene(plan, BuildOptions(robot_radius=0.2))
+    (door,) = [o for o in scene.openings if o.kind == "door"]
+    x0, y0, x1, y1 = door.footprint.bounds
+    assert (x0, x1) == pytest.approx((4.1, 4.3), abs=1e-6)
+    assert (y0, y1) == pytest.approx((3.1, 4.0), abs=1e-6)  # the leaf's 0.9 m of the 1 m gap
+    assert any("pocket door" in w for w in scene.info["warnings"])
+    assert scene.walls.intersection(box(4.1, 0.2, 4.3, 3.1)).area == pytest.approx(0.2 * 2.9, rel=1e-3)  # not cut
+    assert len(scene.free_space.geoms) == 1

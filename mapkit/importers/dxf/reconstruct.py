@@ -26,13 +26,15 @@ from mapkit.options import BuildOptions
 from mapkit.importers.dxf.closure import closed_footprint
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
+from mapkit.importers.dxf.pocket_doors import pocket_opening
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP, SMALL_PLAN_M, SNAP_GAP, ZERO
+from mapkit.tolerances import (MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP, SMALL_PLAN_M, SNAP_GAP, ZERO,
+                                ZONE_WALLS_DRAWN_SHARE)
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -56,6 +58,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     if not zones.is_empty:
         between = _between_zones(walls, zones, options.max_wall_thickness)
+        if not between.is_empty and between.intersection(walls).area >= ZONE_WALLS_DRAWN_SHARE * between.area:
+            # The walls are drawn (the room fills stop at their faces): the
+            # strips off them are doorways and openings the walls leave open.
+            between = Polygon()
         if not between.is_empty:
             # Room fills stop short of the doorways too: where a door sits in
             # a gap of the walls as drawn, the strip is its gap, not a wall.
@@ -148,8 +154,15 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     door_gaps = []
     lost = []
     cuts = []
+    pockets = []
     for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
         if gap is None:
+            gap = pocket_opening(item, walls, options.max_wall_thickness)
+            if gap is not None and not _claimed(gap, door_gaps + window_gaps):
+                pockets.append(gap)
+                door_gaps.append(gap)
+                openings.append(Opening(gap, "door", 0.0, options.door_height))
+                continue
             gap = cut_opening(item, walls, options.max_wall_thickness)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
                 lost.append(item.centroid)
@@ -159,6 +172,8 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
             continue
         door_gaps.append(gap)
         openings.append(Opening(gap, "door", 0.0, options.door_height))
+    if pockets:
+        warn(f"{len(pockets)} pocket door(s) (a leaf drawn inside the wall): their doorways are the gaps beside them")
     if cuts:
         walls = MultiPolygon(polygon_parts(walls.difference(unary_union(cuts))))
         warn(f"{len(cuts)} door drawing(s) over an unbroken wall: their openings cut through it")
@@ -191,7 +206,8 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     holes of the union of all barriers; door gaps and the bridges with a
     room on both sides then join the interior (the robot passes through
     them; a bridge to the outside stays shut). A floor layer, when there is
-    one, says where the inside is. Plans still open after that (the holes
+    one, says where the inside is (within the outer walls, when they
+    enclose the plan). Plans still open after that (the holes
     cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) are
     closed from their outer walls (:func:`.closure.closed_footprint`); if
     that encloses too little as well, the source is ``"open"`` and the
@@ -205,7 +221,12 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     enclosed = unary_union(holes) if holes else Polygon()
     hull = shut.convex_hull
     floor_area = _floor_extent(floor)
-    if not floor_area.is_empty:
+    if not floor_area.is_empty and enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
+        # The walls enclose the building: a floor layer adds the rooms they
+        # leave open, but nothing beyond the outer walls (a floor outline of
+        # a terrace or of the next wing drawn beside the plan).
+        inside, source = unary_union([enclosed, floor_area.intersection(closed_footprint(shut))]), "floor layer"
+    elif not floor_area.is_empty:
         inside, source = unary_union([enclosed, floor_area]), "floor layer"
     elif enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
         inside, source = enclosed, "enclosed"
