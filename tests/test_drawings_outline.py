@@ -105,14 +105,15 @@ def test_refusal_is_a_one_line_cli_error(tmp_path, capsys):
 # ---- a facility-management plan: walls drawn, room fills, a floor outline beside it ----------
 
 
-def write_fm_plan(path, *, floor_outside: bool = False, pocket: bool = False):
+def write_fm_plan(path, *, floor_outside: bool = False, pocket: bool = False, chase: bool = False):
     """Two 4 x 4 m rooms in double-line walls 0.2 m thick (``A-WALL``),
     each also a room fill on ``Rooms-Color`` stopping at the wall faces.
     The shared wall (x 4.1..4.3) stops 1 m short of the top wall: a doorway
     (y 3.1..4.1) with no door swing. ``floor_outside``: an ``A-FLOR``
     outline of 6 x 4 m beside the building (x -7..-1), as the university
     floor's. ``pocket``: the doorway's door slides into the shared wall,
-    its leaf a line inside it on ``A-DOOR``."""
+    its leaf a line inside it on ``A-DOOR``. ``chase``: a walled space
+    (x 6.3..8.2, y 0.2..1.6) in the right room's corner, no fill, no door."""
     doc = ezdxf.new("R2013")
     doc.header["$INSUNITS"] = 6
     msp = doc.modelspace()
@@ -120,8 +121,14 @@ def write_fm_plan(path, *, floor_outside: bool = False, pocket: bool = False):
     msp.add_lwpolyline([(0, 0), (8.4, 0), (8.4, 4.3), (0, 4.3)], close=True, dxfattribs=wall)
     msp.add_lwpolyline([(0.2, 0.2), (8.2, 0.2), (8.2, 4.1), (0.2, 4.1)], close=True, dxfattribs=wall)
     msp.add_lwpolyline([(4.1, 0.2), (4.1, 3.1), (4.3, 3.1), (4.3, 0.2)], dxfattribs=wall)
-    for x0, x1 in ((0.2, 4.1), (4.3, 8.2)):
-        msp.add_lwpolyline([(x0, 0.2), (x1, 0.2), (x1, 4.1), (x0, 4.1)], close=True, dxfattribs=room)
+    msp.add_lwpolyline([(0.2, 0.2), (4.1, 0.2), (4.1, 4.1), (0.2, 4.1)], close=True, dxfattribs=room)
+    if chase:
+        msp.add_lwpolyline([(6.1, 0.2), (6.1, 1.8), (8.2, 1.8)], dxfattribs=wall)
+        msp.add_lwpolyline([(6.3, 0.2), (6.3, 1.6), (8.2, 1.6)], dxfattribs=wall)
+        msp.add_lwpolyline([(4.3, 0.2), (6.1, 0.2), (6.1, 1.8), (8.2, 1.8), (8.2, 4.1), (4.3, 4.1)], close=True,
+                           dxfattribs=room)
+    else:
+        msp.add_lwpolyline([(4.3, 0.2), (8.2, 0.2), (8.2, 4.1), (4.3, 4.1)], close=True, dxfattribs=room)
     if floor_outside:
         msp.add_lwpolyline([(-7, 0), (-1, 0), (-1, 4), (-7, 4)], close=True, dxfattribs={"layer": "A-FLOR"})
     if pocket:
@@ -162,3 +169,14 @@ def test_a_pocket_door_leaf_inside_a_wall_is_the_door_of_the_gap_beside_it(tmp_p
     assert any("pocket door" in w for w in scene.info["warnings"])
     assert scene.walls.intersection(box(4.1, 0.2, 4.3, 3.1)).area == pytest.approx(0.2 * 2.9, rel=1e-3)  # not cut
     assert len(scene.free_space.geoms) == 1
+
+
+def test_a_walled_space_with_no_room_fill_and_no_door_is_a_shaft(tmp_path):
+    """Behind the university floor's restrooms a pipe chase (walls all
+    round, no door, none of the 26 room fills) was a second part of free
+    space: the rooms looked unconnected."""
+    plan = write_fm_plan(tmp_path / "fm.dxf", chase=True)
+    scene = load_scene(plan, BuildOptions(robot_radius=0.2))
+    assert len(scene.free_space.geoms) == 1
+    assert not scene.free_space.intersects(box(6.3, 0.2, 8.2, 1.6))
+    assert any("no room fill and no door" in w for w in scene.info["warnings"])

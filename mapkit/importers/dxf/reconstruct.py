@@ -56,12 +56,14 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
 
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    filled_rooms = Polygon()  # the room fills of a plan whose walls are drawn
     if not zones.is_empty:
         between = _between_zones(walls, zones, options.max_wall_thickness)
         if not between.is_empty and between.intersection(walls).area >= ZONE_WALLS_DRAWN_SHARE * between.area:
             # The walls are drawn (the room fills stop at their faces): the
             # strips off them are doorways and openings the walls leave open.
             between = Polygon()
+            filled_rooms = zones
         if not between.is_empty:
             # Room fills stop short of the doorways too: where a door sits in
             # a gap of the walls as drawn, the strip is its gap, not a wall.
@@ -87,6 +89,11 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if options.robot_radius > ZERO.distance:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+    if not filled_rooms.is_empty:
+        free, shafts = _without_shafts(free, filled_rooms, door_gaps, options.robot_radius)
+        if shafts:
+            warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
+                 f"{sum(p.area for p in shafts):.1f} m2")
 
     info["interior"] = interior_source
     info["counts"] = dict(wall_result.counts) | {
@@ -190,6 +197,23 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
     return walls, openings, obstacles, door_gaps
+
+
+def _without_shafts(free: MultiPolygon, rooms, door_gaps: list[Polygon], robot_radius: float):
+    """``free`` without its parts that no room fill covers and no door
+    reaches, and those parts.
+
+    A plan whose every room has a fill (a facility-management plan's room
+    polygons) says where its rooms are: a walled space outside all of them
+    with no door into it is a shaft or a pipe chase, not a place a robot
+    reaches."""
+    doors = unary_union(door_gaps) if door_gaps else Polygon()
+    keep, shafts = [], []
+    for part in free.geoms:
+        in_room = part.intersection(rooms).area >= MIN_FREE_AREA
+        by_door = not doors.is_empty and part.distance(doors) <= robot_radius + SNAP_GAP
+        (keep if in_room or by_door else shafts).append(part)
+    return MultiPolygon(keep), shafts
 
 
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
