@@ -180,3 +180,21 @@ def test_a_walled_space_with_no_room_fill_and_no_door_is_a_shaft(tmp_path):
     assert len(scene.free_space.geoms) == 1
     assert not scene.free_space.intersects(box(6.3, 0.2, 8.2, 1.6))
     assert any("no room fill and no door" in w for w in scene.info["warnings"])
+
+
+def test_layers_lists_a_sheet_whose_wall_layer_by_name_is_empty(tmp_path, capsys):
+    """The house sheet's only layer named like walls ('2ND-WALL') is empty:
+    'mapkit layers', the command its refusal sends the user to, failed
+    with that same refusal instead of listing the layers."""
+    from mapkit.cli import main
+
+    doc = ezdxf.new("R2013")
+    doc.layers.add("2ND-WALL")
+    for a, b in (((0, 0), (8, 0)), ((8, 0), (8, 6)), ((8, 6), (0, 6)), ((0, 6), (0, 0))):
+        doc.modelspace().add_line(a, b, dxfattribs={"layer": "DETAILS"})
+        doc.modelspace().add_line(a, b, dxfattribs={"layer": "SECTION-A"})
+    doc.saveas(tmp_path / "sheet.dxf")
+    code = main(["layers", str(tmp_path / "sheet.dxf")])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "DETAILS" in out and "2ND-WALL" in out and "note: no recognisable walls" in out
