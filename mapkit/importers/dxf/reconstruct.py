@@ -79,8 +79,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "closed from the walls":
-        warn(f"no closed outline encloses the plan and there is no floor layer; the building's outline is closed "
-             f"from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
+        warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
+             f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
 
     free = interior.difference(walls)
     if not obstacles.is_empty:
@@ -120,9 +120,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
     if interior_source == "open" and not small:  # (a plan of a room's size: its scale is what is wrong, below)
         raise NoFreeSpaceError(
-            f"the walls enclose no building: no closed outline, no floor layer, and the outer walls stay open across "
-            f"a gap wider than {OUTLINE_MAX_GAP:g} m; outline the building on a layer of its own and name it with "
-            f"--floor, or choose the wall layers with --walls (check them with 'mapkit preview')",
+            f"the walls enclose no building: no closed outline, no floor layer outlining an area, and the outer walls "
+            f"stay open across a gap wider than {OUTLINE_MAX_GAP:g} m; outline the building on a layer of its own and "
+            f"name it with --floor, or choose the wall layers with --walls (check them with 'mapkit preview')",
             scene,
         )
     if free.is_empty:
