@@ -55,25 +55,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
         raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
 
-    zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
-    filled_rooms = Polygon()  # the room fills of a plan whose walls are drawn
-    if not zones.is_empty:
-        between = _between_zones(walls, zones, options.max_wall_thickness)
-        if not between.is_empty and between.intersection(walls).area >= ZONE_WALLS_DRAWN_SHARE * between.area:
-            # The walls are drawn (the room fills stop at their faces): the
-            # strips off them are doorways and openings the walls leave open.
-            between = Polygon()
-            filled_rooms = zones
-        if not between.is_empty:
-            # Room fills stop short of the doorways too: where a door sits in
-            # a gap of the walls as drawn, the strip is its gap, not a wall.
-            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
-                                                options.max_wall_thickness) if g is not None]
-            if gaps:
-                between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
-        if not between.is_empty:
-            walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
-            info["zone_walls_m2"] = round(between.area, 3)
+    walls, filled_rooms = _with_zone_walls(drawing, walls, options, info)
 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
@@ -116,6 +98,40 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         ignored=ignored,
         info=info,
     )
+    _refuse_if_empty(scene, interior_source, options)
+    return scene
+
+
+def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, info: dict):
+    """The walls with those room fills (zone layers) leave implicit, and the
+    room fills when the walls are drawn beside them (empty otherwise): see
+    ``ZONE_WALLS_DRAWN_SHARE``."""
+    zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    filled_rooms = Polygon()  # the room fills of a plan whose walls are drawn
+    if not zones.is_empty:
+        between = _between_zones(walls, zones, options.max_wall_thickness)
+        if not between.is_empty and between.intersection(walls).area >= ZONE_WALLS_DRAWN_SHARE * between.area:
+            # The walls are drawn (the room fills stop at their faces): the
+            # strips off them are doorways and openings the walls leave open.
+            between = Polygon()
+            filled_rooms = zones
+        if not between.is_empty:
+            # Room fills stop short of the doorways too: where a door sits in
+            # a gap of the walls as drawn, the strip is its gap, not a wall.
+            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
+                                                options.max_wall_thickness) if g is not None]
+            if gaps:
+                between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
+        if not between.is_empty:
+            walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
+            info["zone_walls_m2"] = round(between.area, 3)
+    return walls, filled_rooms
+
+
+def _refuse_if_empty(scene: Scene, interior_source: str, options: BuildOptions) -> None:
+    """Raise :class:`NoFreeSpaceError` (with ``scene``, for previews) when
+    the walls enclose no building or leave no free space, naming the fix."""
+    info, walls, free = scene.info, scene.walls, scene.free_space
     x0, y0, x1, y1 = walls.bounds
     small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
     if interior_source == "open" and not small:  # (a plan of a room's size: its scale is what is wrong, below)
@@ -135,7 +151,6 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             + hint,
             scene,
         )
-    return scene
 
 
 def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
