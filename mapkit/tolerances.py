@@ -118,6 +118,30 @@ OPEN_PLAN_FRACTION = 0.25
 #: or a double door; farther apart, the walls are two walls.
 BRIDGE_MAX_GAP = 4.0
 
+#: A plan without a closed outline (nor a floor layer) is closed from its
+#: walls: gaps in its outer walls up to this wide, metres, are bridged (a
+#: building's typical opening: a double door, a garage door, an entrance
+#: beside a corner where no wall end faces another; a recess of the facade
+#: narrower than this becomes inside too). A wider gap leaves the plan open:
+#: it is refused, naming --floor (:mod:`mapkit.importers.dxf.closure`).
+OUTLINE_MAX_GAP = 3.0
+
+#: Mitre limit (times the offset) of that closing's offsets: square corners
+#: stay square; sharper ones are bevelled rather than spiking far out.
+OUTLINE_MITRE_LIMIT = 2.0
+
+#: Room fills (zone layers) leave the walls between them implicit: the thin
+#: strips between fills are walls. Where the drawn walls already cover at
+#: least this share of those strips, the walls are drawn and the rest of
+#: the strips are doorways and openings (a facility-management plan's room
+#: hatches stop at the wall faces and across the doors): no strip is added.
+ZONE_WALLS_DRAWN_SHARE = 0.5
+
+#: A pocket door's leaf (one line inside a wall, running to its end) is at
+#: most this long, metres (a wide single leaf); a longer line in a wall on
+#: the door layer is something else (:mod:`mapkit.importers.dxf.pocket_doors`).
+POCKET_DOOR_MAX_LEAF = 1.5
+
 #: Wall ends are "in line" and "facing" within this many degrees; an end
 #: face is square to its wall within it too.
 BRIDGE_ANGLE_DEG = 15.0

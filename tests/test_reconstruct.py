@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.geometry import box
 
-from mapkit.errors import MapkitError, NoWallsError
+from mapkit.errors import MapkitError, NoFreeSpaceError, NoWallsError
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
@@ -161,15 +161,14 @@ def test_free_space_is_the_room_shrunk_by_the_robot_radius(w, h, r):
     assert scene.walls.distance(scene.free_space) == pytest.approx(r, abs=1e-6)
 
 
-def test_open_plan_uses_the_floor_layer_else_the_hull_with_a_warning():
-    walls = [line((0, 0), (10, 0)), line((0, 6), (4, 6))]
-    hull = scene_of(walls)
-    assert hull.info["interior"] == "convex hull"
-    assert any("convex hull" in w for w in hull.info["warnings"])
-    floor = [outline(0, 0, 10, 6, layer="F")]
+def test_open_plan_uses_the_floor_layer_else_it_is_refused():
+    walls = [line((0, 0), (12, 0)), line((0, 6), (4, 6))]
+    with pytest.raises(NoFreeSpaceError, match="enclose no building.*--floor"):
+        scene_of(walls)  # two walls surround nothing, even with their gaps bridged
+    floor = [outline(0, 0, 12, 6, layer="F")]
     floored = scene_of(walls, floor=floor)
     assert floored.info["interior"] == "floor layer"
-    assert floored.free_space.area > hull.free_space.area
+    assert floored.free_space.area > 60.0
 
 
 def test_no_free_space_is_a_user_error():

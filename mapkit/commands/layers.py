@@ -77,6 +77,7 @@ def _plans(path, document, options, roles) -> list[dict]:
     ``document`` is the ``(ezdxf document, warnings)`` already read of ``path``."""
     import logging
 
+    from mapkit.errors import NoWallsError
     from mapkit.importers.dxf import load_drawing
 
     if "walls" not in roles.values():
@@ -84,6 +85,8 @@ def _plans(path, document, options, roles) -> list[dict]:
     logging.getLogger("mapkit").disabled = True  # the build's warnings are not this listing's
     try:
         _, info = load_drawing(path, options, document)
+    except NoWallsError:  # a wall layer by name that holds no linework: the listing's note says so
+        return []
     finally:
         logging.getLogger("mapkit").disabled = False
     return info.get("plans", [])

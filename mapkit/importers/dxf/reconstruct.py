@@ -10,8 +10,10 @@
    drawing claims the wall gap it sits in; free-standing glass becomes an
    obstacle.
 3. Free space: the interior (what closed outlines enclose once door and
-   window gaps are shut; for open plans a floor layer's extent or the walls'
-   convex hull) minus walls and obstacles, shrunk by the robot radius.
+   window gaps are shut; for open plans a floor layer's extent, else the
+   footprint closed from the walls, :mod:`.closure`) minus walls and
+   obstacles, shrunk by the robot radius. A plan that none of these closes
+   is refused.
 """
 
 from __future__ import annotations
@@ -25,9 +27,11 @@ from shapely.ops import unary_union
 from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
+from mapkit.importers.dxf.closure import closed_footprint
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
+from mapkit.importers.dxf.pocket_doors import pocket_opening
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
 from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
@@ -35,7 +39,8 @@ from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import DOUBLE_DOOR_SQUARENESS, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, SMALL_PLAN_M, SNAP_GAP, ZERO
+from mapkit.tolerances import (DOUBLE_DOOR_SQUARENESS, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP,
+                               SMALL_PLAN_M, SNAP_GAP, ZERO, ZONE_WALLS_DRAWN_SHARE)
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:
@@ -52,19 +57,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if walls.is_empty:
         _refuse_no_walls(info, options)
 
-    zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
-    if not zones.is_empty:
-        between = _between_zones(walls, zones, options.max_wall_thickness)
-        if not between.is_empty:
-            # Room fills stop short of the doorways too: where a door sits in
-            # a gap of the walls as drawn, the strip is its gap, not a wall.
-            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
-                                                options.max_wall_thickness) if g is not None]
-            if gaps:
-                between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
-        if not between.is_empty:
-            walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
-            info["zone_walls_m2"] = round(between.area, 3)
+    walls, filled_rooms = _with_zone_walls(drawing, walls, options, info)
 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     if ticks:
@@ -72,8 +65,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     walls = _without_lines_splitting_rooms(drawing, walls, wall_result.single_lines, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
-    if interior_source == "convex hull":
-        warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
+    if interior_source == "closed from the walls":
+        warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
+             f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
 
     free = interior.difference(walls)
     if not obstacles.is_empty:
@@ -82,6 +76,11 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if options.robot_radius > ZERO.distance:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+    if not filled_rooms.is_empty:
+        free, shafts = _without_shafts(free, filled_rooms, door_gaps, options.robot_radius)
+        if shafts:
+            warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
+                 f"{sum(p.area for p in shafts):.1f} m2")
 
     info["interior"] = interior_source
     info["counts"] = dict(wall_result.counts) | {
@@ -104,10 +103,51 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         ignored=ignored,
         info=info,
     )
+    _refuse_if_empty(scene, interior_source, options)
+    return scene
+
+
+def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, info: dict):
+    """The walls with those room fills (zone layers) leave implicit, and the
+    room fills when the walls are drawn beside them (empty otherwise): see
+    ``ZONE_WALLS_DRAWN_SHARE``."""
+    zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
+    filled_rooms = Polygon()  # the room fills of a plan whose walls are drawn
+    if not zones.is_empty:
+        between = _between_zones(walls, zones, options.max_wall_thickness)
+        if not between.is_empty and between.intersection(walls).area >= ZONE_WALLS_DRAWN_SHARE * between.area:
+            # The walls are drawn (the room fills stop at their faces): the
+            # strips off them are doorways and openings the walls leave open.
+            between = Polygon()
+            filled_rooms = zones
+        if not between.is_empty:
+            # Room fills stop short of the doorways too: where a door sits in
+            # a gap of the walls as drawn, the strip is its gap, not a wall.
+            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
+                                                options.max_wall_thickness) if g is not None]
+            if gaps:
+                between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
+        if not between.is_empty:
+            walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
+            info["zone_walls_m2"] = round(between.area, 3)
+    return walls, filled_rooms
+
+
+def _refuse_if_empty(scene: Scene, interior_source: str, options: BuildOptions) -> None:
+    """Raise :class:`NoFreeSpaceError` (with ``scene``, for previews) when
+    the walls enclose no building or leave no free space, naming the fix."""
+    info, walls, free = scene.info, scene.walls, scene.free_space
+    x0, y0, x1, y1 = walls.bounds
+    small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
+    if interior_source == "open" and not small:  # (a plan of a room's size: its scale is what is wrong, below)
+        raise NoFreeSpaceError(
+            f"the walls enclose no building: no closed outline, no floor layer outlining an area, and the outer walls "
+            f"stay open across a gap wider than {OUTLINE_MAX_GAP:g} m; outline the building on a layer of its own and "
+            f"name it with --floor, or choose the wall layers with --walls (check them with 'mapkit preview')",
+            scene,
+        )
     if free.is_empty:
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
-        x0, y0, x1, y1 = walls.bounds
-        small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
         hint = ("; " + rescale_hint(x1 - x0, y1 - y0, info.get("units", "m"), info.get("insunits"), options.units,
                                    options.scale) if small else "")
         raise NoFreeSpaceError(
@@ -116,7 +156,6 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             + hint,
             scene,
         )
-    return scene
 
 
 def _refuse_no_walls(info: dict, options: BuildOptions):
@@ -165,8 +204,15 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     door_gaps = []
     lost = []
     cuts = []
+    pockets = []
     for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
         if gap is None:
+            gap = pocket_opening(item, walls, options.max_wall_thickness)
+            if gap is not None and not _claimed(gap, door_gaps + window_gaps):
+                pockets.append(gap)
+                door_gaps.append(gap)
+                openings.append(Opening(gap, "door", 0.0, options.door_height))
+                continue
             gap = cut_opening(item, walls, options.max_wall_thickness)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
                 lost.append(item.centroid)
@@ -176,6 +222,8 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
             continue
         door_gaps.append(gap)
         openings.append(Opening(gap, "door", 0.0, options.door_height))
+    if pockets:
+        warn(f"{len(pockets)} pocket door(s) (a leaf drawn inside the wall): their doorways are the gaps beside them")
     if cuts:
         walls = MultiPolygon(polygon_parts(walls.difference(unary_union(cuts))))
         warn(f"{len(cuts)} door drawing(s) over an unbroken wall: their openings cut through it")
@@ -238,6 +286,23 @@ def _join_double_doors(cuts: list[Polygon], openings: list[Opening], door_gaps: 
             joined.add(id(b))
 
 
+def _without_shafts(free: MultiPolygon, rooms, door_gaps: list[Polygon], robot_radius: float):
+    """``free`` without its parts that no room fill covers and no door
+    reaches, and those parts.
+
+    A plan whose every room has a fill (a facility-management plan's room
+    polygons) says where its rooms are: a walled space outside all of them
+    with no door into it is a shaft or a pipe chase, not a place a robot
+    reaches."""
+    doors = unary_union(door_gaps) if door_gaps else Polygon()
+    keep, shafts = [], []
+    for part in free.geoms:
+        in_room = part.intersection(rooms).area >= MIN_FREE_AREA
+        by_door = not doors.is_empty and part.distance(doors) <= robot_radius + SNAP_GAP
+        (keep if in_room or by_door else shafts).append(part)
+    return MultiPolygon(keep), shafts
+
+
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
     """Whether most of ``gap`` is already an opening (two drawings in one gap)."""
     return any(gap.intersection(t).area > 0.5 * min(gap.area, t.area) for t in taken)
@@ -252,9 +317,12 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     holes of the union of all barriers; door gaps and the bridges with a
     room on both sides then join the interior (the robot passes through
     them; a bridge to the outside stays shut). A floor layer, when there is
-    one, says where the inside is. Plans still open after that (the holes
-    cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) take
-    the hull.
+    one, says where the inside is (within the outer walls, when they
+    enclose the plan). Plans still open after that (the holes
+    cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) are
+    closed from their outer walls (:func:`.closure.closed_footprint`); if
+    that encloses too little as well, the source is ``"open"`` and the
+    inside empty (the caller refuses the plan).
     """
     bridges = bridges or []
     shut = unary_union([walls, obstacles, *door_gaps, *bridges])
@@ -264,12 +332,21 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     enclosed = unary_union(holes) if holes else Polygon()
     hull = shut.convex_hull
     floor_area = _floor_extent(floor)
-    if not floor_area.is_empty:
+    if not floor_area.is_empty and enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
+        # The walls enclose the building: a floor layer adds the rooms they
+        # leave open, but nothing beyond the outer walls (a floor outline of
+        # a terrace or of the next wing drawn beside the plan).
+        inside, source = unary_union([enclosed, floor_area.intersection(closed_footprint(shut))]), "floor layer"
+    elif not floor_area.is_empty:
         inside, source = unary_union([enclosed, floor_area]), "floor layer"
     elif enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
         inside, source = enclosed, "enclosed"
     else:
-        inside, source = hull, "convex hull"
+        footprint = closed_footprint(shut)
+        if footprint.difference(shut).area >= OPEN_PLAN_FRACTION * hull.area:
+            inside, source = unary_union([enclosed, footprint]), "closed from the walls"
+        else:
+            return Polygon(), "open"
     # The robot walks through doors: their gaps join the rooms they connect.
     # A small closing seals hairline slits where a gap meets a room (they
     # would block the passage once the free space is shrunk); walls are
