@@ -24,6 +24,7 @@ from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.room_layers import room_faces
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
@@ -66,7 +67,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
-    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
+    rooms = room_faces(drawing.role("rooms"), drawing.role("doors")) if drawing.role("rooms") else None
+    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges, rooms)
     if interior_source == "convex hull":
         warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
 
@@ -172,7 +174,7 @@ def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
 
 
 def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPolygon, floor: list[Stroke],
-              bridges: list[Polygon] | None = None):
+              bridges: list[Polygon] | None = None, rooms: Polygon | MultiPolygon | None = None):
     """Region where the building's inside is, and how it was decided.
 
     Doors, windows, glass and the undrawn openings between facing wall ends
@@ -182,7 +184,9 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     them; a bridge to the outside stays shut). A floor layer, when there is
     one, says where the inside is. Plans still open after that (the holes
     cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) take
-    the hull.
+    the hull. A plan drawn one layer per room gives ``rooms``: the faces its
+    room outlines and door lines enclose; they say where the inside is, as
+    a floor layer does.
     """
     bridges = bridges or []
     shut = unary_union([walls, obstacles, *door_gaps, *bridges])
@@ -192,7 +196,9 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     enclosed = unary_union(holes) if holes else Polygon()
     hull = shut.convex_hull
     floor_area = _floor_extent(floor)
-    if not floor_area.is_empty:
+    if rooms is not None and not rooms.is_empty:
+        inside, source = unary_union([floor_area, rooms]), "room outlines"
+    elif not floor_area.is_empty:
         inside, source = unary_union([enclosed, floor_area]), "floor layer"
     elif enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
         inside, source = enclosed, "enclosed"
