@@ -38,14 +38,20 @@ def _room(msp, layer: str, x0: float, y0: float, x1: float, y1: float, gaps=()):
 def _mall(path, units: int = 6):
     """Three 4 x 4 m rooms in a row, each on its layer 'Raum_00k' as lines,
     doors 1 m wide between them and into the first from outside as lines
-    on 'Tueren' across the gaps their outlines leave, a 0.4 m pillar drawn
+    on 'Tueren' across the gaps their outlines leave, a 1.2 x 3 m escalator
+    lane 'Raum_004' off the first room (a door line at each end), a 0.4 m pillar drawn
     on the first room's layer, and a pocket 1 x 4 m that the second and
     third rooms' walls close off (no room of its own, no door)."""
     doc = ezdxf.new("R2013")
     doc.header["$INSUNITS"] = units
     msp = doc.modelspace()
     door = {"layer": "Tueren"}
-    _room(msp, "Raum_001", 0, 0, 4, 4, [("w", 1.5, 2.5), ("e", 1.5, 2.5)])
+    _room(msp, "Raum_001", 0, 0, 4, 4, [("w", 1.5, 2.5), ("e", 1.5, 2.5), ("s", 1, 2.2)])
+    # An escalator lane off the first room: its side walls end square to the door lines at both its ends.
+    msp.add_line((1, 0), (1, -3), dxfattribs={"layer": "Raum_004"})
+    msp.add_line((2.2, 0), (2.2, -3), dxfattribs={"layer": "Raum_004"})
+    msp.add_line((1, 0), (2.2, 0), dxfattribs=door)
+    msp.add_line((1, -3), (2.2, -3), dxfattribs=door)
     _room(msp, "Raum_002", 4, 0, 8, 4, [("w", 1.5, 2.5), ("e", 1.5, 2.5)])
     _room(msp, "Raum_003", 8, 0, 12, 4, [("w", 1.5, 2.5)])
     msp.add_lwpolyline([(1.8, 2.8), (2.2, 2.8), (2.2, 3.2), (1.8, 3.2)], close=True, dxfattribs={"layer": "Raum_001"})
@@ -63,19 +69,22 @@ def _mall(path, units: int = 6):
 
 def test_per_room_layers_are_the_walls_and_the_door_lines_connect_them(tmp_path):
     """Refused before ("no recognisable walls": 'Raum_*' named rooms, read as
-    room fills); now the rooms' outlines are the walls, the three door lines
-    three doors, the rooms one free space, and the free space inside the
-    rooms only: not the pocket between the walls, not the pillar."""
+    room fills); now the rooms' outlines are the walls, the five door lines
+    five doors (the lane's two too, whose walls end square to them: no wall
+    gap of a door leaf), the rooms one free space, and the free space inside
+    the rooms only: not the pocket between the walls, not the pillar."""
     scene = load_scene(_mall(tmp_path / "mall.dxf"))
-    assert [o.kind for o in scene.openings] == ["door"] * 3
+    assert [o.kind for o in scene.openings] == ["door"] * 5
     parts = polygon_parts(scene.free_space)
     assert len(parts) == 1
     assert scene.info["interior"] == "room outlines"
-    # Three 16 m2 rooms less the pillar, shrunk by the robot's 0.2 m: well under 48 m2, nothing of the pocket.
-    assert 30 < scene.free_space.area < 48 - 0.16
+    # Three 16 m2 rooms and the 3.6 m2 lane less the pillar, shrunk by the
+    # robot's 0.2 m: under 51.6 m2, nothing of the pocket.
+    assert 30 < scene.free_space.area < 51.6 - 0.16
+    assert not any("not in a wall gap" in w for w in scene.info["warnings"])
     assert scene.free_space.intersection(shapely_box(4, -1, 12, 0)).area == 0
     assert scene.free_space.intersection(shapely_box(1.8, 2.8, 2.2, 3.2)).area == 0
-    assert any("the rooms' outlines on 'Raum_001', 'Raum_002', 'Raum_003'" in w for w in scene.info["warnings"])
+    assert any("the rooms' outlines on 'Raum_001', 'Raum_002', 'Raum_003', 'Raum_004'" in w for w in scene.info["warnings"])
 
 
 def shapely_box(*b):
@@ -90,7 +99,7 @@ def test_mapkit_layers_says_the_per_room_rule(tmp_path, capsys):
     assert code == 0, err
     rows = {r["name"]: r for r in json.loads(out)["layers"]}
     assert rows["Raum_002"]["role"] == "walls"
-    assert "one of 3 per-room layers 'Raum*'" in rows["Raum_002"]["why"]
+    assert "one of 4 per-room layers 'Raum*'" in rows["Raum_002"]["why"]
     assert rows["Tueren"]["role"] == "doors"
 
 

@@ -24,7 +24,7 @@ from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
-from mapkit.importers.dxf.room_layers import room_faces
+from mapkit.importers.dxf.room_layers import door_line_opening, room_faces
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
@@ -141,11 +141,14 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     cuts = []
     for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
         if gap is None:
-            gap = cut_opening(item, walls, options.max_wall_thickness)
+            cut = cut_opening(item, walls, options.max_wall_thickness)
+            # A plan drawn one layer per room: a door line is a door where it meets walls at both ends.
+            gap = cut if cut is not None or not drawing.role("rooms") else door_line_opening(item, walls)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
                 lost.append(item.centroid)
                 continue
-            cuts.append(gap)
+            if cut is not None:
+                cuts.append(cut)
         if _claimed(gap, door_gaps + window_gaps):
             continue
         door_gaps.append(gap)

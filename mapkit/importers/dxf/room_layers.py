@@ -45,7 +45,8 @@ from shapely.ops import unary_union
 from mapkit.importers.dxf.entities import SILENT
 from mapkit.importers.dxf.layer_roles import tokens
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import MIN_OPENING_WIDTH, PER_ROOM_MIN_LAYERS, ROOM_FACE_MIN_SHARE, SNAP_GAP
+from mapkit.tolerances import (JAMB_REACH, MIN_OPENING_WIDTH, PER_ROOM_MIN_LAYERS, ROOM_FACE_MIN_SHARE, SNAP_GAP,
+                                THIN_WALL)
 
 #: A layer name that ends in a running number, optionally a letter after it
 #: ('Raum_001', 'BathRoom2a', 'Room 12'): the stem, then the number.
@@ -199,3 +200,23 @@ def door_lines_apart(doors: list[Stroke], first_group: int) -> list[Stroke]:
     if not doors or any(s.group is not None or s.closed or len(s.coords) != 2 for s in doors):
         return doors
     return [replace(s, group=first_group + k) for k, s in enumerate(doors)]
+
+
+def door_line_opening(item, walls) -> Polygon | None:
+    """The opening of a door line in a plan drawn one layer per room when
+    no wall gap fits it (the rooms' outlines end on it at an angle, or it
+    is wider than a door leaf: a shop front, the end of an escalator lane):
+    the line itself, ``THIN_WALL`` deep, when both its ends meet walls and
+    it does not run along one. None otherwise.
+
+    ``item``: one door drawing (lines, metres); ``walls``: the wall solids."""
+    lines = [g for g in shapely.get_parts(item) if isinstance(g, LineString)]
+    if len(lines) != 1 or lines[0].length < MIN_OPENING_WIDTH:
+        return None
+    line = lines[0]
+    ends = [shapely.Point(line.coords[0]), shapely.Point(line.coords[-1])]
+    if any(walls.distance(p) > JAMB_REACH for p in ends):
+        return None
+    if walls.intersection(line).length > 0.5 * line.length:
+        return None
+    return line.buffer(THIN_WALL / 2.0, cap_style="flat")
