@@ -12,6 +12,7 @@ from collections import Counter
 
 import ezdxf
 import pytest
+from shapely.geometry import box
 
 from cli_helpers import run
 from mapkit.importers import load_scene
@@ -82,15 +83,9 @@ def test_per_room_layers_are_the_walls_and_the_door_lines_connect_them(tmp_path)
     # robot's 0.2 m: under 51.6 m2, nothing of the pocket.
     assert 30 < scene.free_space.area < 51.6 - 0.16
     assert not any("not in a wall gap" in w for w in scene.info["warnings"])
-    assert scene.free_space.intersection(shapely_box(4, -1, 12, 0)).area == 0
-    assert scene.free_space.intersection(shapely_box(1.8, 2.8, 2.2, 3.2)).area == 0
+    assert scene.free_space.intersection(box(4, -1, 12, 0)).area == 0
+    assert scene.free_space.intersection(box(1.8, 2.8, 2.2, 3.2)).area == 0
     assert any("the rooms' outlines on 'Raum_001', 'Raum_002', 'Raum_003', 'Raum_004'" in w for w in scene.info["warnings"])
-
-
-def shapely_box(*b):
-    from shapely.geometry import box
-
-    return box(*b)
 
 
 def test_mapkit_layers_says_the_per_room_rule(tmp_path, capsys):
@@ -120,6 +115,7 @@ def test_which_numbered_layers_are_rooms():
     wall layers: door, generic and zone-polygon layers keep their roles."""
     assert room_stem("Raum_001") == "raum" and room_stem("BathRoom2a") == "bathroom"
     assert room_stem("Layer1") is None and room_stem("0-3") is None and room_stem("Kitchen") is None
+    assert room_stem("F-0") is None  # a pen code of a framing plan (walldet_sample's 'F-0', 'F-4', 'F-8')
     lines = Counter({"LINE": 6})
     counts = {f"Raum_00{k}": lines for k in range(1, 4)} | {f"Door{k}": lines for k in range(1, 4)} \
         | {f"Layer{k}": lines for k in range(1, 4)} | {f"Zone{k}": Counter({"LWPOLYLINE": 1}) for k in range(1, 4)}
@@ -159,8 +155,9 @@ def _storeys(path):
 
 
 def test_two_storeys_drawn_one_layer_per_room_are_two_plans(tmp_path):
-    """Built wrong before: the staircase wall's one line was the walls (the
-    rooms read as fills), the free space its convex hull; now the rooms'
+    """Wrong before: the staircase wall's one line was the walls (the rooms
+    read as fills): the real house built as that line's convex hull, this
+    one refused for no free space; now the rooms'
     outlines are the walls, the sheet's two storeys two plans (the largest
     built, the other named), and the storey's rooms connect through its doors."""
     scene = load_scene(_storeys(tmp_path / "house.dxf"))

@@ -18,7 +18,8 @@ read), for layers whose role was guessed, never for those named with
    room's outline traced, not one closed zone polygon per room), holding
    more of it than the layers named for walls. A stem whose name gives
    another role keeps it ('Door1', 'Door2', 'Door3' are doors), and so
-   does a generic one ('Layer1', 'Layer2').
+   do a generic one ('Layer1', 'Layer2') and a code of a letter or two
+   ('F-0', 'F-4', 'F-8': pens of a framing plan).
 2. in such a drawing, the layers named for a room or a space ('Kitchen',
    'DiningRoom', 'Balcony1') drawn the same way are rooms too.
 3. in a drawing with no wall linework at all, the layers named for rooms
@@ -56,6 +57,9 @@ _NUMBERED = re.compile(r"^(?P<stem>.*[^\W\d_])[\s_.\-]*(?P<number>\d+)[a-zA-Z]?$
 _GENERIC_STEMS = frozenset({"layer", "layers", "ebene", "calque", "capa", "livello", "laag", "level", "plan",
                             "sheet", "group", "block", "new"})
 
+#: Letters a stem needs to name rooms ('Raum', 'Closet'); fewer are a code.
+_STEM_MIN_LETTERS = 3
+
 #: Words that name a room or a space, whole words of the layer name (see
 #: :func:`mapkit.importers.dxf.layer_roles.tokens`); a word ending in "room"
 #: ('bedroom', 'storeroom') is one too.
@@ -85,7 +89,10 @@ def room_stem(layer: str) -> str | None:
     if m is None:
         return None
     stem = m.group("stem").casefold()
-    return None if stem.strip(" _.-") in _GENERIC_STEMS else stem
+    # A letter or two is a pen or sheet code ('F-0', 'F-4', 'F-8' of a framing plan), not a room's name.
+    if stem.strip(" _.-") in _GENERIC_STEMS or sum(c.isalpha() for c in stem) < _STEM_MIN_LETTERS:
+        return None
+    return stem
 
 
 def _linework(counter: Counter) -> int:
