@@ -198,11 +198,6 @@ SHEET_MIN_PLAN_AREA_SHARE = 0.5
 #: ('Raum_001', 'Raum_002', 'Raum_003') are a drawing's rooms, one a layer
 #: (two numbered layers are as often a storey's two halves or two sheets).
 PER_ROOM_MIN_LAYERS = 3
-#: ... and a face their outlines and door lines enclose is a room when at
-#: least this share of its outline (door lines aside) is one room layer's
-#: linework; a pocket between several rooms' walls (an area no room was
-#: drawn for) is not.
-ROOM_FACE_MIN_SHARE = 0.5
 
 #: A plan whose walls span less than this, metres, and leave no free space
 #: is probably read in the wrong units (a gallery drawn at 1:10 in metres

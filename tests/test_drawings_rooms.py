@@ -41,8 +41,9 @@ def _mall(path, units: int = 6):
     doors 1 m wide between them and into the first from outside as lines
     on 'Tueren' across the gaps their outlines leave, a 1.2 x 3 m escalator
     lane 'Raum_004' off the first room (a door line at each end), a 0.4 m pillar drawn
-    on the first room's layer, and a pocket 1 x 4 m that the second and
-    third rooms' walls close off (no room of its own, no door)."""
+    on the first room's layer, a pocket 12 x 1 m that the three rooms'
+    walls close off (no room of its own, no door), and a niche
+    in the third room its own lines close off (no door)."""
     doc = ezdxf.new("R2013")
     doc.header["$INSUNITS"] = units
     msp = doc.modelspace()
@@ -56,11 +57,15 @@ def _mall(path, units: int = 6):
     _room(msp, "Raum_002", 4, 0, 8, 4, [("w", 1.5, 2.5), ("e", 1.5, 2.5)])
     _room(msp, "Raum_003", 8, 0, 12, 4, [("w", 1.5, 2.5)])
     msp.add_lwpolyline([(1.8, 2.8), (2.2, 2.8), (2.2, 3.2), (1.8, 3.2)], close=True, dxfattribs={"layer": "Raum_001"})
-    # The pocket: south of rooms 2 and 3, closed by a line on each of their layers.
-    msp.add_line((4, 0), (4, -1), dxfattribs={"layer": "Raum_002"})
-    msp.add_line((4, -1), (8, -1), dxfattribs={"layer": "Raum_002"})
-    msp.add_line((8, -1), (12, -1), dxfattribs={"layer": "Raum_003"})
-    msp.add_line((12, -1), (12, 0), dxfattribs={"layer": "Raum_003"})
+    # The pocket: north of the three rooms, closed by lines on each of their layers.
+    msp.add_line((0, 4), (0, 5), dxfattribs={"layer": "Raum_001"})
+    msp.add_line((0, 5), (4, 5), dxfattribs={"layer": "Raum_001"})
+    msp.add_line((4, 5), (8, 5), dxfattribs={"layer": "Raum_002"})
+    msp.add_line((8, 5), (12, 5), dxfattribs={"layer": "Raum_003"})
+    msp.add_line((12, 5), (12, 4), dxfattribs={"layer": "Raum_003"})
+    # A niche 1.2 m square the third room's own lines close off, with no door.
+    msp.add_line((10.8, 4), (10.8, 2.8), dxfattribs={"layer": "Raum_003"})
+    msp.add_line((10.8, 2.8), (12, 2.8), dxfattribs={"layer": "Raum_003"})
     for x in (0, 4, 8):
         msp.add_line((x, 1.5), (x, 2.5), dxfattribs=door)
     msp.add_text("Raum 1", dxfattribs={"layer": "Raum_001"}).set_placement((1, 1))
@@ -73,7 +78,8 @@ def test_per_room_layers_are_the_walls_and_the_door_lines_connect_them(tmp_path)
     room fills); now the rooms' outlines are the walls, the five door lines
     five doors (the lane's two too, whose walls end square to them: no wall
     gap of a door leaf), the rooms one free space, and the free space inside
-    the rooms only: not the pocket between the walls, not the pillar."""
+    the rooms only: not the pocket between the walls, not the pillar, not
+    the niche no door leads into."""
     scene = load_scene(_mall(tmp_path / "mall.dxf"))
     assert [o.kind for o in scene.openings] == ["door"] * 5
     parts = polygon_parts(scene.free_space)
@@ -83,8 +89,9 @@ def test_per_room_layers_are_the_walls_and_the_door_lines_connect_them(tmp_path)
     # robot's 0.2 m: under 51.6 m2, nothing of the pocket.
     assert 30 < scene.free_space.area < 51.6 - 0.16
     assert not any("not in a wall gap" in w for w in scene.info["warnings"])
-    assert scene.free_space.intersection(box(4, -1, 12, 0)).area == 0
+    assert scene.free_space.intersection(box(0, 4, 12, 5)).area == 0
     assert scene.free_space.intersection(box(1.8, 2.8, 2.2, 3.2)).area == 0
+    assert scene.free_space.intersection(box(10.8, 2.8, 12, 4)).area == 0
     assert any("the rooms' outlines on 'Raum_001', 'Raum_002', 'Raum_003', 'Raum_004'" in w for w in scene.info["warnings"])
 
 
@@ -194,6 +201,21 @@ def test_rooms_traced_on_space_layers_at_an_unknown_scale_name_the_units(tmp_pat
     rows = {r["name"]: r for r in json.loads(out)["layers"]}
     assert rows["hall"]["role"] == "walls" and "no layer holds walls" in rows["hall"]["why"]
     assert rows["edge"]["role"] == "unknown"
+
+
+def test_door_symbols_other_than_lines_are_left_whole():
+    """Each straight door line of a per-room plan is a door of its own; a
+    door drawn as a leaf and its swing stays one drawing (its strokes keep
+    no group of their own)."""
+    import numpy as np
+
+    from mapkit.importers.dxf.room_layers import door_lines_apart
+    from mapkit.importers.dxf.strokes import Stroke
+
+    lines = [Stroke(np.array([[0.0, 0.0], [1.0, 0.0]]), layer="Tueren"), Stroke(np.array([[1.0, 0.0], [2.0, 0.0]]))]
+    assert [s.group for s in door_lines_apart(lines, 7)] == [7, 8]
+    swing = lines[:1] + [Stroke(np.array([[1.0, 0.0], [0.7, 0.7], [0.0, 1.0]]))]
+    assert [s.group for s in door_lines_apart(swing, 7)] == [None, None]
 
 
 @pytest.mark.parametrize("name", ["Kitchen", "DiningRoom", "hall", "Walkway", "Balcony1"])

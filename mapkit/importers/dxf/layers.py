@@ -53,9 +53,11 @@ def resolve_layer_roles(counts: dict[str, Counter],
     roles.update({name: "walls" for name in outlines})
     warnings: list[str] = []
     if outlines:
-        shown = ", ".join(f"'{n}'" for n in outlines[:5]) + (f" (+{len(outlines) - 5} more)" if len(outlines) > 5 else "")
-        warnings.append(f"the rooms' outlines on {shown} (rooms drawn a layer each, or on layers named for spaces) are "
-                        f"taken as the walls and, with the door lines, as the rooms (see 'mapkit layers PLAN'; --walls to choose)")
+        shown = ", ".join(f"'{n}'" for n in outlines[:5])
+        shown += f" (+{len(outlines) - 5} more)" if len(outlines) > 5 else ""
+        warnings.append(f"the rooms' outlines on {shown} (rooms drawn a layer each, or on layers named for spaces) "
+                        f"are taken as the walls and, with the door lines, as the rooms (see 'mapkit layers PLAN'; "
+                        f"--walls to choose)")
     wall_layers = [name for name, role in roles.items() if role == "walls" and _has_linework(counts[name])]
     if not wall_layers and not options.walls:
         unknown = [name for name, role in roles.items() if role is None and _has_linework(counts[name])]

@@ -25,18 +25,20 @@ read), for layers whose role was guessed, never for those named with
 3. in a drawing with no wall linework at all, the layers named for rooms
    or spaces ('room', 'hall') that hold linework are the walls.
 
-The walls' door lines (a 'Tueren' layer) are doors as usual: the rooms
-connect through them. The rooms themselves (:func:`room_faces`) are what
-the outlines enclose together with the door lines: they say where the
-inside of the building is.
+The door lines (a 'Tueren' layer) connect the rooms: each straight one is
+a door of its own (:func:`door_lines_apart`), and where no wall gap of a
+door leaf fits it (a shop front, an escalator lane's end) the line itself
+is the opening (:func:`door_line_opening`). The rooms (:func:`room_faces`)
+are what the outlines enclose together with the door lines: they say where
+the inside of the building is.
 """
 
 from __future__ import annotations
 
 import re
 from collections import Counter
-from dataclasses import replace
 from collections.abc import Mapping
+from dataclasses import replace
 
 import numpy as np
 import shapely
@@ -46,8 +48,7 @@ from shapely.ops import unary_union
 from mapkit.importers.dxf.entities import SILENT
 from mapkit.importers.dxf.layer_roles import tokens
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import (JAMB_REACH, MIN_OPENING_WIDTH, PER_ROOM_MIN_LAYERS, ROOM_FACE_MIN_SHARE, SNAP_GAP,
-                                THIN_WALL)
+from mapkit.tolerances import JAMB_REACH, MIN_OPENING_WIDTH, PER_ROOM_MIN_LAYERS, SNAP_GAP, THIN_WALL
 
 #: A layer name that ends in a running number, optionally a letter after it
 #: ('Raum_001', 'BathRoom2a', 'Room 12'): the stem, then the number.
@@ -147,38 +148,22 @@ def room_faces(rooms: list[Stroke], doors: list[Stroke]) -> Polygon | MultiPolyg
 
     ``rooms``: the strokes of the room-outline layers; ``doors``: the door
     strokes, which close the outlines where a room opens into the next one.
-    The faces that the outlines and door lines enclose together are rooms
-    when most of their outline, doors aside, is the linework of one room
-    layer (``ROOM_FACE_MIN_SHARE``): a pocket that neighbouring rooms' walls
-    happen to enclose (a shaft, an area no room was drawn for) is not. A
-    face inside another room's face with no door on its outline is an
-    island in that room (a pillar, a fountain drawn on the room's layer),
-    not a room."""
-    walls = [(_line(s), s.layer) for s in rooms if len(s.coords) >= 2]
+    The rooms are the faces that the outlines and door lines enclose
+    together. In a plan with door lines, a face with no door on its outline
+    (none ``MIN_OPENING_WIDTH`` long) is no room anyone enters: a pocket
+    that neighbouring rooms' walls close off (an area no room was drawn
+    for), an island in a room (a pillar, a fountain drawn on the room's
+    layer), a niche a room's own lines close off."""
+    walls = [_line(s) for s in rooms if len(s.coords) >= 2]
     door_lines = [_line(s) for s in doors if len(s.coords) >= 2]
     if not walls:
         return Polygon()
-    noded = unary_union([g for g, _ in walls] + door_lines)
+    noded = unary_union(walls + door_lines)
     faces = [f for f in shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))) if f.area > 0]
-    if not faces:
-        return Polygon()
-    door_zone = unary_union(door_lines).buffer(SNAP_GAP) if door_lines else Polygon()
-    tree = shapely.STRtree([g for g, _ in walls])
-    kept = []
-    for f in faces:
-        ring = f.exterior
-        on_doors = ring.intersection(door_zone).length if not door_zone.is_empty else 0.0
-        wall_length = ring.length - on_doors
-        by_layer: dict[str, float] = {}
-        for i in tree.query(ring, predicate="dwithin", distance=SNAP_GAP):
-            g, layer = walls[int(i)]
-            by_layer[layer] = by_layer.get(layer, 0.0) + ring.intersection(g.buffer(SNAP_GAP)).length
-        if wall_length > 0 and max(by_layer.values(), default=0.0) < ROOM_FACE_MIN_SHARE * wall_length:
-            continue
-        if door_lines and on_doors < MIN_OPENING_WIDTH:
-            continue
-        kept.append(f)
-    return unary_union(kept) if kept else Polygon()
+    if door_lines:
+        door_zone = unary_union(door_lines).buffer(SNAP_GAP)
+        faces = [f for f in faces if f.exterior.intersection(door_zone).length >= MIN_OPENING_WIDTH]
+    return unary_union(faces) if faces else Polygon()
 
 
 def _line(s: Stroke) -> LineString:
