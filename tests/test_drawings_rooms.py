@@ -220,7 +220,10 @@ def test_door_symbols_other_than_lines_are_left_whole():
 
 @pytest.mark.parametrize("name", ["Kitchen", "DiningRoom", "hall", "Walkway", "Balcony1"])
 def test_space_names(name):
-    from mapkit.importers.dxf.room_layers import is_space_name
+    from mapkit.importers.dxf.room_layers import is_general_space_name, is_space_name
 
     assert is_space_name(name)
     assert not is_space_name("Parking") and not is_space_name("Boundary")
+    # Alone, without a drawing of one layer per room, only general words make rooms' outlines.
+    assert is_general_space_name("hall") and is_general_space_name("room")
+    assert not is_general_space_name("Kitchen stuff")

@@ -37,7 +37,6 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     """Build the scene of a plan; ``info`` (units, layers, warnings) is completed and stored in it."""
     info = dict(info or {})
     warnings = info.setdefault("warnings", [])
-
     warn = partial(warn_decision, warnings)
 
     wall_result = build_walls(drawing.role("walls"), options.max_wall_thickness)
@@ -67,8 +66,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
 
     walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
-    rooms = room_faces(drawing.role("rooms"), drawing.role("doors")) if drawing.role("rooms") else None
-    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges, rooms)
+    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges,
+                                          room_faces(drawing.role("rooms"), drawing.role("doors")))
     if interior_source == "convex hull":
         warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
 

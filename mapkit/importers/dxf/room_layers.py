@@ -23,7 +23,8 @@ read), for layers whose role was guessed, never for those named with
 2. in such a drawing, the layers named for a room or a space ('Kitchen',
    'DiningRoom', 'Balcony1') drawn the same way are rooms too.
 3. in a drawing with no wall linework at all, the layers named for rooms
-   or spaces ('room', 'hall') that hold linework are the walls.
+   or spaces in general ('room', 'hall'; not one kind of room: a 'Kitchen
+   stuff' layer holds furniture) that hold linework are the walls.
 
 The door lines (a 'Tueren' layer) connect the rooms: each straight one is
 a door of its own (:func:`door_lines_apart`), and where no wall gap of a
@@ -72,6 +73,14 @@ _SPACE_WORDS = re.compile(r"""^(?:
     |store|storage|lager|shops?|laden|geschaeft|stores
 )$""", re.X)
 
+#: Words that name rooms or spaces in general, not one kind of room: a
+#: drawing with no wall layer takes layers named so as its rooms' outlines
+#: ('room', 'hall'), not a 'Kitchen stuff' layer of furniture.
+_GENERAL_SPACE_WORDS = re.compile(r"""^(?:
+    rooms?|raum|raume|raeume|zimmer|spaces?|zones?|pieces?|stanze?|habitaciones?|locaux|local
+    |halls?|hallway|corridors?|flur
+)$""", re.X)
+
 #: Entity types that trace an outline stroke by stroke.
 _OPEN_STROKES = ("LINE", "ARC")
 
@@ -82,6 +91,11 @@ _REPLACEABLE = (None, "floor")
 def is_space_name(layer: str) -> bool:
     """Whether a layer's name says it holds a room or a space ('Kitchen', 'BedRoom1', 'hall')."""
     return any(_SPACE_WORDS.match(w) or w.endswith("room") for w in tokens(layer))
+
+
+def is_general_space_name(layer: str) -> bool:
+    """Whether a layer's name says it holds rooms or spaces in general ('room', 'hall', 'Raum')."""
+    return any(_GENERAL_SPACE_WORDS.match(w) for w in tokens(layer))
 
 
 def room_stem(layer: str) -> str | None:
@@ -138,7 +152,7 @@ def room_outline_layers(counts: Mapping[str, Counter], roles: Mapping[str, str |
         return out
     if wall_linework == 0:
         for n in sorted(candidates):
-            if is_space_name(n):
+            if is_general_space_name(n):
                 out[n] = "named for rooms or spaces, and no layer holds walls: the rooms' outlines are walls"
     return out
 
