@@ -237,6 +237,12 @@ SHEET_MIN_PLAN_SHARE = 0.2
 #: annex beside a building does not).
 SHEET_MIN_PLAN_AREA_SHARE = 0.5
 
+#: Plans drawn one layer per room (mapkit/importers/dxf/room_layers.py):
+#: at least this many layers named with one stem and a running number
+#: ('Raum_001', 'Raum_002', 'Raum_003') are a drawing's rooms, one a layer
+#: (two numbered layers are as often a storey's two halves or two sheets).
+PER_ROOM_MIN_LAYERS = 3
+
 #: A plan whose walls span less than this, metres, and leave no free space
 #: is probably read in the wrong units (a gallery drawn at 1:10 in metres
 #: spans 4.6 m): the refusal names the --units or --scale that makes it a

@@ -21,7 +21,7 @@ def run(args) -> int:
 
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.errors import MapkitError, NoWallsError
-    from mapkit.importers.dxf.layers import layer_counts, resolve_roles
+    from mapkit.importers.dxf.layers import layer_counts, resolve_roles, room_roles
     from mapkit.importers.dxf.read import read_dxf
     from mapkit.importers.dxf.layer_roles import assign_roles
 
@@ -38,6 +38,9 @@ def run(args) -> int:
     doc, warnings = read_dxf(path)
     document = (doc, list(warnings))  # as read, for the plans below: the file is parsed once
     counts = layer_counts(doc)
+    # Why a layer's role differs from what its name says (a plan drawn one layer per room).
+    decided = room_roles(counts, assign_roles(counts, options.walls, options.doors, options.windows, options.ignore,
+                                              list(getattr(options, "floor", []) or [])), options)
     try:
         roles, more = resolve_roles(counts, options)
         warnings += more
@@ -52,7 +55,8 @@ def run(args) -> int:
             "role": {"ignore": "ignored", None: "unknown"}.get(roles.get(name), roles.get(name)),
             "entities": dict(sorted(c.items())),
             "total": sum(c.values()),
-            "why": _why(name, roles.get(name), options),
+            "why": decided.get(name) if roles.get(name) == "walls" and name in decided
+            else _why(name, roles.get(name), options),
         }
         for name, c in sorted(counts.items(), key=lambda kv: kv[0].casefold())
     ]

@@ -28,12 +28,13 @@ from ezdxf import bbox
 from mapkit.errors import MapkitError
 from mapkit.importers.dxf.door_swings import find_door_swings
 from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
-from mapkit.importers.dxf.layers import layer_counts, resolve_roles
+from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
 from mapkit.importers.dxf.units import decide_units
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
+from mapkit.importers.dxf.room_layers import door_lines_apart
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
 from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES, LOCAL_ORIGIN_BEYOND_M
@@ -74,7 +75,7 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
         log.warning(w)
     check_entity_count(model_space(doc), doc.blocks, options.max_entities)
     counts = layer_counts(doc)
-    roles, role_warnings = resolve_roles(counts, options)
+    roles, role_warnings, room_outlines = resolve_layer_roles(counts, options)
     for w in role_warnings:
         log.warning(w)
     warnings += role_warnings
@@ -103,7 +104,7 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
              f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
              f"('mapkit export --drawing-coordinates' puts it back)")
     strokes, swing_strokes, plans, others = _one_plan(strokes, swing_strokes, roles, options.plan_number, note)
-    drawing = _by_role(strokes, swing_strokes, roles)
+    drawing = _by_role(strokes, swing_strokes, roles, set(room_outlines))
     for s in others:  # the sheet's other plans: shown in previews, not built
         drawing.ignored.setdefault(s.layer, []).append(s)
 
@@ -174,9 +175,11 @@ def _one_plan(strokes: list, swing_strokes: list, roles: dict, choice: int | Non
             [s for s in strokes if not ours(s)])
 
 
-def _by_role(strokes: list, swing_strokes: list, roles: dict) -> PlanDrawing:
+def _by_role(strokes: list, swing_strokes: list, roles: dict, room_outlines: set[str] = frozenset()) -> PlanDrawing:
     """The strokes sorted by their layer's role (door swings are doors
-    whatever their layer); those of other layers kept for previews."""
+    whatever their layer); those of other layers kept for previews. The
+    strokes of ``room_outlines`` layers (:mod:`.room_layers`) are walls and
+    also the "rooms" role; in such a plan each straight door line is a door."""
     drawing = PlanDrawing()
     if swing_strokes:
         drawing.strokes["doors"] = list(swing_strokes)
@@ -184,8 +187,13 @@ def _by_role(strokes: list, swing_strokes: list, roles: dict) -> PlanDrawing:
         role = roles.get(s.layer)
         if role in _USED_ROLES:
             drawing.strokes.setdefault(role, []).append(s)
+            if s.layer in room_outlines:
+                drawing.strokes.setdefault("rooms", []).append(s)
         else:
             drawing.ignored.setdefault(s.layer, []).append(s)
+    if room_outlines and drawing.role("doors"):
+        first = 1 + max((s.group for s in strokes + swing_strokes if s.group is not None), default=-1)
+        drawing.strokes["doors"] = door_lines_apart(drawing.role("doors"), first)
     return drawing
 
 

@@ -7,7 +7,8 @@ from collections import Counter
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers.dxf.entities import SILENT
 from mapkit.importers.dxf.read import model_space
-from mapkit.importers.dxf.layer_roles import assign_roles, unmatched_globs
+from mapkit.importers.dxf.layer_roles import _matches, assign_roles, unmatched_globs
+from mapkit.importers.dxf.room_layers import room_outline_layers
 from mapkit.options import BuildOptions
 
 
@@ -24,11 +25,20 @@ def _has_linework(counter: Counter) -> bool:
 
 
 def resolve_roles(counts: dict[str, Counter], options: BuildOptions) -> tuple[dict[str, str | None], list[str]]:
-    """Role of every layer (see :func:`mapkit.importers.dxf.layer_roles.assign_roles`) and warnings.
+    """Role of every layer and warnings; see :func:`resolve_layer_roles`."""
+    roles, warnings, _ = resolve_layer_roles(counts, options)
+    return roles, warnings
 
-    When no wall layer is named or recognised but exactly one layer of
-    unknown role holds linework, that layer is taken as the walls (simple
-    drawings keep everything on one layer). Raises :class:`NoWallsError`
+
+def resolve_layer_roles(counts: dict[str, Counter],
+                        options: BuildOptions) -> tuple[dict[str, str | None], list[str], list[str]]:
+    """Role of every layer (see :func:`mapkit.importers.dxf.layer_roles.assign_roles`), warnings, and the
+    layers whose lines are the rooms' outlines (walls, that with the door lines enclose the rooms).
+
+    Plans drawn one layer per room have their rooms' outlines as walls
+    (:func:`room_roles`), with a warning. When no wall layer is named or recognised but
+    exactly one layer of unknown role holds linework, that layer is taken
+    as the walls (simple drawings keep everything on one layer). Raises :class:`NoWallsError`
     listing the layers otherwise, and :class:`MapkitError` for globs that
     match no layer.
     """
@@ -39,7 +49,15 @@ def resolve_roles(counts: dict[str, Counter], options: BuildOptions) -> tuple[di
     if missing:
         raise MapkitError(f"{', '.join(missing)} matches no layer; layers are: {_listing(counts)}")
     roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore, floor)
+    outlines = sorted(room_roles(counts, roles, options))
+    roles.update({name: "walls" for name in outlines})
     warnings: list[str] = []
+    if outlines:
+        shown = ", ".join(f"'{n}'" for n in outlines[:5])
+        shown += f" (+{len(outlines) - 5} more)" if len(outlines) > 5 else ""
+        warnings.append(f"the rooms' outlines on {shown} (rooms drawn a layer each, or on layers named for spaces) "
+                        f"are taken as the walls and, with the door lines, as the rooms (see 'mapkit layers PLAN'; "
+                        f"--walls to choose)")
     wall_layers = [name for name, role in roles.items() if role == "walls" and _has_linework(counts[name])]
     if not wall_layers and not options.walls:
         unknown = [name for name, role in roles.items() if role is None and _has_linework(counts[name])]
@@ -62,7 +80,18 @@ def resolve_roles(counts: dict[str, Counter], options: BuildOptions) -> tuple[di
             f"no recognisable walls: layers are {_listing(counts)}; "
             f"name the wall layers with --walls (see 'mapkit layers PLAN')"
         )
-    return roles, warnings
+    return roles, warnings, outlines
+
+
+def room_roles(counts: dict[str, Counter], roles: dict[str, str | None], options: BuildOptions) -> dict[str, str]:
+    """The layers whose role by name gives way to the rooms' outlines as
+    walls (:mod:`mapkit.importers.dxf.room_layers`), and why each; none when
+    the user named the wall layers."""
+    if options.walls:
+        return {}
+    named = [*options.doors, *options.windows, *options.ignore, *(getattr(options, "floor", []) or [])]
+    guessed = {name for name in counts if not _matches(name, named)}
+    return room_outline_layers(counts, roles, guessed)
 
 
 def _listing(counts: dict[str, Counter]) -> str:

@@ -33,6 +33,7 @@ from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.pocket_doors import pocket_opening
 from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.room_layers import door_line_opening, room_faces
 from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
@@ -47,7 +48,6 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     """Build the scene of a plan; ``info`` (units, layers, warnings) is completed and stored in it."""
     info = dict(info or {})
     warnings = info.setdefault("warnings", [])
-
     warn = partial(warn_decision, warnings)
 
     # Jamb ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
@@ -64,7 +64,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         walls = _tick_doorways(ticks, drawing, walls, openings, door_gaps, options, warn)
     walls = _without_lines_splitting_rooms(drawing, walls, wall_result.single_lines, warn)
     bridges = end_bridges(walls, options.max_wall_thickness)
-    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
+    interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges,
+                                          room_faces(drawing.role("rooms"), drawing.role("doors")))
     if interior_source == "closed from the walls":
         warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
              f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
@@ -213,11 +214,14 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
                 door_gaps.append(gap)
                 openings.append(Opening(gap, "door", 0.0, options.door_height))
                 continue
-            gap = cut_opening(item, walls, options.max_wall_thickness)
+            cut = cut_opening(item, walls, options.max_wall_thickness)
+            # A plan drawn one layer per room: a door line is a door where it meets walls at both ends.
+            gap = cut if cut is not None or not drawing.role("rooms") else door_line_opening(item, walls)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
                 lost.append(item.centroid)
                 continue
-            cuts.append(gap)
+            if cut is not None:
+                cuts.append(cut)
         if _claimed(gap, door_gaps + window_gaps):
             continue
         door_gaps.append(gap)
@@ -309,7 +313,7 @@ def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
 
 
 def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPolygon, floor: list[Stroke],
-              bridges: list[Polygon] | None = None):
+              bridges: list[Polygon] | None = None, rooms: Polygon | MultiPolygon | None = None):
     """Region where the building's inside is, and how it was decided.
 
     Doors, windows, glass and the undrawn openings between facing wall ends
@@ -318,10 +322,12 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     room on both sides then join the interior (the robot passes through
     them; a bridge to the outside stays shut). A floor layer, when there is
     one, says where the inside is (within the outer walls, when they
-    enclose the plan). Plans still open after that (the holes
-    cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull) are
-    closed from their outer walls (:func:`.closure.closed_footprint`); if
-    that encloses too little as well, the source is ``"open"`` and the
+    enclose the plan). A plan drawn one layer per room gives ``rooms``:
+    the faces its room outlines and door lines enclose; they say where the
+    inside is, as a floor layer does. Plans still open after that (the
+    holes cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull)
+    are closed from their outer walls (:func:`.closure.closed_footprint`);
+    if that encloses too little as well, the source is ``"open"`` and the
     inside empty (the caller refuses the plan).
     """
     bridges = bridges or []
@@ -332,7 +338,9 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     enclosed = unary_union(holes) if holes else Polygon()
     hull = shut.convex_hull
     floor_area = _floor_extent(floor)
-    if not floor_area.is_empty and enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
+    if rooms is not None and not rooms.is_empty:
+        inside, source = unary_union([floor_area, rooms]), "room outlines"
+    elif not floor_area.is_empty and enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
         # The walls enclose the building: a floor layer adds the rooms they
         # leave open, but nothing beyond the outer walls (a floor outline of
         # a terrace or of the next wing drawn beside the plan).

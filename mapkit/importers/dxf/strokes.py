@@ -38,6 +38,10 @@ class Stroke:
 class PlanDrawing:
     """Everything the reconstruction needs, per role ("walls", "doors", "windows", "floor").
 
+    "rooms" holds the wall strokes that outline one room each (a plan drawn
+    one layer per room, :mod:`mapkit.importers.dxf.room_layers`): with the
+    door lines they enclose the rooms.
+
     ``ignored`` holds the strokes of ignored layers, per layer, for previews.
     """
 
