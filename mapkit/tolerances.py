@@ -257,6 +257,21 @@ PLAUSIBLE_EXTENT = (1.0, 2000.0)
 #: their extent closest to this (in log scale).
 TYPICAL_EXTENT = 20.0
 
+#: Door widths as drawn tell a drawing's units where its header is wrong
+#: (a mall level whose header says metres, its doors 10 m wide: drawn in
+#: decimetres; a house that says feet, drawn in inches): with at least
+#: ``DOOR_UNITS_MIN_DOORS`` door drawings whose median width (the longer
+#: side of each one's minimum rotated rectangle: a leaf's swing, a door
+#: line, a block) falls outside ``DOOR_WIDTH_PLAUSIBLE`` metres, the unit
+#: that puts the median closest to ``TYPICAL_DOOR_WIDTH`` (in log scale)
+#: is taken, if that median is plausible, with a warning. On the real
+#: corpus (docs/benchmarks/drawings.md) the right units give medians of
+#: 0.75 to 1.5 m (a college's double doors); the two wrong headers 9 and
+#: 10 m.
+DOOR_UNITS_MIN_DOORS = 5
+DOOR_WIDTH_PLAUSIBLE = (0.5, 2.5)
+TYPICAL_DOOR_WIDTH = 0.9
+
 #: Double-line wall ends are capped only if both lines run within this many
 #: degrees of parallel and the cap is within this of square to them.
 WALL_CAP_ANGLE_DEG = 15.0

@@ -319,9 +319,15 @@ def test_a_plan_too_small_for_free_space_names_the_units(tmp_path, capsys):
     """A plan drawn in centimetres that says millimetres was refused naming
     only the wall layers and the robot radius; the refusal says what the
     plan measures as read and names the --units that makes it a building's
-    size, and with that option it builds."""
+    size, and with that option it builds. (With its doors drawn, the
+    doors' widths say the units: tests/test_drawings_units.py; here they
+    are left out.)"""
     doc = ezdxf.readfile(FLAT)
-    for e in doc.modelspace():
+    msp = doc.modelspace()
+    for e in list(msp):
+        if e.dxf.layer == "A-DOOR":
+            msp.delete_entity(e)
+            continue
         try:
             e.scale_uniform(0.1)
         except (NotImplementedError, AttributeError, TypeError):

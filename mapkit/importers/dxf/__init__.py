@@ -23,6 +23,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import shapely
 from ezdxf import bbox
 
 from mapkit.errors import MapkitError
@@ -31,12 +32,14 @@ from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
-from mapkit.importers.dxf.units import decide_units
+from mapkit.importers.dxf.openings import drawing_items
+from mapkit.importers.dxf.units import decide_units, units_from_doors
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.room_layers import door_lines_apart
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
+from mapkit.units import UNIT_METRES
 from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES, LOCAL_ORIGIN_BEYOND_M
 
 SUFFIXES = (".dxf",)
@@ -95,7 +98,19 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
         log.warning(message)
         warnings.append(message)
 
-    strokes, swing_strokes = _flatten(msp, roles, far, factor, options, note)
+    first_notes: list[str] = []
+    strokes, swing_strokes = _flatten(msp, roles, far, factor, options, first_notes.append)
+    by_doors = None
+    if options.units is None and float(options.scale) == 1.0:
+        by_doors = units_from_doors(door_widths(strokes, roles), unit, extent * factor)
+    if by_doors is not None:  # the header (or the guess) is wrong: read again in the doors' unit
+        unit, message = by_doors
+        note(message)
+        factor = UNIT_METRES[unit]
+        strokes, swing_strokes = _flatten(msp, roles, far, factor, options, note)
+    else:
+        for message in first_notes:
+            note(message)
     offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES] + swing_strokes)
     if offset is not None:
         strokes = [replace(s, coords=s.coords - offset) for s in strokes]
@@ -209,6 +224,18 @@ def _swing_strokes(swings, factor: float, first_group: int) -> list:
 
 def _names(layers: list[str]) -> str:
     return ", ".join(f"'{n}'" for n in layers)
+
+
+def door_widths(strokes: list, roles: dict) -> list[float]:
+    """The width of each door drawing of the door layers' ``strokes``
+    (metres as read): the longer side of its minimum rotated rectangle (a
+    leaf and its swing, a door line, a door block)."""
+    widths = []
+    for item in drawing_items([s for s in strokes if roles.get(s.layer) == "doors"]):
+        box = shapely.minimum_rotated_rectangle(item)
+        xy = np.asarray(box.exterior.coords if box.geom_type == "Polygon" else box.coords, dtype=float)
+        widths.append(float(np.hypot(*np.diff(xy, axis=0).T).max()) if len(xy) > 1 else 0.0)
+    return widths
 
 
 def local_origin(strokes) -> np.ndarray | None:

@@ -11,7 +11,8 @@ import math
 
 from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.tolerances import PLAUSIBLE_EXTENT, TYPICAL_EXTENT, ZERO
+from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH,
+                               TYPICAL_EXTENT, ZERO)
 
 #: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
 #: astronomical or micro units no floor plan uses).
@@ -68,6 +69,36 @@ def decide_units(
         f"{extent:.4g} units ({_fmt(extent * factor)}); pass --units to override"
     )
     return name, factor, warning
+
+
+#: Units a floor plan is drawn in, tried when its doors say its header is wrong.
+_DRAWING_UNITS = ("mm", "cm", "dm", "m", "in", "ft")
+
+
+def units_from_doors(door_widths_m, unit: str, extent_m: float) -> tuple[str, str] | None:
+    """The unit the doors say a drawing is in, when its stated or guessed
+    ``unit`` makes them no door's width: ``door_widths_m`` the widths of
+    its door drawings as read in ``unit`` (metres), ``extent_m`` its
+    extent as read. Returns ``(unit, warning)``, or None when the doors
+    agree with ``unit``, are too few to tell (``DOOR_UNITS_MIN_DOORS``), or
+    no unit gives them a plausible width and the plan a plausible extent."""
+    widths = [float(w) for w in door_widths_m if w > 0]
+    if len(widths) < DOOR_UNITS_MIN_DOORS:
+        return None
+    median = float(sorted(widths)[len(widths) // 2])
+    lo, hi = DOOR_WIDTH_PLAUSIBLE
+    if lo <= median <= hi:
+        return None
+
+    def ratio(u: str) -> float:
+        return UNIT_METRES[u] / UNIT_METRES[unit]
+
+    best = min(_DRAWING_UNITS, key=lambda u: abs(math.log10(median * ratio(u) / TYPICAL_DOOR_WIDTH)))
+    if best == unit or not lo <= median * ratio(best) <= hi or not _plausible(extent_m * ratio(best)):
+        return None
+    return best, (f"read in {unit}, the drawing's {len(widths)} doors are a median {median:.2f} m wide, no "
+                  f"door's width; read in {best} instead (doors {median * ratio(best):.2f} m, the plan "
+                  f"{_fmt(extent_m * ratio(best))} across); pass --units to override")
 
 
 def rescale_hint(width_m: float, depth_m: float, unit: str, insunits: int | None, override: str | None,
