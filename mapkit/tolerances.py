@@ -226,11 +226,13 @@ CUT_MIN_REACH = 0.3
 DOUBLE_DOOR_SQUARENESS = 0.95
 
 #: Sheets (mapkit/importers/dxf/sheets.py): wall linework closer than
-#: this, metres, belongs to one plan (the widest opening in a facade is a
-#: few metres; plans side by side on a sheet stand farther apart); a
+#: this, metres, belongs to one plan (a plan's wall strokes join around
+#: its openings, and the widest opening is bridged at ``OUTLINE_MAX_GAP``
+#: when a building is closed from its walls; plans side by side on a sheet
+#: stand farther apart: the two storeys of the corpus's smh_dxf28 4.9 m); a
 #: cluster with at least this share of the largest one's wall length is a
 #: plan of its own, a smaller one (a column, a shed) stays with its plan.
-SHEET_GAP_M = 5.0
+SHEET_GAP_M = 3.0
 SHEET_MIN_PLAN_SHARE = 0.2
 #: ... and whose walls' bounding box covers at least this share of the
 #: largest one's (storeys side by side cover about the same ground; an

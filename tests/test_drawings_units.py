@@ -74,3 +74,14 @@ def test_right_units_and_an_explicit_choice_are_kept(tmp_path):
 def test_the_unit_the_doors_say(widths, unit, expected):
     found = units_from_doors(widths, unit, 50.0)
     assert (found[0] if found else None) == expected
+
+
+@pytest.mark.parametrize("layer, role", [
+    ("Staircase_innerwall", "walls"), ("Staircase_outertwall", "walls"), ("Innenwand", "walls"),
+    ("Trennwaende", "walls"), ("curtainwall", "windows"), ("Glaswand", "windows"), ("Walkway", None),
+])
+def test_compound_words_ending_in_a_wall_are_walls(layer, role):
+    # smh_dxf28's staircase walls ('Staircase_innerwall', 'Staircase_outertwall') were read as nothing.
+    from mapkit.importers.dxf.layer_roles import guess_role
+
+    assert guess_role(layer) == role

@@ -24,7 +24,9 @@ ROLES = ("walls", "doors", "windows", "floor", "ignore")
 # folded, split on punctuation, digits and camelCase). Checked in order:
 # annotation words win over everything (an "A-WALL-TEXT" layer holds text),
 # doors before windows before walls (a "glass door" is a door, a "curtain
-# wall" is glass).
+# wall" is glass). Compound words ending in a wall ("innerwall",
+# "Staircase_outertwall", "Innenwand", "Trennwaende") are walls, a
+# "curtainwall" or "Glaswand" glass.
 _IGNORE_FIRST = r"""
     text|texts|txt|texte|texto|testo|tekst|anno|annotation|notes?|dims?|dimensions?|dimension
     |cotas?|cotation|cotations?|quotas?|quote|bemassung|bemasung|masse|maatvoering
@@ -42,6 +44,7 @@ _DOORS = r"doors?|door|dr|porte|portes|tuer|tur|tueren|turen|puertas?|porta|port
 _WINDOWS = r"""
     windows?|wndw|glaz|glazing|glass|crystal|cristal|cristales|vitre|vitres|vitrage|fenetres?
     |fenster|glas|verglasung|ventanas?|vidrio|finestr[ae]|vetro|vetri|ramen|raam|janelas?|vidro|curtain|cwmg
+    |curtainwalls?|glasswalls?|glaswand|glaswaende|glaswande|[a-z]+fenster
 """
 _WALLS = r"""
     walls?|wall|wand|waende|wande|mauer|mauern|murs?|muros?|muri|muur|muren|wanden|pared|paredes|parete|pareti|parede|paredes
@@ -49,6 +52,7 @@ _WALLS = r"""
     |columns?|cols?|colonnes?|colonnas?|columnas?|pilier|piliers|pilar|pilares|pilastr[io]|poteaux?|stuetzen?|stutzen?|kolom|kolommen
     |core|beton|concrete|hormigon|masonry|maconnerie|mauerwerk
     |facades?|fassaden?|fachadas?|facciata|facciate|gevel|gevels|envelope|shell
+    |[a-z]+walls?|[a-z]+wand|[a-z]+waende|[a-z]+wande
 """
 _FLOOR = r"""
     flooring|floors?|flor|sol|sols|dallage|revetement|suelos?|pavimentos?|piso|boden|fussboden|vloer|paving
