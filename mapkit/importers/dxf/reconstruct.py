@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from functools import partial
 
+import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
@@ -23,7 +24,8 @@ from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.layer_roles import is_zone_layer
-from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.openings import cut_opening, door_openings, door_strokes, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.reachable import describe_left_out, entered_parts
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
@@ -50,13 +52,20 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
         raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
 
+    doors, strays = door_strokes(drawing.role("doors"))
+    if strays:
+        longest = max(float(np.hypot(*np.ptp(s.coords, axis=0)[:2])) for s in strays)
+        warn(f"{len(strays)} stroke(s) on the door layer(s) span more than a door drawing can "
+             f"(up to {longest:.0f} m; layers {', '.join(sorted({repr(s.layer) for s in strays}))}): a dimension "
+             f"chain or an outline, not doors; left out of the doors")
+
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     if not zones.is_empty:
         between = _between_zones(walls, zones, options.max_wall_thickness)
         if not between.is_empty:
             # Room fills stop short of the doorways too: where a door sits in
             # a gap of the walls as drawn, the strip is its gap, not a wall.
-            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
+            gaps = [g for _, g in door_openings(drawing_items(doors), walls,
                                                 options.max_wall_thickness) if g is not None]
             if gaps:
                 between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
@@ -64,7 +73,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
             info["zone_walls_m2"] = round(between.area, 3)
 
-    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
+    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn, doors)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
@@ -77,6 +86,12 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if options.robot_radius > ZERO.distance:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+    # Shafts, light wells and roofs the walls enclose are no rooms: no door leads into them.
+    entries = door_gaps + _doorways(bridges, interior, obstacles) if door_gaps else []
+    free, left_out = entered_parts(free, entries, options.robot_radius)
+    if left_out:
+        warn(describe_left_out(left_out))
+        info["left_out_m2"] = round(sum(p.area for p in left_out), 3)
 
     info["interior"] = interior_source
     info["counts"] = dict(wall_result.counts) | {
@@ -114,10 +129,11 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     return scene
 
 
-def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
+def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn, doors: list[Stroke] | None = None):
     """The walls (with the openings of doors drawn over unbroken walls cut
     through them), openings, obstacles (windows, glass) and door gap
-    footprints."""
+    footprints. ``doors``: the door strokes (default: the drawing's)."""
+    doors = drawing.role("doors") if doors is None else doors
     openings: list[Opening] = []
     glass_parts = []
     window_gaps = []
@@ -137,7 +153,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     door_gaps = []
     lost = []
     cuts = []
-    for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
+    for item, gap in door_openings(drawing_items(doors), barriers, options.max_wall_thickness):
         if gap is None:
             gap = cut_opening(item, walls, options.max_wall_thickness)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
@@ -164,6 +180,12 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
     return walls, openings, obstacles, door_gaps
+
+
+def _doorways(bridges: list[Polygon], inside, obstacles) -> list[Polygon]:
+    """The ``bridges`` (openings between wall ends) that join two rooms and
+    hold no window or glass: the robot passes through them."""
+    return [b for b in bridges if passable(b, inside) and not _claimed(b, polygon_parts(obstacles))]
 
 
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
