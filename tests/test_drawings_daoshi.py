@@ -157,3 +157,31 @@ def test_a_long_line_on_a_door_layer_does_not_glue_the_doors_together(tmp_path):
     assert sum(o.kind == "door" for o in scene.openings) == 3
     assert len(polygon_parts(scene.free_space)) == 1
     assert any("span more than a door drawing" in w and "门窗墙" in w for w in scene.info["warnings"])
+
+
+def test_dimensions_on_a_door_layer_are_not_measured_for_the_plan_extent(tmp_path, monkeypatch):
+    """daoshi_f1 keeps 325 dimensions on '门窗墙', a layer whose name makes
+    it a door layer: the plan's extent took ezdxf's bounding box of each
+    (its whole rendered block, 3 s of the import) although dimensions are
+    never built. Only entities that are built are measured, and a LINE's box
+    is its end points."""
+    import mapkit.importers.dxf as dxf_importer
+
+    path = _row_of_rooms(tmp_path / "dims.dxf", stray=False)
+    doc = ezdxf.readfile(path)
+    msp = doc.modelspace()
+    for k in range(5):
+        msp.add_linear_dim(base=(0, -3 - k), p1=(0, 0), p2=(4.4 + k, 0), dxfattribs={"layer": "门窗墙"}).render()
+    doc.saveas(path)
+    measured = []
+    real = dxf_importer.bbox.extents
+
+    def counting(entities, *args, **kwargs):
+        measured.extend(e.dxftype() for e in entities)
+        return real(entities, *args, **kwargs)
+
+    monkeypatch.setattr(dxf_importer.bbox, "extents", counting)
+    drawing, info = dxf_importer.load_drawing(path, BuildOptions())
+    assert "DIMENSION" not in measured and "LINE" not in measured
+    assert "ARC" in measured and "LWPOLYLINE" in measured
+    assert drawing.role("doors") and info["units"] == "m"

@@ -27,7 +27,7 @@ from ezdxf import bbox
 
 from mapkit.errors import MapkitError
 from mapkit.importers.dxf.door_swings import find_door_swings
-from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
+from mapkit.importers.dxf.entities import SILENT, check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
@@ -80,7 +80,11 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
     warnings += role_warnings
 
     msp = model_space(doc)
-    used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
+    # Dimensions, text and the like are never built (entities.SILENT): they
+    # neither size the plan nor count as far outliers. (Their boxes are also
+    # costly: a DIMENSION's is its whole rendered block.)
+    used = [e for e in msp if e.dxftype() not in SILENT
+            and (roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0"))]
     extent, far = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
     imperial = doc.header.get("$MEASUREMENT", 1) == 0
@@ -226,21 +230,17 @@ def _extent(entities) -> tuple[float, list]:
     item to be left out of the plan."""
     kept, lows, highs = [], [], []
     for e in entities:
-        try:
-            box = bbox.extents([e], fast=True)
-        except Exception:  # noqa: BLE001 - a broken entity (a vertex without a location); flattening names it
+        box = _box(e)
+        if box is None:
             continue
-        if not box.has_data:
-            continue
-        a = np.array((box.extmin.x, box.extmin.y), dtype=float)
-        b = np.array((box.extmax.x, box.extmax.y), dtype=float)
+        a, b = box
         if np.isfinite(a).all() and np.isfinite(b).all():
             kept.append(e)
             lows.append(a)
             highs.append(b)
     if not kept:
         return 0.0, []
-    lo, hi = np.array(lows), np.array(highs)
+    lo, hi = np.array(lows, dtype=float), np.array(highs, dtype=float)
     far = np.zeros(len(kept), dtype=bool)
     if len(kept) >= DXF_FAR_MIN_ENTITIES:
         centres = 0.5 * (lo + hi)
@@ -252,6 +252,25 @@ def _extent(entities) -> tuple[float, list]:
     near = ~far
     extent = float((hi[near].max(axis=0) - lo[near].min(axis=0)).max())
     return extent, [e for e, f in zip(kept, far) if f]
+
+
+def _box(entity) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """The ``(x, y)`` corners (low, high) of an entity's bounding box,
+    drawing units; None for an entity without extent or a broken one.
+
+    A LINE's box is its end points' (what ezdxf's fast box gives, without
+    its per-call set-up: the college floors hold thousands of lines)."""
+    if entity.dxftype() == "LINE":
+        start, end = entity.dxf.start, entity.dxf.end
+        x0, y0, x1, y1 = start.x, start.y, end.x, end.y
+        return (min(x0, x1), min(y0, y1)), (max(x0, x1), max(y0, y1))
+    try:
+        box = bbox.extents([entity], fast=True)
+    except Exception:  # noqa: BLE001 - a broken entity (a vertex without a location); flattening names it
+        return None
+    if not box.has_data:
+        return None
+    return (box.extmin.x, box.extmin.y), (box.extmax.x, box.extmax.y)
 
 
 def _layer(entity) -> str:
