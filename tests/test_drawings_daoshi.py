@@ -24,13 +24,15 @@ def _swing(msp, hinge, width, layer="门线"):
     msp.add_arc((x, y), width, 0, 90, dxfattribs={"layer": layer})
 
 
-def _floor_with_shaft_and_light_well(path, door: bool = True):
+def _floor_with_shaft_and_light_well(path, door: bool = True, loose_swing: bool = False):
     """Two rooms (mm, layers named as the college's: 墙线 wall lines, 门线
     doors, 窗线 windows) side by side, 6 x 5 m each, walls 200 mm thick drawn
     as double lines; between them a pipe shaft 0.8 x 1.5 m walled in on all
     sides; at the back a light well 3 x 2 m walled in, its window to room A
     drawn as glass lines in a gap of its wall. Room A has a door to room B
-    (``door``) and one to the outside in its front wall."""
+    (``door``) and one to the outside in its front wall; without it, with
+    ``loose_swing``, a swing is drawn against the walled-up partition's face
+    in room B (a door drawing no gap is found for)."""
     doc = ezdxf.new("R2010")
     doc.header["$INSUNITS"] = 4
     msp = doc.modelspace()
@@ -55,6 +57,9 @@ def _floor_with_shaft_and_light_well(path, door: bool = True):
     else:  # the gap walled up
         msp.add_line((6200, 1000), (6200, 1900), dxfattribs={"layer": w})
         msp.add_line((6400, 1000), (6400, 1900), dxfattribs={"layer": w})
+        if loose_swing:
+            msp.add_line((6420, 1000), (7320, 1000), dxfattribs={"layer": "门线"})
+            msp.add_arc((6420, 1000), 900, 0, 90, dxfattribs={"layer": "门线"})
     # A pipe shaft in room B's corner: 0.8 x 1.5 m inside, walls 100 mm, no door.
     _box(msp, 6400, 5500, 7500, 7200, w)
     _box(msp, 6500, 5600, 7400, 7100, w)
@@ -98,6 +103,18 @@ def test_a_room_entered_only_through_a_door_to_the_outside_is_kept(tmp_path):
     assert len(parts) == 1
     assert parts[0].contains(shapely.Point(3, 2)) and not parts[0].contains(shapely.Point(9, 3))
     assert any("3 enclosed space(s)" in w for w in warnings), warnings
+
+
+def test_a_room_with_a_door_drawing_whose_gap_was_not_found_is_kept(tmp_path):
+    """A door drawn where no gap is found (against a wall's face) still
+    marks its room as entered: the room stays, a part of its own, and the
+    lost door is warned about (the missing door shows in the count)."""
+    path = _floor_with_shaft_and_light_well(tmp_path / "floor.dxf", door=False, loose_swing=True)
+    parts, warnings = _parts_and_warnings(path)
+    assert len(parts) == 2
+    assert any(p.contains(shapely.Point(9, 3)) for p in parts)
+    assert any("not in a wall gap" in w for w in warnings), warnings
+    assert any("2 enclosed space(s)" in w for w in warnings), warnings
 
 
 def test_a_plan_without_doors_keeps_every_part(tmp_path):

@@ -12,7 +12,9 @@ What tells a room from such a space is its entry: people reach a room
 through a door (or a doorway, an opening between two wall ends). When a
 plan's doors were found, a part of the free space that no door or doorway
 touches (within the robot's radius, the margin the free space keeps from
-the jambs) is left out. Plans without any door found keep every part: no
+the jambs) is left out. A door drawing whose gap was not found counts as a
+door: the room it opens into stays (and the missing door shows in the
+count of doors found). Plans without any door found keep every part: no
 entry can be told from none.
 """
 
@@ -25,9 +27,10 @@ from mapkit.shapes import polygon_parts
 from mapkit.tolerances import DOOR_REACH_SLACK
 
 
-def entered_parts(free: MultiPolygon, entries: list[Polygon], robot_radius: float) -> tuple[MultiPolygon, list[Polygon]]:
+def entered_parts(free: MultiPolygon, entries: list, robot_radius: float) -> tuple[MultiPolygon, list[Polygon]]:
     """``(kept, left_out)``: the parts of ``free`` (metres) that one of
-    ``entries`` (door gap footprints and doorways) touches, and the others.
+    ``entries`` (door gap footprints, doorways, door drawings) touches, and
+    the others.
 
     A part touches an entry within ``robot_radius + DOOR_REACH_SLACK``: the
     free space is shrunk by the robot's radius, so through a doorway
@@ -56,8 +59,8 @@ def describe_left_out(left_out: list[Polygon]) -> str:
                       for p in largest)
     more = f" and {len(left_out) - len(largest)} more" if len(left_out) > len(largest) else ""
     return (f"{len(left_out)} enclosed space(s) that no door or doorway leads into ({area:.1f} m2: shafts, light "
-            f"wells, roofs, or rooms whose doors are not drawn) left out of the free space: {where}{more}; "
-            f"check them in 'mapkit preview'")
+            f"wells, roofs, or rooms whose doors are not drawn or were not found) left out of the free space: "
+            f"{where}{more}; check them in 'mapkit preview'")
 
 
 __all__ = ["describe_left_out", "entered_parts"]

@@ -58,6 +58,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         warn(f"{len(strays)} stroke(s) on the door layer(s) span more than a door drawing can "
              f"(up to {longest:.0f} m; layers {', '.join(sorted({repr(s.layer) for s in strays}))}): a dimension "
              f"chain or an outline, not doors; left out of the doors")
+    door_items = drawing_items(doors)
 
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     if not zones.is_empty:
@@ -65,7 +66,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         if not between.is_empty:
             # Room fills stop short of the doorways too: where a door sits in
             # a gap of the walls as drawn, the strip is its gap, not a wall.
-            gaps = [g for _, g in door_openings(drawing_items(doors), walls,
+            gaps = [g for _, g in door_openings(door_items, walls,
                                                 options.max_wall_thickness) if g is not None]
             if gaps:
                 between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
@@ -73,7 +74,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             walls = MultiPolygon(polygon_parts(unary_union([walls, between])))
             info["zone_walls_m2"] = round(between.area, 3)
 
-    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn, doors)
+    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn, door_items)
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges)
     if interior_source == "convex hull":
@@ -86,8 +87,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if options.robot_radius > ZERO.distance:
         free = free.buffer(-options.robot_radius)
     free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
-    # Shafts, light wells and roofs the walls enclose are no rooms: no door leads into them.
-    entries = door_gaps + _doorways(bridges, interior, obstacles) if door_gaps else []
+    # Shafts, light wells and roofs the walls enclose are no rooms: no door
+    # leads into them. A door drawing whose gap was not found still marks a room.
+    entries = (door_gaps + _doorways(bridges, interior, obstacles) + door_items) if door_gaps else []
     free, left_out = entered_parts(free, entries, options.robot_radius)
     if left_out:
         warn(describe_left_out(left_out))
@@ -129,11 +131,11 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     return scene
 
 
-def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn, doors: list[Stroke] | None = None):
+def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn, door_items: list | None = None):
     """The walls (with the openings of doors drawn over unbroken walls cut
     through them), openings, obstacles (windows, glass) and door gap
-    footprints. ``doors``: the door strokes (default: the drawing's)."""
-    doors = drawing.role("doors") if doors is None else doors
+    footprints. ``door_items``: the door drawings (default: the drawing's)."""
+    door_items = drawing_items(drawing.role("doors")) if door_items is None else door_items
     openings: list[Opening] = []
     glass_parts = []
     window_gaps = []
@@ -153,7 +155,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     door_gaps = []
     lost = []
     cuts = []
-    for item, gap in door_openings(drawing_items(doors), barriers, options.max_wall_thickness):
+    for item, gap in door_openings(door_items, barriers, options.max_wall_thickness):
         if gap is None:
             gap = cut_opening(item, walls, options.max_wall_thickness)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
