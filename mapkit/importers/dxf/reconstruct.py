@@ -52,22 +52,14 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
             hint = "name the wall layers with --walls (see 'mapkit layers PLAN')"
         raise NoWallsError(f"no recognisable walls on the wall layers ({layers}); {hint}")
 
-    doors, strays = door_strokes(drawing.role("doors"))
-    if strays:
-        longest = max(float(np.hypot(*np.ptp(s.coords, axis=0)[:2])) for s in strays)
-        warn(f"{len(strays)} stroke(s) on the door layer(s) span more than a door drawing can "
-             f"(up to {longest:.0f} m; layers {', '.join(sorted({repr(s.layer) for s in strays}))}): a dimension "
-             f"chain or an outline, not doors; left out of the doors")
-    door_items = drawing_items(doors)
-
+    door_items = _door_items(drawing, warn)
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     if not zones.is_empty:
         between = _between_zones(walls, zones, options.max_wall_thickness)
         if not between.is_empty:
             # Room fills stop short of the doorways too: where a door sits in
             # a gap of the walls as drawn, the strip is its gap, not a wall.
-            gaps = [g for _, g in door_openings(door_items, walls,
-                                                options.max_wall_thickness) if g is not None]
+            gaps = [g for _, g in door_openings(door_items, walls, options.max_wall_thickness) if g is not None]
             if gaps:
                 between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
         if not between.is_empty:
@@ -80,20 +72,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if interior_source == "convex hull":
         warn("no closed outline encloses the plan and there is no floor layer; using the walls' convex hull as the interior")
 
-    free = interior.difference(walls)
-    if not obstacles.is_empty:
-        free = free.difference(obstacles)
-    # Radii below a nanometre are zero (GEOS empties polygons buffered by denormal distances).
-    if options.robot_radius > ZERO.distance:
-        free = free.buffer(-options.robot_radius)
-    free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
-    # Shafts, light wells and roofs the walls enclose are no rooms: no door
-    # leads into them. A door drawing whose gap was not found still marks a room.
-    entries = (door_gaps + _doorways(bridges, interior, obstacles) + door_items) if door_gaps else []
-    free, left_out = entered_parts(free, entries, options.robot_radius)
-    if left_out:
-        warn(describe_left_out(left_out))
-        info["left_out_m2"] = round(sum(p.area for p in left_out), 3)
+    free = _free_space(interior, walls, obstacles, options.robot_radius)
+    if interior_source == "enclosed" and door_gaps:
+        free = _entered(free, door_gaps + _doorways(bridges, interior, obstacles) + door_items, options, warn, info)
 
     info["interior"] = interior_source
     info["counts"] = dict(wall_result.counts) | {
@@ -182,6 +163,44 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     obstacles = unary_union([*window_gaps, glass]) if (window_gaps or not glass.is_empty) else Polygon()
     obstacles = MultiPolygon([p for p in shapely.get_parts(obstacles) if isinstance(p, Polygon) and p.area > 0])
     return walls, openings, obstacles, door_gaps
+
+
+def _free_space(interior, walls, obstacles, robot_radius: float) -> MultiPolygon:
+    """Where the robot's centre may be: the interior less walls and
+    obstacles, shrunk by ``robot_radius`` (m), slivers under
+    ``MIN_FREE_AREA`` dropped."""
+    free = interior.difference(walls)
+    if not obstacles.is_empty:
+        free = free.difference(obstacles)
+    # Radii below a nanometre are zero (GEOS empties polygons buffered by denormal distances).
+    if robot_radius > ZERO.distance:
+        free = free.buffer(-robot_radius)
+    return MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+
+
+def _door_items(drawing: PlanDrawing, warn) -> list:
+    """The door drawings (:func:`.openings.drawing_items`) of the door
+    layers' strokes, less the strokes too long to be part of one (warned)."""
+    doors, strays = door_strokes(drawing.role("doors"))
+    if strays:
+        longest = max(float(np.hypot(*np.ptp(s.coords, axis=0)[:2])) for s in strays)
+        warn(f"{len(strays)} stroke(s) on the door layer(s) span more than a door drawing can "
+             f"(up to {longest:.0f} m; layers {', '.join(sorted({repr(s.layer) for s in strays}))}): a dimension "
+             f"chain or an outline, not doors; left out of the doors")
+    return drawing_items(doors)
+
+
+def _entered(free: MultiPolygon, entries: list, options: BuildOptions, warn, info: dict) -> MultiPolygon:
+    """The free space less the spaces the walls enclose that none of
+    ``entries`` (door gaps, doorways, door drawings) leads into: shafts,
+    light wells, roofs are no rooms (:mod:`.reachable`); warned and counted
+    in ``info["left_out_m2"]``. Only for interiors the walls enclose: a
+    floor layer or the hull says where the inside is by itself."""
+    free, left_out = entered_parts(free, entries, options.robot_radius)
+    if left_out:
+        warn(describe_left_out(left_out))
+        info["left_out_m2"] = round(sum(p.area for p in left_out), 3)
+    return free
 
 
 def _doorways(bridges: list[Polygon], inside, obstacles) -> list[Polygon]:
