@@ -146,6 +146,14 @@ POCKET_DOOR_MAX_LEAF = 1.5
 #: face is square to its wall within it too.
 BRIDGE_ANGLE_DEG = 15.0
 
+#: A part of the free space touches a door or doorway (it is entered, a
+#: room, not a shaft or a light well: :mod:`mapkit.importers.dxf.reachable`)
+#: within the robot's radius plus this, metres: the free space stops the
+#: radius short of a gap narrower than the robot, and buffering rounds that
+#: by well under this. Far below the thinnest wall (``THIN_WALL``), so a
+#: room beside a door's jamb, behind a partition, is not touched.
+DOOR_REACH_SLACK = 0.02
+
 #: Free-space pieces smaller than this, square metres, are slivers between
 #: walls, not places a camera can stand.
 MIN_FREE_AREA = 0.05
@@ -224,6 +232,14 @@ CUT_MIN_REACH = 0.3
 #: door when their union fills at least this share of its rotated bounding
 #: box (in line, one wall; two doors meeting at a corner fill about half).
 DOUBLE_DOOR_SQUARENESS = 0.95
+
+#: A stroke on a door layer whose bounding box's diagonal is longer than
+#: this, metres, is not part of a door drawing (a leaf, its swing and the
+#: jambs of the widest door, ``MAX_DOOR_WIDTH``, fit in a box under 4 m
+#: across): a dimension chain or an outline drawn on the door layer (the
+#: college floor's 122 m polyline on '门窗墙'), which would glue every door
+#: it passes into one drawing. Left out of the doors.
+DOOR_STROKE_MAX_SPAN = 2 * MAX_DOOR_WIDTH
 
 #: Sheets (mapkit/importers/dxf/sheets.py): wall linework closer than
 #: this, metres, belongs to one plan (a plan's wall strokes join around

@@ -28,7 +28,7 @@ from ezdxf import bbox
 
 from mapkit.errors import MapkitError
 from mapkit.importers.dxf.door_swings import find_door_swings
-from mapkit.importers.dxf.entities import check_entity_count, flatten_entities
+from mapkit.importers.dxf.entities import SILENT, check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
@@ -84,7 +84,11 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
     warnings += role_warnings
 
     msp = model_space(doc)
-    used = [e for e in msp if roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0")]
+    # Dimensions, text and the like are never built (entities.SILENT): they
+    # neither size the plan nor count as far outliers. (Their boxes are also
+    # costly: a DIMENSION's is its whole rendered block.)
+    used = [e for e in msp if e.dxftype() not in SILENT
+            and (roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0"))]
     extent, far = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
     imperial = doc.header.get("$MEASUREMENT", 1) == 0
@@ -98,19 +102,7 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
         log.warning(message)
         warnings.append(message)
 
-    first_notes: list[str] = []
-    strokes, swing_strokes = _flatten(msp, roles, far, factor, options, first_notes.append)
-    by_doors = None
-    if options.units is None and float(options.scale) == 1.0:
-        by_doors = units_from_doors(door_widths(strokes, roles), unit, extent * factor)
-    if by_doors is not None:  # the header (or the guess) is wrong: read again in the doors' unit
-        unit, message = by_doors
-        note(message)
-        factor = UNIT_METRES[unit]
-        strokes, swing_strokes = _flatten(msp, roles, far, factor, options, note)
-    else:
-        for message in first_notes:
-            note(message)
+    unit, factor, strokes, swing_strokes = _flatten_in_units(msp, roles, far, unit, factor, extent, options, note)
     offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES] + swing_strokes)
     if offset is not None:
         strokes = [replace(s, coords=s.coords - offset) for s in strokes]
@@ -226,6 +218,29 @@ def _names(layers: list[str]) -> str:
     return ", ".join(f"'{n}'" for n in layers)
 
 
+def _flatten_in_units(msp, roles: dict, far: list, unit: str, factor: float, extent: float, options: BuildOptions,
+                      note) -> tuple[str, float, list, list]:
+    """:func:`_flatten` in the drawing's ``unit`` (``factor`` metres per
+    drawing unit; ``extent`` the plan's, drawing units), read again in the
+    unit its doors say (:func:`.units.units_from_doors`) when the header's
+    or the guessed one makes them no door's width and the user gave
+    neither ``--units`` nor ``--scale``. Returns the unit, the factor and
+    the strokes."""
+    first_notes: list[str] = []
+    strokes, swing_strokes = _flatten(msp, roles, far, factor, options, first_notes.append)
+    by_doors = None
+    if options.units is None and float(options.scale) == 1.0:
+        by_doors = units_from_doors(door_widths(strokes, roles), unit, extent * factor)
+    if by_doors is None:
+        for message in first_notes:
+            note(message)
+        return unit, factor, strokes, swing_strokes
+    unit, message = by_doors  # the header (or the guess) is wrong: read again in the doors' unit
+    note(message)
+    factor = UNIT_METRES[unit]
+    return (unit, factor, *_flatten(msp, roles, far, factor, options, note))
+
+
 def door_widths(strokes: list, roles: dict) -> list[float]:
     """The width of each door drawing of the door layers' ``strokes``
     (metres as read): the longer side of its minimum rotated rectangle (a
@@ -261,21 +276,17 @@ def _extent(entities) -> tuple[float, list]:
     item to be left out of the plan."""
     kept, lows, highs = [], [], []
     for e in entities:
-        try:
-            box = bbox.extents([e], fast=True)
-        except Exception:  # noqa: BLE001 - a broken entity (a vertex without a location); flattening names it
+        box = _box(e)
+        if box is None:
             continue
-        if not box.has_data:
-            continue
-        a = np.array((box.extmin.x, box.extmin.y), dtype=float)
-        b = np.array((box.extmax.x, box.extmax.y), dtype=float)
+        a, b = box
         if np.isfinite(a).all() and np.isfinite(b).all():
             kept.append(e)
             lows.append(a)
             highs.append(b)
     if not kept:
         return 0.0, []
-    lo, hi = np.array(lows), np.array(highs)
+    lo, hi = np.array(lows, dtype=float), np.array(highs, dtype=float)
     far = np.zeros(len(kept), dtype=bool)
     if len(kept) >= DXF_FAR_MIN_ENTITIES:
         centres = 0.5 * (lo + hi)
@@ -287,6 +298,25 @@ def _extent(entities) -> tuple[float, list]:
     near = ~far
     extent = float((hi[near].max(axis=0) - lo[near].min(axis=0)).max())
     return extent, [e for e, f in zip(kept, far) if f]
+
+
+def _box(entity) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """The ``(x, y)`` corners (low, high) of an entity's bounding box,
+    drawing units; None for an entity without extent or a broken one.
+
+    A LINE's box is its end points' (what ezdxf's fast box gives, without
+    its per-call set-up: the college floors hold thousands of lines)."""
+    if entity.dxftype() == "LINE":
+        start, end = entity.dxf.start, entity.dxf.end
+        x0, y0, x1, y1 = start.x, start.y, end.x, end.y
+        return (min(x0, x1), min(y0, y1)), (max(x0, x1), max(y0, y1))
+    try:
+        box = bbox.extents([entity], fast=True)
+    except Exception:  # noqa: BLE001 - a broken entity (a vertex without a location); flattening names it
+        return None
+    if not box.has_data:
+        return None
+    return (box.extmin.x, box.extmin.y), (box.extmax.x, box.extmax.y)
 
 
 def _layer(entity) -> str:

@@ -14,7 +14,7 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import nearest_points, unary_union
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import (CUT_MIN_REACH, CUT_MIN_WALL_SHARE, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH,
+from mapkit.tolerances import (CUT_MIN_REACH, CUT_MIN_WALL_SHARE, DOOR_STROKE_MAX_SPAN, JAMB_REACH, MAX_DOOR_WIDTH, MERGE, MIN_OPENING_WIDTH,
                                 THIN_WALL, ZERO)
 
 
@@ -44,6 +44,18 @@ def drawing_items(strokes: list[Stroke]) -> list[MultiLineString]:
         for blob in blobs:
             items.append(unary_union([loose[i] for i in tree.query(blob, predicate="contains")]))
     return [_lines(item) for item in items if not item.is_empty]
+
+
+def door_strokes(strokes: list[Stroke]) -> tuple[list[Stroke], list[Stroke]]:
+    """``(doors, strays)``: the strokes of door layers that can be part of a
+    door drawing, and those spanning more than ``DOOR_STROKE_MAX_SPAN`` (a
+    dimension chain or an outline on a door layer), which are not."""
+    doors, strays = [], []
+    for s in strokes:
+        pts = np.asarray(s.coords, dtype=float)
+        span = float(np.hypot(*(pts.max(axis=0) - pts.min(axis=0))[:2])) if len(pts) else 0.0
+        (strays if span > DOOR_STROKE_MAX_SPAN else doors).append(s)
+    return doors, strays
 
 
 def find_opening(item: MultiLineString, barriers, max_wall_thickness: float) -> Polygon | None:
@@ -302,4 +314,4 @@ def _lines(geom) -> MultiLineString:
     return MultiLineString([g for g in shapely.get_parts(geom) if isinstance(g, LineString) and not g.is_empty])
 
 
-__all__ = ["cut_opening", "door_openings", "drawing_items", "find_opening", "glass_footprint", "opening_at_wall_end", "opening_width"]
+__all__ = ["cut_opening", "door_openings", "door_strokes", "drawing_items", "find_opening", "glass_footprint", "opening_at_wall_end", "opening_width"]

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from functools import partial
 
+import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
@@ -32,7 +33,9 @@ from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.pocket_doors import pocket_opening
-from mapkit.importers.dxf.openings import cut_opening, door_openings, drawing_items, find_opening, glass_footprint, opening_width
+from mapkit.importers.dxf.openings import (cut_opening, door_openings, door_strokes, drawing_items, find_opening,
+                                          glass_footprint, opening_width)
+from mapkit.importers.dxf.reachable import describe_left_out, entered_parts
 from mapkit.importers.dxf.room_layers import door_line_opening, room_faces
 from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
@@ -57,9 +60,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     if walls.is_empty:
         _refuse_no_walls(info, options)
 
-    walls, filled_rooms = _with_zone_walls(drawing, walls, options, info)
+    door_items = _door_items(drawing, warn)
+    walls, filled_rooms = _with_zone_walls(drawing, walls, options, info, door_items)
 
-    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn)
+    walls, openings, obstacles, door_gaps = _openings(drawing, walls, options, warn, door_items)
     if ticks:
         walls = _tick_doorways(ticks, drawing, walls, openings, door_gaps, options, warn)
     walls = _without_lines_splitting_rooms(drawing, walls, wall_result.single_lines, warn)
@@ -70,18 +74,14 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
              f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
 
-    free = interior.difference(walls)
-    if not obstacles.is_empty:
-        free = free.difference(obstacles)
-    # Radii below a nanometre are zero (GEOS empties polygons buffered by denormal distances).
-    if options.robot_radius > ZERO.distance:
-        free = free.buffer(-options.robot_radius)
-    free = MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+    free = _free_space(interior, walls, obstacles, options.robot_radius)
     if not filled_rooms.is_empty:
         free, shafts = _without_shafts(free, filled_rooms, door_gaps, options.robot_radius)
         if shafts:
             warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
                  f"{sum(p.area for p in shafts):.1f} m2")
+    if interior_source == "enclosed" and door_gaps:
+        free = _entered(free, door_gaps + _doorways(bridges, interior, obstacles) + door_items, options, warn, info)
 
     info["interior"] = interior_source
     info["counts"] = dict(wall_result.counts) | {
@@ -108,10 +108,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     return scene
 
 
-def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, info: dict):
+def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, info: dict, door_items: list):
     """The walls with those room fills (zone layers) leave implicit, and the
     room fills when the walls are drawn beside them (empty otherwise): see
-    ``ZONE_WALLS_DRAWN_SHARE``."""
+    ``ZONE_WALLS_DRAWN_SHARE``. ``door_items``: the door drawings."""
     zones = _floor_extent([st for st in drawing.role("floor") if is_zone_layer(st.layer)])
     filled_rooms = Polygon()  # the room fills of a plan whose walls are drawn
     if not zones.is_empty:
@@ -124,8 +124,7 @@ def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOp
         if not between.is_empty:
             # Room fills stop short of the doorways too: where a door sits in
             # a gap of the walls as drawn, the strip is its gap, not a wall.
-            gaps = [g for _, g in door_openings(drawing_items(drawing.role("doors")), walls,
-                                                options.max_wall_thickness) if g is not None]
+            gaps = [g for _, g in door_openings(door_items, walls, options.max_wall_thickness) if g is not None]
             if gaps:
                 between = between.difference(unary_union(gaps).buffer(SNAP_GAP, join_style="mitre"))
         if not between.is_empty:
@@ -182,10 +181,11 @@ def _without_lines_splitting_rooms(drawing: PlanDrawing, walls: MultiPolygon, si
     return MultiPolygon(polygon_parts(walls.difference(not_walls)))
 
 
-def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn):
+def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, warn, door_items: list | None = None):
     """The walls (with the openings of doors drawn over unbroken walls cut
     through them), openings, obstacles (windows, glass) and door gap
-    footprints."""
+    footprints. ``door_items``: the door drawings (default: the drawing's)."""
+    door_items = drawing_items(drawing.role("doors")) if door_items is None else door_items
     openings: list[Opening] = []
     glass_parts = []
     window_gaps = []
@@ -206,7 +206,7 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     lost = []
     cuts = []
     pockets = []
-    for item, gap in door_openings(drawing_items(drawing.role("doors")), barriers, options.max_wall_thickness):
+    for item, gap in door_openings(door_items, barriers, options.max_wall_thickness):
         if gap is None:
             gap = pocket_opening(item, walls, options.max_wall_thickness)
             if gap is not None and not _claimed(gap, door_gaps + window_gaps):
@@ -305,6 +305,50 @@ def _without_shafts(free: MultiPolygon, rooms, door_gaps: list[Polygon], robot_r
         by_door = not doors.is_empty and part.distance(doors) <= robot_radius + SNAP_GAP
         (keep if in_room or by_door else shafts).append(part)
     return MultiPolygon(keep), shafts
+
+
+def _free_space(interior, walls, obstacles, robot_radius: float) -> MultiPolygon:
+    """Where the robot's centre may be: the interior less walls and
+    obstacles, shrunk by ``robot_radius`` (m), slivers under
+    ``MIN_FREE_AREA`` dropped."""
+    free = interior.difference(walls)
+    if not obstacles.is_empty:
+        free = free.difference(obstacles)
+    # Radii below a nanometre are zero (GEOS empties polygons buffered by denormal distances).
+    if robot_radius > ZERO.distance:
+        free = free.buffer(-robot_radius)
+    return MultiPolygon([p for p in shapely.get_parts(free) if isinstance(p, Polygon) and p.area >= MIN_FREE_AREA])
+
+
+def _door_items(drawing: PlanDrawing, warn) -> list:
+    """The door drawings (:func:`.openings.drawing_items`) of the door
+    layers' strokes, less the strokes too long to be part of one (warned)."""
+    doors, strays = door_strokes(drawing.role("doors"))
+    if strays:
+        longest = max(float(np.hypot(*np.ptp(s.coords, axis=0)[:2])) for s in strays)
+        warn(f"{len(strays)} stroke(s) on the door layer(s) span more than a door drawing can "
+             f"(up to {longest:.0f} m; layers {', '.join(sorted({repr(s.layer) for s in strays}))}): a dimension "
+             f"chain or an outline, not doors; left out of the doors")
+    return drawing_items(doors)
+
+
+def _entered(free: MultiPolygon, entries: list, options: BuildOptions, warn, info: dict) -> MultiPolygon:
+    """The free space less the spaces the walls enclose that none of
+    ``entries`` (door gaps, doorways, door drawings) leads into: shafts,
+    light wells, roofs are no rooms (:mod:`.reachable`); warned and counted
+    in ``info["left_out_m2"]``. Only for interiors the walls enclose: a
+    floor layer or the hull says where the inside is by itself."""
+    free, left_out = entered_parts(free, entries, options.robot_radius)
+    if left_out:
+        warn(describe_left_out(left_out))
+        info["left_out_m2"] = round(sum(p.area for p in left_out), 3)
+    return free
+
+
+def _doorways(bridges: list[Polygon], inside, obstacles) -> list[Polygon]:
+    """The ``bridges`` (openings between wall ends) that join two rooms and
+    hold no window or glass: the robot passes through them."""
+    return [b for b in bridges if passable(b, inside) and not _claimed(b, polygon_parts(obstacles))]
 
 
 def _claimed(gap: Polygon, taken: list[Polygon]) -> bool:
