@@ -569,6 +569,29 @@ class RigConstants(_Constants):
     #: seed reached, which the old thresholds accept too
     #: (docs/benchmarks/real-rigs.md).
     explained_min_share: float = 0.08
+    #: A prior's search stops before the other cameras' trees once the
+    #: verdict accepts the best verified pose and the seeds of this many
+    #: cameras' own searches verified to it (within ``settled_m`` and
+    #: ``settled_deg``): the cameras' trees are 85 % of a rig call's time
+    #: (ZInD sample tour, PEQ 3), and two narrow
+    #: views that found one place from their own lines are the evidence the
+    #: remaining trees would add. One camera's alone is not enough: a look-
+    #: alike a few centimetres off (a jamb's near face for its far one)
+    #: explains most of the frame too, and a rival only another camera's
+    #: tree finds would refuse it.
+    settled_cameras: int = 2
+    #: Two cameras' seeds verified to one place: within these (metres,
+    #: degrees) of each other. The joint refit does not pull them onto one
+    #: optimum (each keeps the matches it started from): on a ZInD panorama
+    #: (sample tour, frame 1, PEQ 3) the best pose's own camera's other seeds
+    #: ended 3 to 11 cm and 1 to 3.5 degrees away, another camera's 11 cm and
+    #: 0.6 degrees; the other places verified there lay 0.4 m and 7 degrees
+    #: away or more (``VerdictConstants.ambiguous_m`` 0.5). On the whole tour
+    #: (seed 0, PEQ 3) the stop leaves right and wrong as they were: 15 and
+    #: 14 of 32 right (panoramas, 4-camera rigs), 0 wrong
+    #: (docs/benchmarks/real-rigs.md).
+    settled_m: float = 0.2
+    settled_deg: float = 3.0
 
 
 #: The fields of :class:`Tolerances` that hold inner constants, and each one's class.

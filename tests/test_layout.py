@@ -37,6 +37,7 @@ NOT_THRESHOLDS = {
     ("linemap/rig_files.py", "MAX_PITCH_DEG"): "a rig file's check of its input (the camera files' pitch bound)",
     ("linemap/rig_files.py", "_KALIBR_DISTORTIONS"): "the coefficient counts of a file format",
     ("linemap/atomic.py", "STALE_TEMP_S"): "file housekeeping (a killed write's leftovers), not a tolerance of the method",
+    ("matcher/panorama.py", "_KEPT_VIEW_MAPS"): "a cache's size (memory), not a tolerance of the method",
     ("matcher/cli.py", "EXIT_OK"): "exit codes",
     ("linemap/errors.py", "EXIT_BUG"): "exit codes",
     ("matcher/tracking/route_plot.py", "_WALL"): "colours of a picture",

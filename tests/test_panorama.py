@@ -239,6 +239,26 @@ def test_bad_cuts_are_refused_in_one_line(kwargs, says):
     assert says in str(exc.value) and "\n" not in str(exc.value)
 
 
+def test_a_rig_cuts_its_panoramas_with_maps_computed_once():
+    # A stream's panoramas share one rig: the views' remap maps are computed
+    # for the first and reused, read-only, and every cut equals a fresh one.
+    from matcher.panorama import _kept_view_maps
+
+    rng = np.random.default_rng(4)
+    rig = panorama_rig(256, 1.2, yaw_offset_deg=30.0)
+    first, second = (rng.integers(0, 255, (128, 256), dtype=np.uint8) for _ in range(2))
+    cut_views(first, rig)
+    before = _kept_view_maps.cache_info()
+    kept = cut_views(second, rig)
+    after = _kept_view_maps.cache_info()
+    assert after.hits - before.hits == len(rig) and after.misses == before.misses
+    for rc, view in zip(rig, kept):
+        map_u, map_v = view_maps(rc, 256, 30.0)
+        fresh = cv2.remap(second, map_u, map_v, interpolation=cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
+        assert np.array_equal(view, fresh)
+    assert not _kept_view_maps(rig[0], 256, 30.0)[0].flags.writeable
+
+
 def test_a_plain_rig_is_refused_by_the_cut(panoramas):
     with pytest.raises(InputError, match="panorama_rig"):
         cut_views(panoramas[POSES[0]], Rig.single(matcher.Camera.from_fov(60, 64, 48, 1.2, 0)))

@@ -138,3 +138,50 @@ def test_cli_localizes_a_simulated_rig_frame(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "matcher", "localize", "--map", "maps/flat.lmap", "--rig",
                           str(out / "rig.json"), "--lines", lines[0], "--lost"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "give one per camera" in bad.stderr
+
+
+def _ranked(poses, score, n):
+    from matcher.rig.verify import RigRanked
+
+    poses, score, n = np.array(poses, float), np.array(score, float), np.array(n)
+    order = np.lexsort((score, -n * np.isfinite(score)))
+    return RigRanked(poses, (), n, n, score, np.zeros(len(n)), order, "")
+
+
+def test_confirmed_by_counts_the_cameras_whose_seeds_reached_the_best_pose():
+    tol = matcher.Tolerances()
+    near_m, near_rad = 0.5 * tol.rig.settled_m, np.radians(0.5 * tol.rig.settled_deg)
+    far_m = 2.0 * tol.rig.settled_m
+    from matcher.rig.localize import confirmed_by
+
+    # The best (camera 0), its own camera's other seed, camera 2's seed near it
+    # (and across the +-pi seam), camera 1's seed too far off.
+    poses = [(1.0, 2.0, np.pi - 0.001), (1.0 + near_m, 2.0, np.pi), (1.0, 2.0 + far_m, np.pi),
+             (1.0, 2.0 - near_m, -np.pi + near_rad)]
+    ranked = _ranked(poses, [1e-3, 2e-3, 1e-3, 2e-3], [30, 20, 15, 18])
+    assert confirmed_by(ranked, [0, 0, 1, 2], tol) == 2
+    assert confirmed_by(ranked, [0, 0, 1, 0], tol) == 1
+    # A near seed dropped as a duplicate of the best (E inf, same matches) still counts.
+    ranked = _ranked(poses, [1e-3, 2e-3, 1e-3, np.inf], [30, 20, 15, 30])
+    assert confirmed_by(ranked, [0, 0, 1, 2], tol) == 2
+    # Nothing verified: no camera confirms anything.
+    assert confirmed_by(_ranked(poses, [np.inf] * 4, [3] * 4), [0, 1, 2, 3], tol) == 0
+
+
+@pytest.mark.slow
+def test_search_stops_once_two_cameras_found_the_accepted_pose(flat):
+    # The same frame with the stop and without it (more cameras than the
+    # rig's needed to settle): one answer, fewer tree nodes with the stop.
+    from dataclasses import replace
+
+    rng = np.random.default_rng(3)
+    rig = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
+    rig_frame(flat, rig, rng)  # the first frame's other two cameras see too little to make a difference
+    f, _ = rig_frame(flat, rig, rng)
+    tol = matcher.Tolerances()
+    never = replace(tol, rig=replace(tol.rig, settled_cameras=len(rig) + 1))
+    a = localize_rig(flat, rig, f.lines, f.prior, f.dt, f.dyaw, tolerances=tol)
+    b = localize_rig(flat, rig, f.lines, f.prior, f.dt, f.dyaw, tolerances=never)
+    assert a and b, (a.reason, b.reason)
+    assert pose_error(a.pose, f.pose)[0] < 0.01 and pose_error(a.pose, b.pose)[0] < 0.01
+    assert a.stage1.tree_nodes < b.stage1.tree_nodes

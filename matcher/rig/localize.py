@@ -80,6 +80,8 @@ class PriorFound:
     tried: list = field(default_factory=list)
     search_ms: float = 0.0
     verify_ms: float = 0.0
+    #: (H,) per verified pose of ``ranked``, the camera whose seed it is.
+    proposed_by: list = field(default_factory=list)
 
 
 def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadlines: Deadlines) -> PriorFound:
@@ -87,10 +89,12 @@ def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadline
     one's new seeds verified on every camera as they come: first every
     camera with the interpretation tree alone
     (:data:`~matcher.strategy.TREE_ALONE`), then, only if none of their
-    seeds verified, with the whole strategy. (Stopping at the first pose
-    that explains most of the frame would save the other cameras' trees,
-    but a look-alike a few centimetres off, a jamb's near face for its far
-    one, explains most of the frame too.)"""
+    seeds verified, with the whole strategy. The search stops before the
+    other cameras' trees once it is settled (:func:`_settled`: the verdict
+    accepts a pose that the seeds of ``RigConstants.settled_cameras``
+    cameras verified to). (Stopping at the first pose that explains most of
+    the frame would not do: a look-alike a few centimetres off, a jamb's
+    near face for its far one, explains most of the frame too.)"""
     searches = [search_camera(linemap, v, px, tol, deadlines, ()) for v in frame.views]  # candidates only
     found = PriorFound(searches, [s.cands for s in searches])
     order = sorted(range(len(frame.views)), key=lambda i: -int(frame.views[i].lines.usable.sum()))
@@ -104,12 +108,40 @@ def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadline
             found.search_ms += (t_v - t) * 1e3
             if len(seeds):
                 found.tried += list(seeds)
+                found.proposed_by += [i] * len(seeds)
                 found.ranked = merged(frame.views, found.cands, found.ranked,
                                       verify_seeds(frame.views, found.cands, seeds, px, tol), px, tol)
+            settled = len(seeds) and _settled(frame, found, tol)
             found.verify_ms += (time.perf_counter() - t_v) * 1e3
+            if settled:
+                return found
         if found.ranked is not None and np.isfinite(found.ranked.score).any():
             return found  # the tree's seeds gave verified poses: the verdict judges them
     return found
+
+
+def _settled(frame: RigFrame, found: PriorFound, tol: Tolerances) -> bool:
+    """Whether the verdict accepts the best verified pose so far and the
+    seeds of ``RigConstants.settled_cameras`` cameras (or more) verified to
+    it, within ``settled_m`` and ``settled_deg``: the other cameras' trees
+    are not searched then."""
+    ranked = found.ranked
+    if ranked is None or confirmed_by(ranked, found.proposed_by, tol) < tol.rig.settled_cameras:
+        return False
+    # The calibration is judged once, on the final answer (rig_result).
+    return bool(decide(_evidence(frame, found.cands, ranked, tol, UNCUT, calibration=False)[0], tol))
+
+
+def confirmed_by(ranked: RigRanked, proposed_by, tol: Tolerances) -> int:
+    """How many cameras' seeds (``proposed_by`` (H,): the camera of each of
+    ``ranked``'s poses) were verified to within ``RigConstants.settled_m``
+    and ``settled_deg`` of the best verified pose; 0 when none is left."""
+    if not len(ranked.order) or not np.isfinite(ranked.score[ranked.order[0]]):
+        return 0
+    d = ranked.poses - ranked.poses[int(ranked.order[0])]
+    near = ((np.hypot(d[:, 0], d[:, 1]) <= tol.rig.settled_m)
+            & (np.abs(np.remainder(d[:, 2] + math.pi, 2 * math.pi) - math.pi) <= math.radians(tol.rig.settled_deg)))
+    return len({int(proposed_by[h]) for h in near.nonzero()[0]})
 
 
 def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None):
@@ -159,21 +191,7 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
     E, order = ranked.score, ranked.order
     best = int(order[0]) if len(order) else None
     finite = [int(h) for h in order if np.isfinite(E[h])]
-    answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(E[h]), float(ranked.cost[h])) for h in finite]
-    if rivals and answers:  # the best stays first; the others by the ranking's keys
-        rest = sorted([a for a in rivals if a[0] != answers[0][0]] + answers[1:], key=lambda a: (-a[1], a[3], a[2]))
-        answers = answers[:1] + rest
-    answers = tuple(answers)
-    if not finite:
-        ev = Evidence(score=math.inf, unscored=ranked.why or "no verified pose", cut=run.cut)
-    else:
-        pose_std = Deferred(lambda: _pose_std(frame, cands, ranked, best, tol))
-        ev = Evidence(score=float(E[best]), coverage=Deferred(lambda: _coverage(frame, cands, ranked, best, tol)),
-                      explained=int(ranked.explained[best]), searched=frame.searched,
-                      needed=rig_lines_needed(frame.searched, tol),
-                      answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=run.cut,
-                      clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept,
-                      calibration=Deferred(lambda: _calibration(frame, cands, ranked, best, tol, run.px)))
+    ev, pose_std = _evidence(frame, cands, ranked, tol, run.cut, rivals, px=run.px)
     verdict = decide(ev, tol)
     times = dict(run.times, total=(time.perf_counter() - run.t0) * 1e3)
     listed = [(float(E[h]), _all_matches(frame, cands, ranked, h), _pose_deg(ranked.poses[h])) for h in finite]
@@ -186,6 +204,33 @@ def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances,
     return LocalizeResult(True, "", pose=_pose_deg(ranked.poses[best]), score=verdict.score,
                           matches=listed[0][1], cameras=_per_camera(frame, cands, ranked, best, tol), _pose_std=pose_std,
                           **common)
+
+
+def _evidence(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, cut: str,
+              rivals: list | None = None, px: tuple | None = None, calibration: bool = True) -> tuple:
+    """``(Evidence, pose_std)`` of the verified poses for the verdict (the
+    best's pose standard deviations deferred; None when no pose is left);
+    ``rivals`` as :func:`rig_result` takes them; with ``calibration``, the
+    cameras' calibration judged within the robot's prior ``px`` (None:
+    lost mode, no bounds)."""
+    E, order = ranked.score, ranked.order
+    best = int(order[0]) if len(order) else None
+    finite = [int(h) for h in order if np.isfinite(E[h])]
+    answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(E[h]), float(ranked.cost[h])) for h in finite]
+    if rivals and answers:  # the best stays first; the others by the ranking's keys
+        rest = sorted([a for a in rivals if a[0] != answers[0][0]] + answers[1:], key=lambda a: (-a[1], a[3], a[2]))
+        answers = answers[:1] + rest
+    answers = tuple(answers)
+    if not finite:
+        return Evidence(score=math.inf, unscored=ranked.why or "no verified pose", cut=cut), None
+    pose_std = Deferred(lambda: _pose_std(frame, cands, ranked, best, tol))
+    return Evidence(score=float(E[best]), coverage=Deferred(lambda: _coverage(frame, cands, ranked, best, tol)),
+                    explained=int(ranked.explained[best]), searched=frame.searched,
+                    needed=rig_lines_needed(frame.searched, tol),
+                    answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut,
+                    clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept,
+                    calibration=Deferred(lambda: _calibration(frame, cands, ranked, best, tol, px)) if calibration
+                    else None), pose_std
 
 
 def rig_lines_needed(searched: int, tol: Tolerances) -> int:
