@@ -261,6 +261,14 @@ SHEET_MIN_PLAN_AREA_SHARE = 0.5
 #: (two numbered layers are as often a storey's two halves or two sheets).
 PER_ROOM_MIN_LAYERS = 3
 
+#: A plan drawn one layer per room: a space all barriers enclose (walls,
+#: rooms' outlines, doors) that a door opens into is a room of its own when
+#: less than this share of it lies in the rooms' closed outlines (a room
+#: whose layer's outline stays open, closed by the walls around it: a
+#: living room closed by a staircase and an open-to-sky void); one mostly
+#: inside them is a room already there (mapkit/importers/dxf/room_layers.py).
+ROOM_FACES_COVER_SHARE = 0.5
+
 #: A plan whose walls span less than this, metres, and leave no free space
 #: is probably read in the wrong units (a gallery drawn at 1:10 in metres
 #: spans 4.6 m): the refusal names the --units or --scale that makes it a

@@ -36,7 +36,7 @@ from mapkit.importers.dxf.pocket_doors import pocket_opening
 from mapkit.importers.dxf.openings import (cut_opening, door_openings, door_strokes, drawing_items, find_opening,
                                           glass_footprint, opening_width)
 from mapkit.importers.dxf.reachable import describe_left_out, entered_parts
-from mapkit.importers.dxf.room_layers import door_line_opening, room_faces
+from mapkit.importers.dxf.room_layers import door_line_opening, entered_spaces, room_faces
 from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
@@ -367,10 +367,11 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     them; a bridge to the outside stays shut). A floor layer, when there is
     one, says where the inside is (within the outer walls, when they
     enclose the plan). A plan drawn one layer per room gives ``rooms``:
-    the faces its room outlines and door lines enclose; they say where the
-    inside is, as a floor layer does. Plans still open after that (the
-    holes cover less than ``OPEN_PLAN_FRACTION`` of the walls' convex hull)
-    are closed from their outer walls (:func:`.closure.closed_footprint`);
+    the faces its room outlines and door lines enclose, and the spaces the
+    barriers enclose that a door opens into (a room whose own outline stays
+    open); they say where the inside is, as a floor layer does. Plans still
+    open after that (the holes cover less than ``OPEN_PLAN_FRACTION`` of the
+    walls' convex hull) are closed from their outer walls (:func:`.closure.closed_footprint`);
     if that encloses too little as well, the source is ``"open"`` and the
     inside empty (the caller refuses the plan).
     """
@@ -383,7 +384,9 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     hull = shut.convex_hull
     floor_area = _floor_extent(floor)
     if rooms is not None and not rooms.is_empty:
-        inside, source = unary_union([floor_area, rooms]), "room outlines"
+        # Rooms whose own outline the walls around them close (:func:`.room_layers.entered_spaces`) too.
+        entered = entered_spaces(holes, door_gaps, bridges, rooms)
+        inside, source = unary_union([floor_area, rooms, *entered]), "room outlines"
     elif not floor_area.is_empty and enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
         # The walls enclose the building: a floor layer adds the rooms they
         # leave open, but nothing beyond the outer walls (a floor outline of

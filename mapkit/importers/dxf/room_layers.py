@@ -21,7 +21,10 @@ read), for layers whose role was guessed, never for those named with
    do a generic one ('Layer1', 'Layer2') and a code of a letter or two
    ('F-0', 'F-4', 'F-8': pens of a framing plan).
 2. in such a drawing, the layers named for a room or a space ('Kitchen',
-   'DiningRoom', 'Balcony1') drawn the same way are rooms too.
+   'DiningRoom', 'Balcony1') drawn the same way are rooms too, and so are
+   those named for a void the rooms are drawn around ('OTS', open to sky;
+   'Void', 'Shaft'): its outline is walls (a parapet, a shaft's walls)
+   and, with no door into it, it is no room.
 3. in a drawing with no wall linework at all, the layers named for rooms
    or spaces in general ('room', 'hall'; not one kind of room: a 'Kitchen
    stuff' layer holds furniture) that hold linework are the walls.
@@ -31,7 +34,10 @@ a door of its own (:func:`door_lines_apart`), and where no wall gap of a
 door leaf fits it (a shop front, an escalator lane's end) the line itself
 is the opening (:func:`door_line_opening`). The rooms (:func:`room_faces`)
 are what the outlines enclose together with the door lines: they say where
-the inside of the building is.
+the inside of the building is. A room whose own outline stays open (a
+living room drawn as three lines, closed by a staircase's walls and a void
+beside it) is the space all barriers enclose that a door opens into
+(:func:`entered_spaces`).
 """
 
 from __future__ import annotations
@@ -46,10 +52,12 @@ import shapely
 from shapely.geometry import LineString, MultiPolygon, Polygon
 from shapely.ops import unary_union
 
+from mapkit.importers.dxf.enclosure import passable
 from mapkit.importers.dxf.entities import SILENT
 from mapkit.importers.dxf.layer_roles import tokens
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import JAMB_REACH, MIN_OPENING_WIDTH, PER_ROOM_MIN_LAYERS, SNAP_GAP, THIN_WALL
+from mapkit.tolerances import (JAMB_REACH, MIN_OPENING_WIDTH, PER_ROOM_MIN_LAYERS, ROOM_FACES_COVER_SHARE, SNAP_GAP,
+                               THIN_WALL)
 
 #: A layer name that ends in a running number, optionally a letter after it
 #: ('Raum_001', 'BathRoom2a', 'Room 12'): the stem, then the number.
@@ -64,13 +72,15 @@ _STEM_MIN_LETTERS = 3
 
 #: Words that name a room or a space, whole words of the layer name (see
 #: :func:`mapkit.importers.dxf.layer_roles.tokens`); a word ending in "room"
-#: ('bedroom', 'storeroom') is one too.
+#: ('bedroom', 'storeroom') is one too. The last line's words name voids and
+#: courts the rooms are drawn around ('OTS', 'Open to sky' of Indian plans).
 _SPACE_WORDS = re.compile(r"""^(?:
     rooms?|raum|raume|raeume|zimmer|spaces?|zones?|pieces?|stanze?|habitaciones?|locaux|local
     |halls?|hallway|corridors?|flur|gang|lobby|foyer|landing|passage|walkway|vestibule
     |kitchen|kueche|kuche|bath|baths|bad|toilets?|wc|closets?|pantry|laundry|utility|wash
     |bed|bedrooms?|living|dining|lounge|study|office|offices|buero|buro|balcony|balkon|loggia
     |store|storage|lager|shops?|laden|geschaeft|stores
+    |ots|sky|voids?|shafts?|lightwell|courtyard|atrium
 )$""", re.X)
 
 #: Words that name rooms or spaces in general, not one kind of room: a
@@ -148,7 +158,7 @@ def room_outline_layers(counts: Mapping[str, Counter], roles: Mapping[str, str |
                           f"lines tracing one room each): the rooms' outlines are walls")
         for n in sorted(candidates - set(per_room)):
             if is_space_name(n) and _traced(counts[n]):
-                out[n] = "named for a room, in a drawing of one layer per room: its outline is walls"
+                out[n] = "named for a room or a space, in a drawing of one layer per room: its outline is walls"
         return out
     if wall_linework == 0:
         for n in sorted(candidates):
@@ -178,6 +188,51 @@ def room_faces(rooms: list[Stroke], doors: list[Stroke]) -> Polygon | MultiPolyg
         door_zone = unary_union(door_lines).buffer(SNAP_GAP)
         faces = [f for f in faces if f.exterior.intersection(door_zone).length >= MIN_OPENING_WIDTH]
     return unary_union(faces) if faces else Polygon()
+
+
+def entered_spaces(enclosed: list[Polygon], door_gaps: list[Polygon], bridges: list[Polygon],
+                   rooms: Polygon | MultiPolygon) -> list[Polygon]:
+    """The rooms of a plan drawn one layer per room that its rooms' faces
+    (:func:`room_faces`) miss: the spaces all barriers enclose that a door
+    opens into, or an undrawn opening joins to a room, less than
+    ``ROOM_FACES_COVER_SHARE`` of each in the faces.
+
+    A room's layer may leave its outline open where other things close it
+    for a person reading the plan: a living room drawn as three lines, its
+    fourth side the staircase's walls and an open-to-sky void's parapet.
+    Its lines enclose no face; the walls built from all of them do, and
+    the doors into it say it is a room. A space no door or opening leads
+    into (a shaft, a void, a pocket between rooms) stays out.
+
+    ``enclosed``: the spaces the union of walls, obstacles, door gaps and
+    ``bridges`` encloses (its holes, metres); ``door_gaps``: the doors' gap
+    footprints; ``bridges``: the undrawn openings between facing wall ends
+    (:func:`.enclosure.end_bridges`: a walkway's open end into the room it
+    leaves), joining a space only to one already inside; ``rooms``: the
+    rooms' faces."""
+    pending = [h for h in enclosed
+               if h.area > 0 and h.intersection(rooms).area < ROOM_FACES_COVER_SHARE * h.area]
+    if not pending:
+        return []
+    reached = [g.buffer(SNAP_GAP) for g in door_gaps]
+    openings = [b.buffer(SNAP_GAP) for b in bridges]
+
+    def touched(space: Polygon, zones: list[Polygon]) -> list[int]:
+        return [k for k, z in enumerate(zones) if space.exterior.intersection(z).length >= MIN_OPENING_WIDTH]
+
+    out: list[Polygon] = []
+    inside = rooms
+    while pending:
+        joined = [h for h in pending if touched(h, reached)]
+        if not joined:
+            joined = [h for h in pending
+                      if any(passable(bridges[k], unary_union([inside, h])) for k in touched(h, openings))]
+        if not joined:
+            break
+        out += joined
+        pending = [h for h in pending if all(h is not j for j in joined)]
+        inside = unary_union([inside, *joined])
+    return out
 
 
 def _line(s: Stroke) -> LineString:
