@@ -317,15 +317,18 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
     return map_owned(lambda rows: test(gi[rows], bi[rows]), gi, len(geoms), workers)
 
 
-def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray, workers: int = 1) -> np.ndarray:
-    """(P,) bool: whether ``grown[ps]`` meets cell box ``boxes[pc]``. A region
-    holding the cell's centre ``(cx, cy)[pc]`` meets it; that point test costs
-    a quarter of the box test and settles most pairs (GEOS's predicates are
-    exact, so the answers are those of the box test alone)."""
-    hit = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
+def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray,
+           workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """``(hit, centre_in)`` (P,) bool each: whether ``grown[ps]`` meets cell
+    box ``boxes[pc]``, and whether it holds the cell's centre ``(cx, cy)[pc]``
+    in its interior. A region holding the centre meets the cell; that point
+    test costs a quarter of the box test and settles most pairs (GEOS's
+    predicates are exact, so the answers are those of the box test alone)."""
+    centre_in = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
+    hit = centre_in.copy()
     rest = np.nonzero(~hit)[0]
     hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes, workers=workers)
-    return hit
+    return hit, centre_in
 
 
 def _quadtree_frame(free_space, min_cell: float) -> tuple[int, float, np.ndarray]:
@@ -374,12 +377,18 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
     alive = keep[cells.pc]
     pc, ps = remap[cells.pc[alive]], cells.ps[alive]
     ix, iy, node, boxes = cells.ix[keep], cells.iy[keep], cells.node[keep], boxes[keep]
-    hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
-    pc, ps = pc[hit], ps[hit]
+    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
+    pc, ps, centre_in = pc[hit], ps[hit], centre_in[hit]
     if last:  # smallest cells keep every segment that may be seen
         full = np.ones(len(pc), dtype=bool)
     else:
-        full = _pairwise(shapely.covers, grown, ps, pc, boxes, workers=workers)
+        # A region covering the cell holds its centre (strictly inside the
+        # box) in its interior: only pairs whose centre test hit can be
+        # covered, so the box test is asked of those alone (the predicates
+        # are exact: the answers are those of asking every pair).
+        full = np.zeros(len(pc), dtype=bool)
+        inside = np.nonzero(centre_in)[0]
+        full[inside] = _pairwise(shapely.covers, grown, ps[inside], pc[inside], boxes, workers=workers)
     decided = (node[pc[full]].astype(np.int32), ps[full].astype(np.int32))
     pc, ps = pc[~full], ps[~full]
     open_count = np.bincount(pc, minlength=len(ix))
