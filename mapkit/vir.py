@@ -530,7 +530,21 @@ def adjacent_pairs(labels: np.ndarray) -> np.ndarray:
         ]
     )
     pairs = pairs[(pairs[:, 0] != pairs[:, 1]) & (pairs >= 0).all(axis=1)]
-    return np.unique(np.sort(pairs, axis=1), axis=0)
+    return unique_pairs(pairs)
+
+
+def unique_pairs(pairs: np.ndarray) -> np.ndarray:
+    """``np.unique(np.sort(pairs, axis=1), axis=0)`` for (P, 2) non-negative
+    ints: each pair as (low, high), the distinct ones in lexicographic order,
+    same dtype. One value sort of ``low * base + high`` (``base`` past every
+    label), duplicates dropped by hand: the row sort, and ``np.unique`` even
+    on plain values, cost tens of times more."""
+    lo = np.minimum(pairs[:, 0], pairs[:, 1]).astype(np.int64)
+    hi = np.maximum(pairs[:, 0], pairs[:, 1]).astype(np.int64)
+    base = int(hi.max()) + 1 if len(hi) else 1
+    key = np.sort(lo * base + hi)
+    key = key[np.concatenate([key[:1] == key[:1], key[1:] != key[:-1]])]
+    return np.stack([key // base, key % base], axis=1).astype(pairs.dtype)
 
 
 def _leaf_fingerprints(leaves: Leaves) -> tuple[np.ndarray, np.ndarray]:
@@ -727,7 +741,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     first[comp[::-1]] = np.arange(m)[::-1]
     cell_area = (leaves.size / 2.0**leaves.level) ** 2
     area = np.bincount(comp, weights=cell_area, minlength=n_comp).tolist()
-    cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
+    cpairs = unique_pairs(comp[pairs])
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
     # One int object per component, shared by the sets and heap entries
     # below (ids from .tolist() would be new objects each: tens of MB).
