@@ -269,17 +269,20 @@ class Leaves:
         int32: pairs sorted by position in ``leaves`` then segment id
         (``owner`` indexes ``leaves``); in no particular order if not
         ``ordered`` (the sort is most of the cost)."""
-        owners, segs = [], []
+        # Every (leaf position, node) of the leaves and their ancestors, then
+        # the nodes' segments gathered once (few numpy calls per level).
+        positions, nodes = [np.zeros(0, dtype=np.int32)], [np.zeros(0, dtype=np.int64)]
         cur = self.node[np.asarray(leaves, dtype=np.int64)]
         pos = np.arange(len(cur), dtype=np.int32)
         while len(cur):
-            start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
-            owners.append(np.repeat(pos, count))
-            segs.append(self.node_segs[_ranges(start, count)])
+            positions.append(pos)
+            nodes.append(cur)
             up = self.parent[cur]
             pos, cur = pos[up >= 0], up[up >= 0]
-        owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int32)
-        seg = np.concatenate(segs) if segs else np.zeros(0, dtype=np.int32)
+        pos, cur = np.concatenate(positions), np.concatenate(nodes)
+        start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
+        owner = np.repeat(pos, count)
+        seg = self.node_segs[_ranges(start, count)]
         if not ordered:
             return owner, seg
         # One sort of owner * n + seg: a value sort, much cheaper than lexsort.
