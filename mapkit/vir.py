@@ -436,8 +436,9 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 
     Per level, every still-undecided (cell, segment) pair is tested at once
     with shapely's vectorised predicates on prepared geometries: ``intersects``
-    (S may be listed) then ``covers`` (S is listed for every child too; not
-    asked at the finest level, which lists whatever meets it).
+    (S may be listed) then ``covers`` (S is listed for every child too; asked
+    only where S's region holds the cell's centre, and not at the finest
+    level, which lists whatever meets it).
     Children test only their parent's undecided segments; what a cell is
     covered by is stored once, at that cell (:class:`Leaves`). The pair tests
     run in ``workers`` threads.
