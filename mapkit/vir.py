@@ -269,17 +269,20 @@ class Leaves:
         int32: pairs sorted by position in ``leaves`` then segment id
         (``owner`` indexes ``leaves``); in no particular order if not
         ``ordered`` (the sort is most of the cost)."""
-        owners, segs = [], []
+        # Every (leaf position, node) of the leaves and their ancestors, then
+        # the nodes' segments gathered once (few numpy calls per level).
+        positions, nodes = [np.zeros(0, dtype=np.int32)], [np.zeros(0, dtype=np.int64)]
         cur = self.node[np.asarray(leaves, dtype=np.int64)]
         pos = np.arange(len(cur), dtype=np.int32)
         while len(cur):
-            start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
-            owners.append(np.repeat(pos, count))
-            segs.append(self.node_segs[_ranges(start, count)])
+            positions.append(pos)
+            nodes.append(cur)
             up = self.parent[cur]
             pos, cur = pos[up >= 0], up[up >= 0]
-        owner = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int32)
-        seg = np.concatenate(segs) if segs else np.zeros(0, dtype=np.int32)
+        pos, cur = np.concatenate(positions), np.concatenate(nodes)
+        start, count = self.node_ptr[cur], self.node_ptr[cur + 1] - self.node_ptr[cur]
+        owner = np.repeat(pos, count)
+        seg = self.node_segs[_ranges(start, count)]
         if not ordered:
             return owner, seg
         # One sort of owner * n + seg: a value sort, much cheaper than lexsort.
@@ -317,15 +320,18 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
     return map_owned(lambda rows: test(gi[rows], bi[rows]), gi, len(geoms), workers)
 
 
-def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray, workers: int = 1) -> np.ndarray:
-    """(P,) bool: whether ``grown[ps]`` meets cell box ``boxes[pc]``. A region
-    holding the cell's centre ``(cx, cy)[pc]`` meets it; that point test costs
-    a quarter of the box test and settles most pairs (GEOS's predicates are
-    exact, so the answers are those of the box test alone)."""
-    hit = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
+def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray,
+           workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """``(hit, centre_in)`` (P,) bool each: whether ``grown[ps]`` meets cell
+    box ``boxes[pc]``, and whether it holds the cell's centre ``(cx, cy)[pc]``
+    in its interior. A region holding the centre meets the cell; that point
+    test costs a quarter of the box test and settles most pairs (GEOS's
+    predicates are exact, so the answers are those of the box test alone)."""
+    centre_in = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
+    hit = centre_in.copy()
     rest = np.nonzero(~hit)[0]
     hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes, workers=workers)
-    return hit
+    return hit, centre_in
 
 
 def _quadtree_frame(free_space, min_cell: float) -> tuple[int, float, np.ndarray]:
@@ -374,12 +380,18 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
     alive = keep[cells.pc]
     pc, ps = remap[cells.pc[alive]], cells.ps[alive]
     ix, iy, node, boxes = cells.ix[keep], cells.iy[keep], cells.node[keep], boxes[keep]
-    hit = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
-    pc, ps = pc[hit], ps[hit]
+    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
+    pc, ps, centre_in = pc[hit], ps[hit], centre_in[hit]
     if last:  # smallest cells keep every segment that may be seen
         full = np.ones(len(pc), dtype=bool)
     else:
-        full = _pairwise(shapely.covers, grown, ps, pc, boxes, workers=workers)
+        # A region covering the cell holds its centre (strictly inside the
+        # box) in its interior: only pairs whose centre test hit can be
+        # covered, so the box test is asked of those alone (the predicates
+        # are exact: the answers are those of asking every pair).
+        full = np.zeros(len(pc), dtype=bool)
+        inside = np.nonzero(centre_in)[0]
+        full[inside] = _pairwise(shapely.covers, grown, ps[inside], pc[inside], boxes, workers=workers)
     decided = (node[pc[full]].astype(np.int32), ps[full].astype(np.int32))
     pc, ps = pc[~full], ps[~full]
     open_count = np.bincount(pc, minlength=len(ix))
@@ -424,8 +436,9 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
 
     Per level, every still-undecided (cell, segment) pair is tested at once
     with shapely's vectorised predicates on prepared geometries: ``intersects``
-    (S may be listed) then ``covers`` (S is listed for every child too; not
-    asked at the finest level, which lists whatever meets it).
+    (S may be listed) then ``covers`` (S is listed for every child too; asked
+    only where S's region holds the cell's centre, and not at the finest
+    level, which lists whatever meets it).
     Children test only their parent's undecided segments; what a cell is
     covered by is stored once, at that cell (:class:`Leaves`). The pair tests
     run in ``workers`` threads.
@@ -521,7 +534,21 @@ def adjacent_pairs(labels: np.ndarray) -> np.ndarray:
         ]
     )
     pairs = pairs[(pairs[:, 0] != pairs[:, 1]) & (pairs >= 0).all(axis=1)]
-    return np.unique(np.sort(pairs, axis=1), axis=0)
+    return unique_pairs(pairs)
+
+
+def unique_pairs(pairs: np.ndarray) -> np.ndarray:
+    """``np.unique(np.sort(pairs, axis=1), axis=0)`` for (P, 2) non-negative
+    ints: each pair as (low, high), the distinct ones in lexicographic order,
+    same dtype. One value sort of ``low * base + high`` (``base`` past every
+    label), duplicates dropped by hand: the row sort, and ``np.unique`` even
+    on plain values, cost tens of times more."""
+    lo = np.minimum(pairs[:, 0], pairs[:, 1]).astype(np.int64)
+    hi = np.maximum(pairs[:, 0], pairs[:, 1]).astype(np.int64)
+    base = int(hi.max()) + 1 if len(hi) else 1
+    key = np.sort(lo * base + hi)
+    key = key[np.concatenate([key[:1] == key[:1], key[1:] != key[:-1]])]
+    return np.stack([key // base, key % base], axis=1).astype(pairs.dtype)
 
 
 def _leaf_fingerprints(leaves: Leaves) -> tuple[np.ndarray, np.ndarray]:
@@ -718,7 +745,7 @@ def merge_leaves(leaves: Leaves, merge_growth: float) -> tuple[np.ndarray, list[
     first[comp[::-1]] = np.arange(m)[::-1]
     cell_area = (leaves.size / 2.0**leaves.level) ** 2
     area = np.bincount(comp, weights=cell_area, minlength=n_comp).tolist()
-    cpairs = np.unique(np.sort(comp[pairs], axis=1), axis=0)
+    cpairs = unique_pairs(comp[pairs])
     cpairs = cpairs[cpairs[:, 0] != cpairs[:, 1]]
     # One int object per component, shared by the sets and heap entries
     # below (ids from .tolist() would be new objects each: tens of MB).

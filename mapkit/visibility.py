@@ -450,54 +450,56 @@ class _Sight:
     min_visible_length: float
 
 
-def _pair_annulus(pts: np.ndarray, dmin: np.ndarray, dmax: np.ndarray, j: int) -> tuple[float, float] | None:
-    """``(r_in, r_out)`` of the annulus around the midpoint of samples ``j``
-    and ``j + 1`` of ``pts`` (n, 3) that bounds both their distance bands
-    (:func:`segment_regions`), or None when the pair is never seen."""
-    if dmax[j] < 0 or dmax[j + 1] < 0:
-        return None  # one sample never seen: the pair never is
-    delta2 = float(np.sum((pts[j + 1, :2] - pts[j, :2]) ** 2))
-    r_out2 = (dmax[j] ** 2 + dmax[j + 1] ** 2) / 2.0 - delta2 / 4.0
-    r_in2 = min(dmin[j], dmin[j + 1]) ** 2 - delta2 / 4.0
-    if r_out2 <= max(r_in2, 0.0):
-        return None
-    return (math.sqrt(r_in2) if r_in2 > 0 else 0.0), math.sqrt(r_out2)
+def _pair_annuli(pts: np.ndarray, dmin: np.ndarray, dmax: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(seen, r_in, r_out)`` (K,) each, for the pairs of samples ``j`` and
+    ``j + 1`` of ``pts`` (n, 3) (``j`` (K,) rows, both of one segment): the
+    annulus around their midpoint that bounds both their distance bands
+    (:func:`segment_regions`), and ``seen`` False where the pair is never
+    seen (its radii are then meaningless). Elementwise, one formula per pair."""
+    d0, d1 = dmax[j], dmax[j + 1]
+    step_xy = pts[j + 1, :2] - pts[j, :2]
+    delta2 = step_xy[:, 0] ** 2 + step_xy[:, 1] ** 2
+    r_out2 = (d0**2 + d1**2) / 2.0 - delta2 / 4.0
+    r_in2 = np.minimum(dmin[j], dmin[j + 1]) ** 2 - delta2 / 4.0
+    # One sample never seen: the pair never is; nor is it with an empty annulus.
+    seen = ~((d0 < 0) | (d1 < 0)) & ~(r_out2 <= np.maximum(r_in2, 0.0))
+    with np.errstate(invalid="ignore"):
+        r_in = np.where(r_in2 > 0, np.sqrt(np.maximum(r_in2, 0.0)), 0.0)
+        r_out = np.sqrt(np.where(seen, r_out2, 0.0))
+    return seen, r_in, r_out
 
 
 def _samples(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> _Samples:
     """Sample every segment of ``segs`` (N, 2, 3) (``vertical`` (N,) bool:
     one sample at its xy point; else spaced <= ``min_visible_length / 2``)
-    and pair the consecutive samples seen from a common annulus."""
+    and pair the consecutive samples seen from a common annulus.
+
+    Points are keyed by their xy rounded to 1e-7 m, numbered in order of
+    first appearance (the vertical segments' points, then each other
+    segment's samples in order); pairs come in segment order, then along
+    the segment."""
     e_min, e_max = sight.elevation
-    keys: dict[tuple[float, float], int] = {}
-
-    def key_of(pt: np.ndarray) -> int:
-        k = (round(float(pt[0]), 7), round(float(pt[1]), 7))
-        if k not in keys:
-            keys[k] = len(keys)
-        return keys[k]
-
-    pair_seg, pair_a, pair_b, pair_mid, pair_rin, pair_rout = [], [], [], [], [], []
     vert_ids = np.nonzero(vertical)[0]
-    vert_keys = [key_of(segs[i, 0, :2]) for i in vert_ids]
-    for i in np.nonzero(~vertical)[0]:
-        pts = sample_segment(segs[i], sight.min_visible_length / 2.0)
-        dmin, dmax = distance_band(pts[:, 2], sight.h, e_min, e_max, sight.max_range)
-        ks = [key_of(pt) for pt in pts[:, :2]]
-        for j in range(len(pts) - 1):
-            radii = _pair_annulus(pts, dmin, dmax, j)
-            if radii is None:
-                continue
-            pair_seg.append(i)
-            pair_a.append(ks[j])
-            pair_b.append(ks[j + 1])
-            pair_mid.append((pts[j, :2] + pts[j + 1, :2]) / 2.0)
-            pair_rin.append(radii[0])
-            pair_rout.append(radii[1])
+    slanted = np.nonzero(~vertical)[0]
+    parts = [sample_segment(segs[i], sight.min_visible_length / 2.0) for i in slanted]
+    counts = np.array([len(p) for p in parts], dtype=np.int64)
+    pts = np.concatenate(parts) if parts else np.zeros((0, 3))
+    dmin, dmax = distance_band(pts[:, 2], sight.h, e_min, e_max, sight.max_range)
+
+    keys: dict[tuple[float, float], int] = {}
+    all_xy = np.concatenate([segs[vert_ids, 0, :2].reshape(-1, 2), pts[:, :2]]).tolist()
+    ids = [keys.setdefault((round(x, 7), round(y, 7)), len(keys)) for x, y in all_xy]
+    ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+    vert_keys, ks = ids[: len(vert_ids)], ids[len(vert_ids) :]
+
+    # Consecutive samples of one segment: every row but each segment's last.
+    last = np.cumsum(counts) - 1
+    j = np.setdiff1d(np.arange(len(pts), dtype=np.int64), last, assume_unique=True)
+    seen, r_in, r_out = _pair_annuli(pts, dmin, dmax, j)
+    j = j[seen]
     xy = np.array(list(keys)).reshape(-1, 2)
-    return _Samples(xy, vert_ids, np.asarray(vert_keys, dtype=np.int64), np.array(pair_seg, dtype=np.int64),
-                    np.array(pair_a, dtype=np.int64), np.array(pair_b, dtype=np.int64),
-                    np.array(pair_mid).reshape(-1, 2), np.array(pair_rin), np.array(pair_rout))
+    return _Samples(xy, vert_ids, vert_keys, np.repeat(slanted, counts)[j].astype(np.int64), ks[j], ks[j + 1],
+                    ((pts[j, :2] + pts[j + 1, :2]) / 2.0).reshape(-1, 2), r_in[seen], r_out[seen])
 
 
 def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int) -> np.ndarray:

@@ -116,27 +116,32 @@ def _sweep(pts: np.ndarray, pi: np.ndarray, ei: np.ndarray, occ: Occluders, half
     # -off, then the same vertices turned by +off: 4m rays.
     r_pt = np.repeat(np.arange(n_pts), 4 * m)
     r0 = np.repeat(4 * e0, 4 * m)
+    m_r = m[r_pt]  # each ray's point's edge count
     local = np.arange(len(r_pt)) - r0
-    vert = local % (2 * m[r_pt])
-    plus = local >= 2 * m[r_pt]
-    edge_of = e0[r_pt] + np.where(vert < m[r_pt], vert, vert - m[r_pt])
-    vx = np.where((vert < m[r_pt])[:, None], a[edge_of], b[edge_of]) - pts[r_pt]
+    vert = local % (2 * m_r)
+    plus = local >= 2 * m_r
+    on_a = vert < m_r
+    edge_of = e0[r_pt] + np.where(on_a, vert, vert - m_r)
+    # One gather from the a's followed by the b's, not two and a choice.
+    vx = np.concatenate([a, b])[np.where(on_a, edge_of, edge_of + len(a))] - pts[r_pt]
     theta = np.arctan2(vx[:, 1], vx[:, 0])
     off = math.radians(VIS_RAY_OFFSET_DEG)
     ang = np.mod(np.where(plus, theta + off, theta - off) + math.pi, 2.0 * math.pi) - math.pi
     d = np.stack([np.cos(ang), np.sin(ang)], axis=1)
     # Rays sorted by point, then angle (stable). A vertex shared by two edges
     # casts the same rays twice: cast each distinct (point, angle) once.
-    order = np.lexsort((ang, r_pt))
+    order = _by_group(ang, r_pt)
     new = np.ones(len(order), dtype=bool)
     new[1:] = (r_pt[order][1:] != r_pt[order][:-1]) | (ang[order][1:] != ang[order][:-1])
     cast = order[new]
     t = _nearest_hits(d[cast], r_pt[cast], a - pts[e_pt], b - a, e_pt, m, e0)
-    t = t[np.cumsum(new) - 1][np.argsort(order)]
+    back = np.empty_like(order)  # the inverse permutation of order (its argsort)
+    back[order] = np.arange(len(order))
+    t = t[np.cumsum(new) - 1][back]
     # Hidden vertices: both rays stop short (see visibility_polygon).
     r = np.hypot(vx[:, 0], vx[:, 1])
     short = t < r - VIS_HIDDEN_SLACK
-    twin = np.where(plus, np.arange(len(t)) - 2 * m[r_pt], np.arange(len(t)) + 2 * m[r_pt])
+    twin = np.where(plus, np.arange(len(t)) - 2 * m_r, np.arange(len(t)) + 2 * m_r)
     seen = ~(short & short[twin])
     # Per point, by angle, the first seen ray of each angle (as np.unique).
     order = order[seen[order]]
@@ -145,6 +150,16 @@ def _sweep(pts: np.ndarray, pi: np.ndarray, ei: np.ndarray, occ: Occluders, half
     first[1:] = (pt_s[1:] != pt_s[:-1]) | (ang_s[1:] != ang_s[:-1])
     keep = order[first]
     return pts[r_pt[keep]] + d[keep] * t[keep, None], r_pt[keep]
+
+
+def _by_group(key: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """``np.lexsort((key, group))`` for (K,) ``group`` ids of this chunk's
+    points (below ``2**31``): rows by group, then key, ties in row order.
+    Two stable sorts, the second on ``group`` as small ints (numpy sorts
+    16-bit ints by radix), cost less than the lexsort."""
+    first = np.argsort(key, kind="stable")
+    small = np.int16 if len(group) == 0 or int(group.max()) < 2**15 else np.int32
+    return first[np.argsort(group[first].astype(small), kind="stable")]
 
 
 def _nearest_hits(d, r_pt, a, e, e_pt, m, e0) -> np.ndarray:
@@ -158,7 +173,7 @@ def _nearest_hits(d, r_pt, a, e, e_pt, m, e0) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         u = np.clip(np.where(ee > 0, -np.einsum("ij,ij->i", a, e) / ee, 0.0), 0.0, 1.0)
     reach = np.hypot(a[:, 0] + u * e[:, 0], a[:, 1] + u * e[:, 1])
-    order = np.lexsort((reach, e_pt))  # stable: ties keep the edges' order
+    order = _by_group(reach, e_pt)  # stable: ties keep the edges' order
     a, e, reach = a[order], e[order], reach[order]
     cross = a[:, 0] * e[:, 1] - a[:, 1] * e[:, 0]
     rays = np.arange(len(d))

@@ -1,0 +1,143 @@
+"""The region stage's faster forms compute what their plain forms compute,
+bit for bit: sample pairing, leaf-pair deduplication, the sweep's grouped
+sort, and the quadtree's covers test asked only where the centre is inside."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from mapkit.vir import RegionSettings, build_regions, unique_pairs
+from mapkit.visibility import _samples, _Sight, distance_band, sample_segment
+from mapkit.visibility_batch import _by_group
+from mapkit_harness.plans import two_rooms
+from linemap.camera import Camera
+
+CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)
+
+
+def _samples_one_by_one(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> dict:
+    """The per-segment, per-pair loop :func:`mapkit.visibility._samples` replaced."""
+    e_min, e_max = sight.elevation
+    keys: dict = {}
+
+    def key_of(pt):
+        k = (round(float(pt[0]), 7), round(float(pt[1]), 7))
+        return keys.setdefault(k, len(keys))
+
+    out = {k: [] for k in ("pair_seg", "pair_a", "pair_b", "pair_mid", "pair_rin", "pair_rout")}
+    vert_ids = np.nonzero(vertical)[0]
+    vert_keys = [key_of(segs[i, 0, :2]) for i in vert_ids]
+    for i in np.nonzero(~vertical)[0]:
+        pts = sample_segment(segs[i], sight.min_visible_length / 2.0)
+        dmin, dmax = distance_band(pts[:, 2], sight.h, e_min, e_max, sight.max_range)
+        ks = [key_of(pt) for pt in pts[:, :2]]
+        for j in range(len(pts) - 1):
+            if dmax[j] < 0 or dmax[j + 1] < 0:
+                continue
+            delta2 = float(np.sum((pts[j + 1, :2] - pts[j, :2]) ** 2))
+            r_out2 = (dmax[j] ** 2 + dmax[j + 1] ** 2) / 2.0 - delta2 / 4.0
+            r_in2 = min(dmin[j], dmin[j + 1]) ** 2 - delta2 / 4.0
+            if r_out2 <= max(r_in2, 0.0):
+                continue
+            out["pair_seg"].append(i)
+            out["pair_a"].append(ks[j])
+            out["pair_b"].append(ks[j + 1])
+            out["pair_mid"].append((pts[j, :2] + pts[j + 1, :2]) / 2.0)
+            out["pair_rin"].append(math.sqrt(r_in2) if r_in2 > 0 else 0.0)
+            out["pair_rout"].append(math.sqrt(r_out2))
+    return {
+        "xy": np.array(list(keys)).reshape(-1, 2),
+        "vert_ids": vert_ids,
+        "vert_keys": np.asarray(vert_keys, dtype=np.int64),
+        "pair_seg": np.array(out["pair_seg"], dtype=np.int64),
+        "pair_a": np.array(out["pair_a"], dtype=np.int64),
+        "pair_b": np.array(out["pair_b"], dtype=np.int64),
+        "pair_mid": np.array(out["pair_mid"]).reshape(-1, 2),
+        "pair_rin": np.array(out["pair_rin"]),
+        "pair_rout": np.array(out["pair_rout"]),
+    }
+
+
+def test_samples_match_the_per_pair_loop():
+    rng = np.random.default_rng(3)
+    n = 60
+    a = rng.uniform(-4, 4, (n, 3))
+    b = a + rng.normal(0, 1.5, (n, 3))
+    a[:, 2], b[:, 2] = rng.choice([0.0, 2.6, 5.0], n), rng.choice([0.0, 2.6, 5.0], n)
+    b[:10, :2] = a[:10, :2]  # vertical edges
+    b[:10, 2] = a[:10, 2] + 2.6
+    a[20:25] = a[25:30]  # shared sample points
+    b[20:25] = b[25:30]
+    segs = np.stack([a, b], axis=1)
+    vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= 1e-9
+    for sight in (_Sight(1.2, (-0.4, 0.4), 6.0, 0.3), _Sight(1.2, (-0.9, 0.1), 3.0, 0.5)):
+        got = _samples(segs, vertical, sight)
+        want = _samples_one_by_one(segs, vertical, sight)
+        assert len(want["pair_seg"]) > 0
+        for name, value in want.items():
+            mine = getattr(got, name)
+            assert mine.dtype == value.dtype and mine.shape == value.shape, name
+            assert mine.tobytes() == value.tobytes(), name
+
+
+def test_samples_of_vertical_segments_only():
+    segs = np.array([[[0.0, 0.0, 0.0], [0.0, 0.0, 2.6]], [[1.0, 0.0, 0.0], [1.0, 0.0, 2.6]]])
+    got = _samples(segs, np.array([True, True]), _Sight(1.2, (-0.4, 0.4), 6.0, 0.3))
+    assert got.xy.shape == (2, 2) and got.vert_keys.tolist() == [0, 1]
+    assert got.pair_seg.shape == (0,) and got.pair_mid.shape == (0, 2)
+
+
+def test_unique_pairs_is_the_row_unique():
+    rng = np.random.default_rng(0)
+    for dtype in (np.int32, np.int64):
+        for n in (0, 1, 7, 5000):
+            pairs = rng.integers(0, 50, (n, 2)).astype(dtype)
+            want = np.unique(np.sort(pairs, axis=1), axis=0)
+            got = unique_pairs(pairs)
+            assert got.dtype == want.dtype and got.shape == want.shape
+            assert (got == want).all()
+
+
+def test_grouped_sort_is_the_lexsort():
+    rng = np.random.default_rng(1)
+    group = np.sort(rng.integers(0, 40, 3000))
+    key = rng.choice(np.linspace(-math.pi, math.pi, 50), 3000)  # many ties
+    assert (_by_group(key, group) == np.lexsort((key, group))).all()
+    big = np.sort(rng.integers(0, 70_000, 3000))  # past 16-bit ids
+    assert (_by_group(key, big) == np.lexsort((key, big))).all()
+    assert _by_group(np.zeros(0), np.zeros(0, dtype=np.int64)).shape == (0,)
+
+
+def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
+    """Asking covers of every met pair gives the same partition."""
+    import mapkit.vir as vir
+
+    scene = two_rooms()
+    settings = RegionSettings(eps=0.05)
+    fast = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
+    asked = []
+    real = vir._pairwise
+
+    def every_pair(predicate, geoms, gi, bi, *cells, workers=1):
+        if predicate is shapely.covers:
+            asked.append(len(gi))
+        return real(predicate, geoms, gi, bi, *cells, workers=workers)
+
+    original_meets = vir._meets
+
+    def meets_all_inside(*args, **kwargs):
+        hit, centre_in = original_meets(*args, **kwargs)
+        return hit, hit.copy()  # every met pair a covers candidate: the plain form
+
+    monkeypatch.setattr(vir, "_pairwise", every_pair)
+    monkeypatch.setattr(vir, "_meets", meets_all_inside)
+    plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
+    assert sum(asked) > 0
+    assert len(fast.polygons) == len(plain.polygons)
+    for p, q in zip(fast.polygons, plain.polygons):
+        assert shapely.to_wkb(p) == shapely.to_wkb(q)
+    for a, b in zip(fast.lists, plain.lists):
+        assert a.tolist() == b.tolist()
