@@ -244,7 +244,9 @@ def _flatten_in_units(msp, roles: dict, far: list, unit: str, factor: float, ext
 def door_widths(strokes: list, roles: dict) -> list[float]:
     """The width of each door drawing of the door layers' ``strokes``
     (metres as read): the longer side of its minimum rotated rectangle (a
-    leaf and its swing, a door line, a door block)."""
+    leaf and its swing, a door line, a door block). The strokes too long
+    for a door (:func:`.openings.door_strokes`) are kept here: that bound is
+    in metres, and read in the wrong unit every door may exceed it."""
     widths = []
     for item in drawing_items([s for s in strokes if roles.get(s.layer) == "doors"]):
         box = shapely.minimum_rotated_rectangle(item)
