@@ -22,7 +22,8 @@ import math
 import numpy as np
 import shapely
 
-from mapkit.tolerances import BRIDGE_ANGLE_DEG, GAP_UNITS_FACING_DEG, GAP_UNITS_REACH_SHARE, GAP_UNITS_TOUCH_SHARE
+from mapkit.tolerances import (BRIDGE_ANGLE_DEG, GAP_UNITS_FACING_DEG, GAP_UNITS_NEIGHBOURS, GAP_UNITS_REACH_SHARE,
+                               GAP_UNITS_TOUCH_SHARE)
 
 
 def doorway_gaps(strokes: list, extent: float) -> np.ndarray:
@@ -82,7 +83,7 @@ def _segments(strokes: list, touch: float) -> tuple[np.ndarray, np.ndarray, np.n
         z = np.zeros((0, 2))
         return z, z, np.zeros(0, dtype=int)
     a, b, owner = np.concatenate(starts), np.concatenate(ends), np.concatenate(owner)
-    long = np.hypot(*(b - a).T) > touch
+    long = np.hypot(*(b - a).T) > touch  # (False for a non-finite piece)
     return a[long], b[long], owner[long]
 
 
@@ -156,26 +157,34 @@ def _away(p: np.ndarray, q: np.ndarray, joint: np.ndarray) -> np.ndarray:
 def _paired(tips: np.ndarray, outs: np.ndarray, reach: float) -> tuple[list[float], np.ndarray]:
     """The widths of the gaps between wall ends in line and facing each
     other (within ``BRIDGE_ANGLE_DEG``), at most ``reach`` apart, each end
-    used once, the nearest pairs first; and the indices of the ends used."""
+    used once, the nearest pairs first; and the indices of the ends used.
+    An end's partner is sought among its ``GAP_UNITS_NEIGHBOURS`` nearest
+    ends (a doorway's other jamb is near it; the work stays linear in the
+    ends of a plan of thousands)."""
     from scipy.spatial import cKDTree
 
+    k = min(GAP_UNITS_NEIGHBOURS + 1, len(tips))
+    if k < 2:
+        return [], np.zeros(0, dtype=int)
+    dist, j = cKDTree(tips).query(tips, k=k, distance_upper_bound=reach)
+    i = np.repeat(np.arange(len(tips)), k).reshape(dist.shape)
+    found = np.isfinite(dist) & (j != i) & (dist > 0)
+    i, j, dist = i[found], j[found], dist[found]
+    keep = i < j  # each pair once (a pair found from one side only is kept too)
+    i, j, dist = np.concatenate([i[keep], j[~keep]]), np.concatenate([j[keep], i[~keep]]), \
+        np.concatenate([dist[keep], dist[~keep]])
+    u = (tips[j] - tips[i]) / dist[:, None]
     cos_par = math.cos(math.radians(BRIDGE_ANGLE_DEG))
-    pairs = []
-    for i, j in cKDTree(tips).query_pairs(reach, output_type="ndarray"):
-        v = tips[j] - tips[i]
-        dist = float(np.hypot(*v))
-        if dist <= 0:
-            continue
-        u = v / dist
-        if outs[i] @ outs[j] < -cos_par and outs[i] @ u > cos_par and -(outs[j] @ u) > cos_par:
-            pairs.append((dist, int(i), int(j)))
+    facing = (((outs[i] * outs[j]).sum(axis=1) < -cos_par) & ((outs[i] * u).sum(axis=1) > cos_par)
+              & (-(outs[j] * u).sum(axis=1) > cos_par))
     used: set[int] = set()
     widths = []
-    for dist, i, j in sorted(pairs):
-        if i in used or j in used:
+    for n in np.flatnonzero(facing)[np.argsort(dist[facing], kind="stable")]:
+        a, b = int(i[n]), int(j[n])
+        if a in used or b in used:
             continue
-        used |= {i, j}
-        widths.append(dist)
+        used |= {a, b}
+        widths.append(float(dist[n]))
     return widths, np.asarray(sorted(used), dtype=int)
 
 
@@ -184,15 +193,34 @@ def _to_facing_walls(tips, outs, own, a, b, tree, touch: float, reach: float) ->
     its segment ``own``), the distance to the first segment (``a -> b``) it
     runs into within ``reach``, when that segment stands within
     ``GAP_UNITS_FACING_DEG`` of square to it; ends facing nothing, or
-    first meeting a line at a slant, give none."""
-    if not len(tips):
-        return []
-    rays = shapely.linestrings(np.stack([tips + outs * touch, tips + outs * reach], axis=1))
+    first meeting a line at a slant, give none. Rays are cast a sixteenth,
+    then a quarter of ``reach``, then all of it, each time for the ends that
+    met nothing yet: a long slanted ray's box holds much of a dense plan."""
+    nearest = np.full(len(tips), np.inf)
+    first_facing = np.full(len(tips), np.inf)
+    todo = np.arange(len(tips))
+    for length in (reach / 16, reach / 4, reach):
+        if not len(todo):
+            break
+        near, facing = _first_met(tips[todo], outs[todo], own[todo], a, b, tree, touch, length)
+        nearest[todo], first_facing[todo] = near, facing
+        todo = todo[~np.isfinite(near)]
+    return [float(t) for t, n in zip(first_facing, nearest) if np.isfinite(t) and t <= n]
+
+
+def _first_met(tips, outs, own, a, b, tree, touch: float, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """For rays from ``tips`` along ``outs`` (from ``touch`` to ``length``
+    out), the distance to the first segment each meets other than its
+    ``own`` and to the first standing within ``GAP_UNITS_FACING_DEG`` of
+    square to it (inf: none), each shape (K,)."""
+    nearest = np.full(len(tips), np.inf)
+    first_facing = np.full(len(tips), np.inf)
+    rays = shapely.linestrings(np.stack([tips + outs * touch, tips + outs * length], axis=1))
     hit_ray, hit_seg = tree.query(rays, predicate="intersects")
     keep = hit_seg != own[hit_ray]
     hit_ray, hit_seg = hit_ray[keep], hit_seg[keep]
     if not len(hit_ray):
-        return []
+        return nearest, first_facing
     # The ray p + t u meets the segment a + s d where t = (w x d) / (u x d), w = a - p.
     p, u = tips[hit_ray], outs[hit_ray]
     d = b[hit_seg] - a[hit_seg]
@@ -203,11 +231,9 @@ def _to_facing_walls(tips, outs, own, a, b, tree, touch: float, reach: float) ->
         square = np.abs(cross_ud) / np.hypot(d[:, 0], d[:, 1])  # sine of the angle between ray and segment
     met = np.isfinite(t)
     facing = met & (square >= math.cos(math.radians(GAP_UNITS_FACING_DEG)))
-    nearest = np.full(len(tips), np.inf)
     np.minimum.at(nearest, hit_ray[met], t[met])
-    first_facing = np.full(len(tips), np.inf)
     np.minimum.at(first_facing, hit_ray[facing], t[facing])
-    return [float(t) for t, n in zip(first_facing, nearest) if np.isfinite(t) and t <= n]
+    return nearest, first_facing
 
 
 __all__ = ["doorway_gaps", "wall_doorway_gaps"]
