@@ -298,6 +298,35 @@ DOOR_UNITS_MIN_DOORS = 5
 DOOR_WIDTH_PLAUSIBLE = (0.5, 2.5)
 TYPICAL_DOOR_WIDTH = 0.9
 
+#: Doorway gaps in the wall lines tell the units of a plan that draws no
+#: door symbols (fewer than ``DOOR_UNITS_MIN_DOORS``), measured by
+#: :mod:`mapkit.importers.dxf.doorway_gaps` before the units are known, so
+#: as shares of the plan's extent: wall ends closer than
+#: ``GAP_UNITS_TOUCH_SHARE`` of it to another line touch it (no free end);
+#: ends farther apart than ``GAP_UNITS_REACH_SHARE`` of it are no doorway;
+#: a wall end runs into a wall standing within ``GAP_UNITS_FACING_DEG``
+#: degrees of square to it; its partner across a doorway is sought among
+#: its ``GAP_UNITS_NEIGHBOURS`` nearest wall ends. With at least
+#: ``GAP_UNITS_MIN_GAPS`` gaps whose median is no door's width
+#: (``DOOR_WIDTH_PLAUSIBLE``), the unit of the same system (metric or
+#: imperial) that puts it closest to ``TYPICAL_DOOR_WIDTH`` is taken
+#: (:func:`mapkit.importers.dxf.units.units_from_gaps`) if at least
+#: ``GAP_UNITS_AGREE_SHARE`` of the gaps are then a door's width and the
+#: plan comes closer to ``TYPICAL_EXTENT``. Gaps are a weaker sign than
+#: door symbols (a gallery's openings, a corridor's width, doorways of 0.7
+#: to 2 m): a unit only 3.3 times another (m, ft) is never told from them.
+#: On the corpus (docs/benchmarks/drawings.md) the right units give medians
+#: of 0.76 to 2.4 m (a hall's wide openings); the gallery drawn at a
+#: fraction of its size in metres 0.063 m, which no unit mends: its
+#: refusal names the --scale its doorways say
+#: (:func:`mapkit.importers.dxf.units.scale_from_gaps`).
+GAP_UNITS_TOUCH_SHARE = 1e-3
+GAP_UNITS_REACH_SHARE = 0.2
+GAP_UNITS_FACING_DEG = 30.0
+GAP_UNITS_NEIGHBOURS = 16
+GAP_UNITS_MIN_GAPS = 5
+GAP_UNITS_AGREE_SHARE = 0.5
+
 #: Double-line wall ends are capped only if both lines run within this many
 #: degrees of parallel and the cap is within this of square to them.
 WALL_CAP_ANGLE_DEG = 15.0

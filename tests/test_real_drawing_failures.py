@@ -320,8 +320,9 @@ def test_a_plan_too_small_for_free_space_names_the_units(tmp_path, capsys):
     only the wall layers and the robot radius; the refusal says what the
     plan measures as read and names the --units that makes it a building's
     size, and with that option it builds. (With its doors drawn, the
-    doors' widths say the units: tests/test_drawings_units.py; here they
-    are left out.)"""
+    doors' widths say the units: tests/test_drawings_units.py; without
+    them its doorway gaps: tests/test_drawings_gap_units.py; here the
+    header's unit is also given as --units, which neither overrules.)"""
     doc = ezdxf.readfile(FLAT)
     msp = doc.modelspace()
     for e in list(msp):
@@ -334,8 +335,8 @@ def test_a_plan_too_small_for_free_space_names_the_units(tmp_path, capsys):
             pass
     small = tmp_path / "small.dxf"
     doc.saveas(small)
-    code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap")
-    assert code == 2 and ("the walls span only 1.2 x 1.0 m as read in mm (its $INSUNITS 4 says mm): if it is "
+    code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap", "--units", "mm")
+    assert code == 2 and ("the walls span only 1.2 x 1.0 m as read in mm (--units mm): if it is "
                           "drawn in cm, give --units cm (then 12 x 10 m)") in err
     assert not (tmp_path / "small.lmap").exists()
     code, _, err = run(capsys, "build", small, "-o", tmp_path / "small.lmap", "--units", "cm", "-q")

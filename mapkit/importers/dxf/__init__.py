@@ -33,14 +33,16 @@ from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
 from mapkit.importers.dxf.openings import drawing_items
-from mapkit.importers.dxf.units import decide_units, units_from_doors
+from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
+from mapkit.importers.dxf.units import decide_units, units_from_doors, units_from_gaps
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.room_layers import door_lines_apart
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
 from mapkit.units import UNIT_METRES
-from mapkit.tolerances import CURVE_SAGITTA, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES, LOCAL_ORIGIN_BEYOND_M
+from mapkit.tolerances import (CURVE_SAGITTA, DOOR_UNITS_MIN_DOORS, DXF_FAR_FACTOR, DXF_FAR_MIN_ENTITIES,
+                               LOCAL_ORIGIN_BEYOND_M)
 
 SUFFIXES = (".dxf",)
 
@@ -222,20 +224,25 @@ def _flatten_in_units(msp, roles: dict, far: list, unit: str, factor: float, ext
                       note) -> tuple[str, float, list, list]:
     """:func:`_flatten` in the drawing's ``unit`` (``factor`` metres per
     drawing unit; ``extent`` the plan's, drawing units), read again in the
-    unit its doors say (:func:`.units.units_from_doors`) when the header's
-    or the guessed one makes them no door's width and the user gave
-    neither ``--units`` nor ``--scale``. Returns the unit, the factor and
-    the strokes."""
+    unit its doors say (:func:`.units.units_from_doors`), or in a plan
+    without door symbols the unit its doorway gaps say
+    (:func:`.units.units_from_gaps`), when the header's or the guessed one
+    makes them no door's width and the user gave neither ``--units`` nor
+    ``--scale``. Returns the unit, the factor and the strokes."""
     first_notes: list[str] = []
     strokes, swing_strokes = _flatten(msp, roles, far, factor, options, first_notes.append)
-    by_doors = None
+    told = None
     if options.units is None and float(options.scale) == 1.0:
-        by_doors = units_from_doors(door_widths(strokes, roles), unit, extent * factor)
-    if by_doors is None:
+        widths = door_widths(strokes, roles)
+        told = units_from_doors(widths, unit, extent * factor)
+        if len(widths) < DOOR_UNITS_MIN_DOORS:  # too few door symbols to tell: the gaps in its walls tell
+            walls = [s for s in strokes if roles.get(s.layer) == "walls"]
+            told = units_from_gaps(wall_doorway_gaps(walls), unit, extent * factor)
+    if told is None:
         for message in first_notes:
             note(message)
         return unit, factor, strokes, swing_strokes
-    unit, message = by_doors  # the header (or the guess) is wrong: read again in the doors' unit
+    unit, message = told  # the header (or the guess) is wrong: read again in the unit its doors or gaps say
     note(message)
     factor = UNIT_METRES[unit]
     return (unit, factor, *_flatten(msp, roles, far, factor, options, note))

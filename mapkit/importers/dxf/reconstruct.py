@@ -29,6 +29,7 @@ from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.closure import closed_footprint
+from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
@@ -104,7 +105,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         ignored=ignored,
         info=info,
     )
-    _refuse_if_empty(scene, interior_source, options)
+    _refuse_if_empty(scene, interior_source, options, drawing.role("walls"))
     return scene
 
 
@@ -133,9 +134,10 @@ def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOp
     return walls, filled_rooms
 
 
-def _refuse_if_empty(scene: Scene, interior_source: str, options: BuildOptions) -> None:
+def _refuse_if_empty(scene: Scene, interior_source: str, options: BuildOptions, wall_strokes: list) -> None:
     """Raise :class:`NoFreeSpaceError` (with ``scene``, for previews) when
-    the walls enclose no building or leave no free space, naming the fix."""
+    the walls enclose no building or leave no free space, naming the fix
+    (for a plan too small, the scale its ``wall_strokes``' doorway gaps say)."""
     info, walls, free = scene.info, scene.walls, scene.free_space
     x0, y0, x1, y1 = walls.bounds
     small = max(x1 - x0, y1 - y0) < SMALL_PLAN_M
@@ -149,7 +151,7 @@ def _refuse_if_empty(scene: Scene, interior_source: str, options: BuildOptions) 
     if free.is_empty:
         layers = ", ".join(f"'{n}'" for n in info.get("layers", {}).get("walls", [])) or "none"
         hint = ("; " + rescale_hint(x1 - x0, y1 - y0, info.get("units", "m"), info.get("insunits"), options.units,
-                                   options.scale) if small else "")
+                                   options.scale, wall_doorway_gaps(wall_strokes)) if small else "")
         raise NoFreeSpaceError(
             f"no free space left inside the walls (layers {layers}) after keeping {options.robot_radius:g} m "
             f"from them; check them with 'mapkit preview', choose wall layers with --walls or lower --robot-radius"

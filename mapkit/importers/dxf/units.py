@@ -9,10 +9,12 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from mapkit.errors import MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH,
-                               TYPICAL_EXTENT, ZERO)
+from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, GAP_UNITS_AGREE_SHARE, GAP_UNITS_MIN_GAPS,
+                               PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH, TYPICAL_EXTENT, ZERO)
 
 #: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
 #: astronomical or micro units no floor plan uses).
@@ -101,16 +103,75 @@ def units_from_doors(door_widths_m, unit: str, extent_m: float) -> tuple[str, st
                   f"{_fmt(extent_m * ratio(best))} across); pass --units to override")
 
 
+#: Units of each system a plan's doorway gaps may tell apart: each a
+#: factor of 10 (metric) or 12 (imperial) from the next, more than the
+#: spread of real doorways' widths.
+_GAP_UNITS = {"metric": ("mm", "cm", "dm", "m"), "imperial": ("in", "ft")}
+
+
+def units_from_gaps(gap_widths_m, unit: str, extent_m: float) -> tuple[str, str] | None:
+    """The unit the doorway gaps of a plan without door symbols say it is
+    in, when its stated or guessed ``unit`` makes them no door's width:
+    ``gap_widths_m`` the free widths of its doorways as read in ``unit``
+    (metres, :func:`.doorway_gaps.doorway_gaps`), ``extent_m`` its extent
+    as read. Returns ``(unit, warning)``, or None when the gaps agree with
+    ``unit``, are too few (``GAP_UNITS_MIN_GAPS``), or no unit of the same
+    system makes most of them a door's width (``GAP_UNITS_AGREE_SHARE``)
+    and the plan closer to a building's typical size."""
+    widths = np.asarray([w for w in gap_widths_m if w > 0], dtype=float)
+    if len(widths) < GAP_UNITS_MIN_GAPS:
+        return None
+    median = float(np.median(widths))
+    lo, hi = DOOR_WIDTH_PLAUSIBLE
+    if lo <= median <= hi:
+        return None
+    system = _GAP_UNITS["imperial" if unit in _IMPERIAL_UNITS else "metric"]
+
+    def ratio(u: str) -> float:
+        return UNIT_METRES[u] / UNIT_METRES[unit]
+
+    best = min(system, key=lambda u: abs(math.log10(median * ratio(u) / TYPICAL_DOOR_WIDTH)))
+    if best == unit or not lo <= median * ratio(best) <= hi or not _plausible(extent_m * ratio(best)):
+        return None
+    agree = float(np.mean((widths * ratio(best) >= lo) & (widths * ratio(best) <= hi)))
+    if agree < GAP_UNITS_AGREE_SHARE or _off_typical(extent_m * ratio(best)) >= _off_typical(extent_m):
+        return None
+    return best, (f"read in {unit}, the drawing draws no doors and its {len(widths)} doorways (gaps in its walls) are "
+                  f"a median {median:.3g} m wide, no door's width; read in {best} instead (doorways "
+                  f"{median * ratio(best):.2f} m, the plan {_fmt(extent_m * ratio(best))} across); pass --units to "
+                  f"override")
+
+
+def scale_from_gaps(gap_widths_m) -> tuple[int, float, float] | None:
+    """What the doorway gaps of a plan say of a scale no unit gives (a plan
+    drawn at a fraction of its size, one traced over a scan in pixels):
+    ``(count, median, scale)``, the scale that makes their median
+    ``TYPICAL_DOOR_WIDTH`` (two significant digits), from ``gap_widths_m``
+    (metres as read); None when they are too few (``GAP_UNITS_MIN_GAPS``)
+    or already a door's width. Only an estimate (real doorways are 0.7 to
+    2 m wide): named in a refusal, never applied."""
+    widths = np.asarray([w for w in gap_widths_m if w > 0], dtype=float)
+    if len(widths) < GAP_UNITS_MIN_GAPS:
+        return None
+    median = float(np.median(widths))
+    lo, hi = DOOR_WIDTH_PLAUSIBLE
+    if lo <= median <= hi:
+        return None
+    return len(widths), median, float(f"{TYPICAL_DOOR_WIDTH / median:.2g}")
+
+
 def rescale_hint(width_m: float, depth_m: float, unit: str, insunits: int | None, override: str | None,
-                 scale: float) -> str:
+                 scale: float, doorways=None) -> str:
     """What to pass for a plan read too small for a building (its walls span
     ``width_m`` x ``depth_m`` metres read in ``unit`` times ``scale``, the
     ``--scale``): the unit as read and where it came from (``override``, the
     ``--units``, or the ``insunits`` header code), then the ``--units`` of
     the same system (metric or imperial) that puts the plan closest to a
     typical building's size, or when none is closer than as read (a gallery
-    drawn at 1:10 in metres), the ``--scale`` by a power of ten that does.
-    One clause, e.g. "the walls span only 1.2 x 1.0 m as read in mm (its
+    drawn at 1:10 in metres), a ``--scale``: the one its ``doorways`` (the
+    widths of the gaps in its walls, metres as read) say, when they are
+    enough and no door's width (:func:`scale_from_gaps`), else a power of
+    ten. One clause, e.g. "the walls span only 1.2 x 1.0 m as read in mm (its
     $INSUNITS 4 says mm): if it is drawn in cm, give --units cm (then 12 x 10 m)".
     """
     if override:
@@ -121,19 +182,28 @@ def rescale_hint(width_m: float, depth_m: float, unit: str, insunits: int | None
         source = f"assumed from its extent, $INSUNITS {insunits or 0}"
     read = f"the walls span only {width_m:.1f} x {depth_m:.1f} m as read in {unit} ({source})"
     extent = max(width_m, depth_m, ZERO.distance)
-
-    def off_typical(metres: float) -> float:
-        return abs(math.log10(max(metres, ZERO.distance) / TYPICAL_EXTENT))
-
     system = _GUESSES_IMPERIAL if unit in _IMPERIAL_UNITS else _GUESSES
-    best = min(system, key=lambda u: off_typical(extent * UNIT_METRES[u] / UNIT_METRES[unit]))
+    best = min(system, key=lambda u: _off_typical(extent * UNIT_METRES[u] / UNIT_METRES[unit]))
     ratio = UNIT_METRES[best] / UNIT_METRES[unit]
-    if best != unit and _plausible(extent * ratio) and off_typical(extent * ratio) < off_typical(extent):
+    if best != unit and _plausible(extent * ratio) and _off_typical(extent * ratio) < _off_typical(extent):
         return (f"{read}: if it is drawn in {best}, give --units {best} "
                 f"(then {width_m * ratio:.0f} x {depth_m * ratio:.0f} m)")
+    by_gaps = scale_from_gaps(doorways if doorways is not None else [])
+    if by_gaps is not None and by_gaps[2] > 1 and _plausible(extent * by_gaps[2]):
+        # No unit makes it a building: the scale its doorways say (an
+        # estimate, so named rather than applied).
+        count, median, times = by_gaps
+        return (f"{read} and its {count} doorways (gaps in its walls) are a median {median:.2g} m wide: if they are "
+                f"doors about {TYPICAL_DOOR_WIDTH:g} m wide, give --scale {scale * times:.3g} "
+                f"(then {width_m * times:.0f} x {depth_m * times:.0f} m)")
     times = 10 ** max(1, round(math.log10(TYPICAL_EXTENT / extent)))
     return (f"{read}: if it is drawn at 1/{times} of its size, give --scale {scale * times:g} "
             f"(then {width_m * times:.0f} x {depth_m * times:.0f} m)")
+
+
+def _off_typical(metres: float) -> float:
+    """How far (log10) an extent of ``metres`` is from a typical building's."""
+    return abs(math.log10(max(metres, ZERO.distance) / TYPICAL_EXTENT))
 
 
 def _likely_units(extent: float, imperial: bool) -> str:
