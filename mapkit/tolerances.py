@@ -200,6 +200,14 @@ DOOR_SWING_TIP_SHARE = 0.15
 DOOR_SWING_MIN_CROSSING_DEG = 50.0
 DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 
+#: A drawing no layer of which is named like walls: the layer of unknown
+#: role holding at least this many door swings, in one unit only, is named
+#: in the refusal as where the floor plans are drawn
+#: (mapkit/importers/dxf/swing_layer.py): as many as tell a drawing's units
+#: by its doors (``DOOR_UNITS_MIN_DOORS``). The corpus's drawing sheet
+#: (ciq_building): 27 on its plans' layer, 2 on a section's.
+SWING_LAYER_MIN_SWINGS = 5
+
 #: A room's outline (mapkit/importers/dxf/room_outlines.py) that the walls
 #: cut into more than one part of at least this many square metres is
 #: sealed in part (smaller parts are slivers between the outline and a wall

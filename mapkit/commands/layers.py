@@ -21,6 +21,7 @@ def run(args) -> int:
 
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.errors import MapkitError, NoWallsError
+    from mapkit.importers.dxf import no_walls_with_hint
     from mapkit.importers.dxf.layers import layer_counts, resolve_roles, room_roles
     from mapkit.importers.dxf.read import read_dxf
     from mapkit.importers.dxf.layer_roles import assign_roles
@@ -47,7 +48,7 @@ def run(args) -> int:
     except NoWallsError as exc:
         # Listing the layers is how a user finds the wall layers: show them anyway.
         roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore)
-        warnings.append(str(exc))
+        warnings.append(str(no_walls_with_hint(exc, doc, counts, options)))
 
     rows = [
         {
