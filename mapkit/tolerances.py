@@ -176,6 +176,27 @@ SEGMENTS_WALL_FACE = 0.1
 #: (metres: a double door) are shut to find the rooms they enclose.
 SEGMENTS_CLOSE_GAP = 1.5
 
+#: Stairs drawn on a wall layer (mapkit/importers/dxf/stairs.py): a run of
+#: treads is at least ``STAIR_MIN_TREADS`` straight lines, each
+#: ``STAIR_TREAD_LENGTH`` metres long (a flight's width: a narrow service
+#: stair to a wide entrance flight), parallel, starting and ending level
+#: with each other within ``STAIR_TREAD_ALIGN`` metres, one after the other
+#: at one spacing (the going) in ``STAIR_GOING`` metres (building codes ask
+#: 0.22 to 0.35 m; outdoor steps reach 0.4 m), each spacing within
+#: ``STAIR_GOING_EVEN`` metres of the run's first. Lines at a regular
+#: spacing of their own are rare in a plan's walls otherwise: window
+#: frames lie 0.05 to 0.1 m apart, partitions a metre or more.
+STAIR_MIN_TREADS = 5
+STAIR_TREAD_LENGTH = (0.6, 3.0)
+STAIR_TREAD_ALIGN = 0.05
+STAIR_GOING = (0.2, 0.4)
+STAIR_GOING_EVEN = 0.02
+#: A part of the free space lies in a stair well (the room the walls, with
+#: door gaps and doorways shut, enclose around a run) when at least this
+#: share of its area is inside it: the rest is the margin it reaches into
+#: its door's gap. A part spreading through rooms is mostly outside.
+STAIR_WELL_SHARE = 0.5
+
 #: A plan whose building geometry lies wholly farther than this from the
 #: file's origin, metres, is georeferenced (facility-management drawings in
 #: a national grid, 1758 km out): it is moved to a local origin, the offset

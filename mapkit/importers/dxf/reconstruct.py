@@ -13,7 +13,9 @@
    window gaps are shut; for open plans a floor layer's extent, else the
    footprint closed from the walls, :mod:`.closure`) minus walls and
    obstacles, shrunk by the robot radius. A plan that none of these closes
-   is refused.
+   is refused. Stairs drawn on the wall layer are runs of treads, not
+   walls (:mod:`.stairs`): their extent is no floor, and a stair well's
+   space that only the stair leads to is not this storey's.
 """
 
 from __future__ import annotations
@@ -39,6 +41,8 @@ from mapkit.importers.dxf.openings import (cut_opening, door_openings, door_stro
 from mapkit.importers.dxf.reachable import describe_left_out, entered_parts
 from mapkit.importers.dxf.room_layers import door_line_opening, entered_spaces, room_faces
 from mapkit.importers.dxf.room_outlines import lines_splitting_rooms, room_outlines
+from mapkit.importers.dxf.stairs import (describe_runs, describe_stair_reached, find_stair_runs, stair_reached_parts,
+                                         stair_wells, tread_lines, without_stairs, without_treads)
 from mapkit.importers.dxf.strokes import PlanDrawing, Stroke
 from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
@@ -54,8 +58,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     warnings = info.setdefault("warnings", [])
     warn = partial(warn_decision, warnings)
 
-    # Jamb ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
-    wall_strokes, ticks = split_jamb_ticks(drawing.role("walls"))
+    # Stairs drawn on the wall layer are no walls (:mod:`.stairs`); jamb
+    # ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
+    stair_runs = find_stair_runs(drawing.role("walls"))
+    wall_strokes, ticks = split_jamb_ticks(without_treads(drawing.role("walls"), stair_runs))
     wall_result = build_walls(wall_strokes, options.max_wall_thickness)
     walls = wall_result.walls
     if walls.is_empty:
@@ -81,6 +87,9 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         if shafts:
             warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
                  f"{sum(p.area for p in shafts):.1f} m2")
+    if stair_runs:
+        free = _without_stairs(free, stair_runs, [walls, obstacles, *door_gaps, *bridges],
+                               door_gaps + _doorways(bridges, interior, obstacles) + door_items, options, warn, info)
     if interior_source == "enclosed" and door_gaps:
         free = _entered(free, door_gaps + _doorways(bridges, interior, obstacles) + door_items, options, warn, info)
 
@@ -96,6 +105,8 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         "interior": round(interior.area, 3),
     }
     ignored = {layer: _strokes_geometry(strokes) for layer, strokes in drawing.ignored.items()}
+    if stair_runs:
+        ignored["stairs (treads)"] = tread_lines(drawing.role("walls"), stair_runs)
     scene = Scene(
         walls=walls,
         openings=openings,
@@ -290,6 +301,24 @@ def _join_double_doors(cuts: list[Polygon], openings: list[Opening], door_gaps: 
             door_gaps[:] = [g for g in door_gaps if g is not b.footprint]
             door_gaps.append(both)
             joined.add(id(b))
+
+
+def _without_stairs(free: MultiPolygon, runs: list, barriers: list, entries: list, options: BuildOptions, warn,
+                    info: dict) -> MultiPolygon:
+    """The free space less the stair ``runs``' extents, and less the
+    spaces in a stair well that only the stair leads to from this storey
+    (:mod:`.stairs`; ``barriers``: walls, obstacles, door gaps and
+    doorways; ``entries``: door gaps, doorways and door drawings), warned;
+    ``info`` counts the runs (``stair_runs``) and the area left out
+    (``stair_left_out_m2``)."""
+    warn(describe_runs(runs))
+    info["stair_runs"] = len(runs)
+    free = without_stairs(free, runs, options.robot_radius)
+    free, left_out = stair_reached_parts(free, stair_wells(barriers, runs), entries, options.robot_radius)
+    if left_out:
+        warn(describe_stair_reached(left_out))
+        info["stair_left_out_m2"] = round(sum(p.area for p in left_out), 3)
+    return free
 
 
 def _without_shafts(free: MultiPolygon, rooms, door_gaps: list[Polygon], robot_radius: float):
