@@ -619,17 +619,19 @@ def _equal_list_components(leaves: Leaves) -> tuple[int, np.ndarray, np.ndarray]
 class _Agglomeration:
     """The greedy merge of :func:`merge_leaves` over regions 0..R-1: each
     region's ``area`` (m2), list ``bits`` (Python int bitsets) and their
-    ``count``, its neighbours ``nbrs`` (sets); ``parent`` says which region
-    each joined (itself while it stands), ``version`` how often it grew."""
+    ``count``; ``nbrs[n]`` maps each current neighbour x of n to the cost of
+    merging n and x (:meth:`entry`'s first member, kept at both ends);
+    ``parent`` says which region each joined (itself while it stands),
+    ``version`` how often it grew."""
 
     def __init__(self, area: list, bits: list, pair_ids: list):
         n = len(area)
         self.area, self.bits = area, bits
         self.count = [b.bit_count() for b in bits]
-        self.nbrs: list[set] = [set() for _ in range(n)]
+        self.nbrs: list[dict] = [{} for _ in range(n)]
         for a, b in pair_ids:
-            self.nbrs[a].add(b)
-            self.nbrs[b].add(a)
+            self.nbrs[a][b] = None  # costed by first_queue
+            self.nbrs[b][a] = None
         self.parent = list(range(n))
         self.version = [0] * n
 
@@ -640,37 +642,63 @@ class _Agglomeration:
         u = (bits[a] | bits[b]).bit_count()
         return (area[a] * (u - count[a]) + area[b] * (u - count[b]), a, b, version[a], version[b], owner)
 
+    def _entry_of(self, n: int, x: int, cost: float) -> tuple:
+        """The entry, owned by ``n``, of merging n with its neighbour x at ``cost``."""
+        version = self.version
+        if n < x:
+            return (cost, n, x, version[n], version[x], n)
+        return (cost, x, n, version[x], version[n], n)
+
     def cheapest(self, n: int):
-        """The entry of n's cheapest merge with a current neighbour, or None
-        (:meth:`entry` inlined: this is the hot loop)."""
-        bits, area, count, version = self.bits, self.area, self.count, self.version
-        bits_n, count_n, area_n, version_n = bits[n], count[n], area[n], version[n]
-        top = None
-        for x in self.nbrs[n]:
+        """The entry of n's cheapest merge with a current neighbour, or None,
+        from the costs kept in ``nbrs``.
+
+        Only the costs are compared, the entry made once at the end: among
+        n's own pairs, entries of equal cost are ordered by the pair, which
+        is the lower partner first whichever side of n it is on, so the
+        entry chosen is the least of all of them."""
+        best_c, best_x = math.inf, -1
+        for x, c in self.nbrs[n].items():
+            if c < best_c or (c == best_c and x < best_x):
+                best_c, best_x = c, x
+        return None if best_x < 0 else self._entry_of(n, best_x, best_c)
+
+    def rescore(self, n: int):
+        """Cost every pair of n anew (n's list or area changed), keep the
+        costs at both ends, and return :meth:`cheapest` of n (inlined: this
+        is the hot loop). Each cost is the sum :meth:`entry` makes, in its
+        order: the same float."""
+        bits, area, count, nbrs = self.bits, self.area, self.count, self.nbrs
+        bits_n, count_n, area_n, nbrs_n = bits[n], count[n], area[n], nbrs[n]
+        best_c, best_x = math.inf, -1
+        for x in nbrs_n:
             u = (bits_n | bits[x]).bit_count()
             if n < x:
-                e = (area_n * (u - count_n) + area[x] * (u - count[x]), n, x, version_n, version[x], n)
+                c = area_n * (u - count_n) + area[x] * (u - count[x])
             else:
-                e = (area[x] * (u - count[x]) + area_n * (u - count_n), x, n, version[x], version_n, n)
-            if top is None or e < top:
-                top = e
-        return top
+                c = area[x] * (u - count[x]) + area_n * (u - count_n)
+            nbrs_n[x] = c  # a value replaced, the keys unchanged: safe while iterating
+            nbrs[x][n] = c
+            if c < best_c or (c == best_c and x < best_x):
+                best_c, best_x = c, x
+        return None if best_x < 0 else self._entry_of(n, best_x, best_c)
 
     def first_queue(self, pair_ids: list) -> list:
-        """A heap holding every region's cheapest merge among ``pair_ids``."""
-        best: list = [None] * len(self.area)
+        """Cost every pair of ``pair_ids`` ((a, b), a < b, each once) into
+        ``nbrs``; a heap holding every region's cheapest merge among them."""
+        bits, area, count, nbrs = self.bits, self.area, self.count, self.nbrs
         for a, b in pair_ids:
-            e = self.entry(a, b, a)
-            if best[a] is None or e < best[a]:
-                best[a] = e
-            if best[b] is None or e[:5] < best[b][:5]:
-                best[b] = e[:5] + (b,)
-        heap = [e for e in best if e is not None]
+            u = (bits[a] | bits[b]).bit_count()
+            c = area[a] * (u - count[a]) + area[b] * (u - count[b])
+            nbrs[a][b] = c
+            nbrs[b][a] = c
+        heap = [e for e in map(self.cheapest, range(len(area))) if e is not None]
         heapq.heapify(heap)
         return heap
 
     def join(self, a: int, b: int) -> None:
-        """Region b joins region a: lists united, areas added, neighbours moved."""
+        """Region b joins region a: lists united, areas added, neighbours
+        moved. The costs of a's pairs are left stale: :meth:`rescore` a next."""
         bits, nbrs = self.bits, self.nbrs
         self.parent[b] = a
         bits[a] |= bits[b]
@@ -678,13 +706,14 @@ class _Agglomeration:
         bits[b] = 0  # b's list lives on in a's
         self.area[a] += self.area[b]
         self.version[a] += 1
+        nbrs_a = nbrs[a]
         for x in nbrs[b]:
-            nbrs[x].discard(b)
+            del nbrs[x][b]
             if x != a:
-                nbrs[x].add(a)
-                nbrs[a].add(x)
-        nbrs[a].discard(b)
-        nbrs[b] = set()
+                nbrs[x][a] = None
+                nbrs_a[x] = None
+        nbrs_a.pop(b, None)
+        nbrs[b] = {}
 
     def run(self, heap: list, budget: float) -> None:
         """Merge the cheapest current pair first until the summed cost would
@@ -697,7 +726,9 @@ class _Agglomeration:
         first current entry popped is the cheapest current pair, ties broken
         by (a, b, versions), as if every pair were queued. When an outdated
         entry's owner is still as it was (its partner changed), the owner's
-        cheapest merge is queued anew; it cannot come before the popped one."""
+        cheapest merge is queued anew; it cannot come before the popped one.
+        Only a join changes costs, those of the joined region's pairs, which
+        are costed anew at once: every kept cost is current."""
         parent, version = self.parent, self.version
         spent = 0.0
         while heap and budget > 0:
@@ -713,7 +744,7 @@ class _Agglomeration:
                 break
             spent += c
             self.join(a, b)
-            e = self.cheapest(a)
+            e = self.rescore(a)
             if e is not None:
                 heapq.heappush(heap, e)
 

@@ -1,12 +1,14 @@
 """The region stage's faster forms compute what their plain forms compute,
 bit for bit: sample pairing, leaf-pair deduplication, the sweep's grouped
-sort, and the quadtree's covers test asked only where the centre is inside."""
+sort, the quadtree's covers test asked only where the centre is inside, and
+the merge's queue built from kept costs."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+import pytest
 import shapely
 
 from mapkit.vir import RegionSettings, build_regions, unique_pairs
@@ -141,3 +143,45 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
         assert shapely.to_wkb(p) == shapely.to_wkb(q)
     for a, b in zip(fast.lists, plain.lists):
         assert a.tolist() == b.tolist()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_merge_queue_from_kept_costs_is_the_plain_greedy(seed):
+    """The agglomeration with costs kept per pair and entries made once per
+    region merges as the plain greedy that costs every current pair anew,
+    on a graph with many equal costs (ties go to the lower pair)."""
+    from mapkit.vir import _Agglomeration
+
+    rng = np.random.default_rng(seed)
+    n = 120
+    area = rng.integers(1, 3, n).astype(float).tolist()
+    bits = [int(b) for b in rng.integers(0, 2**6, n)]
+    links = {tuple(sorted(map(int, rng.choice(n, 2, replace=False)))) for _ in range(300)}
+    links |= {(k, k + 1) for k in range(n - 1)}
+    pair_ids = sorted(links)
+    merge = _Agglomeration(list(area), list(bits), pair_ids)
+    budget = 0.3 * sum(a * b.bit_count() for a, b in zip(area, bits))
+    merge.run(merge.first_queue(pair_ids), budget)
+    group, got_bits = merge.groups()
+
+    lists, count, label = list(bits), [b.bit_count() for b in bits], list(range(n))
+
+    def cost(a, b):
+        u = (lists[a] | lists[b]).bit_count()
+        return area[a] * (u - count[a]) + area[b] * (u - count[b])
+
+    current, spent = set(links), 0.0
+    while current:
+        a, b = min(current, key=lambda p: (cost(*p), p))
+        if spent + cost(a, b) > budget:
+            break
+        spent += cost(a, b)
+        lists[a] |= lists[b]
+        count[a], area[a] = lists[a].bit_count(), area[a] + area[b]
+        label = [a if x == b else x for x in label]
+        current = {tuple(sorted((a if x == b else x, a if y == b else y))) for x, y in current}
+        current = {p for p in current if p[0] != p[1]}
+    reps, want = np.unique(np.array(label), return_inverse=True)
+    assert len(reps) < n // 2
+    assert np.array_equal(group, want.ravel())
+    assert got_bits == [lists[r] for r in reps]
