@@ -321,14 +321,23 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
 
 
 def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray,
-           workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
+           workers: int = 1, known: np.ndarray | None = None, centres: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``(hit, centre_in)`` (P,) bool each: whether ``grown[ps]`` meets cell
     box ``boxes[pc]``, and whether it holds the cell's centre ``(cx, cy)[pc]``
     in its interior. A region holding the centre meets the cell; that point
     test costs a quarter of the box test and settles most pairs (GEOS's
-    predicates are exact, so the answers are those of the box test alone)."""
-    centre_in = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
-    hit = centre_in.copy()
+    predicates are exact, so the answers are those of the box test alone).
+
+    ``known`` (P,) bool marks pairs already known to meet (a corner of the
+    box in the region's interior: :func:`_parent_centre_is_corner`); they
+    are asked nothing more, except the centre test if ``centres`` (without
+    it, ``centre_in`` is False where ``known``: the caller needs only ``hit``)."""
+    if known is None:
+        known = np.zeros(len(ps), dtype=bool)
+    ask = np.nonzero(~known)[0] if not centres else np.arange(len(ps))
+    centre_in = np.zeros(len(ps), dtype=bool)
+    centre_in[ask] = _pairwise(shapely.contains_xy, grown, ps[ask], pc[ask], cx, cy, workers=workers)
+    hit = centre_in | known
     rest = np.nonzero(~hit)[0]
     hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes, workers=workers)
     return hit, centre_in
@@ -355,13 +364,32 @@ class _Level:
     """One level of the quadtree while it is built: its cells ``ix``, ``iy``
     (C,) and their node ids ``node`` (C,); the still-undecided (cell,
     segment) pairs ``pc``, ``ps`` (P,) int32 (cell index into this level,
-    segment id)."""
+    segment id), and ``pin`` (P,) bool, whether the pair's region holds the
+    centre of the cell's parent in its interior (False at the root)."""
 
     ix: np.ndarray
     iy: np.ndarray
     node: np.ndarray
     pc: np.ndarray
     ps: np.ndarray
+    pin: np.ndarray
+
+
+def _parent_centre_is_corner(ix: np.ndarray, iy: np.ndarray, origin: np.ndarray, s: float) -> np.ndarray:
+    """(C,) bool: whether the centre of each cell's parent, as the parent's
+    level computed it, is a corner of the cell's box, as this level builds
+    it, bit for bit. Mathematically it always is (the parent's centre is
+    the corner its four children share); in floats the two sums may round
+    apart, and where they do the corner is not taken for the centre.
+
+    A region holding that point in its interior then meets the cell: the
+    pair needs no test (GEOS's predicates are exact on the coordinates, so
+    the box test would say the same)."""
+    parent = 2.0 * s  # exact: a power of two apart
+    px = (origin[0] + (ix // 2) * parent) + parent / 2
+    py = (origin[1] + (iy // 2) * parent) + parent / 2
+    bx, by = origin[0] + ix * s, origin[1] + iy * s
+    return ((px == bx) | (px == bx + s)) & ((py == by) | (py == by + s))
 
 
 def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last: bool, workers: int):
@@ -378,9 +406,12 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
     keep = shapely.intersects(free, boxes)
     remap = (np.cumsum(keep) - 1).astype(np.int32)
     alive = keep[cells.pc]
-    pc, ps = remap[cells.pc[alive]], cells.ps[alive]
+    pc, ps, pin = remap[cells.pc[alive]], cells.ps[alive], cells.pin[alive]
     ix, iy, node, boxes = cells.ix[keep], cells.iy[keep], cells.node[keep], boxes[keep]
-    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
+    # Pairs whose region held the parent's centre meet the cell (that point
+    # is one of its corners); at the last level they are asked nothing.
+    known = pin & _parent_centre_is_corner(ix, iy, origin, s)[pc]
+    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers, known, not last)
     pc, ps, centre_in = pc[hit], ps[hit], centre_in[hit]
     if last:  # smallest cells keep every segment that may be seen
         full = np.ones(len(pc), dtype=bool)
@@ -393,10 +424,10 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
         inside = np.nonzero(centre_in)[0]
         full[inside] = _pairwise(shapely.covers, grown, ps[inside], pc[inside], boxes, workers=workers)
     decided = (node[pc[full]].astype(np.int32), ps[full].astype(np.int32))
-    pc, ps = pc[~full], ps[~full]
+    pc, ps, centre_in = pc[~full], ps[~full], centre_in[~full]
     open_count = np.bincount(pc, minlength=len(ix))
     done = open_count == 0 if not last else np.ones(len(ix), dtype=bool)
-    return _Level(ix, iy, node, pc, ps), decided, done
+    return _Level(ix, iy, node, pc, ps, centre_in), decided, done
 
 
 def _split_cells(cells: _Level, done: np.ndarray, n_nodes: int) -> tuple[_Level, np.ndarray]:
@@ -415,7 +446,8 @@ def _split_cells(cells: _Level, done: np.ndarray, n_nodes: int) -> tuple[_Level,
     base = (child_of[cells.pc] * 4).astype(np.int32)
     pc = (base[:, None] + np.arange(4, dtype=np.int32)).ravel()
     ps = np.repeat(cells.ps, 4)
-    return _Level(ix, iy, node, pc, ps), parents
+    pin = np.repeat(cells.pin, 4)  # the parent's centre test, for each child
+    return _Level(ix, iy, node, pc, ps, pin), parents
 
 
 def _node_lists(dec_node: list, dec_seg: list, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -439,9 +471,10 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     (S may be listed) then ``covers`` (S is listed for every child too; asked
     only where S's region holds the cell's centre, and not at the finest
     level, which lists whatever meets it).
-    Children test only their parent's undecided segments; what a cell is
-    covered by is stored once, at that cell (:class:`Leaves`). The pair tests
-    run in ``workers`` threads.
+    Children test only their parent's undecided segments; a child whose
+    segment's region held the parent's centre (a corner of the child) meets
+    it without a test. What a cell is covered by is stored once, at that
+    cell (:class:`Leaves`). The pair tests run in ``workers`` threads.
     """
     from tqdm import tqdm
 
@@ -452,7 +485,7 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     tree = shapely.STRtree(grown)
     ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int32)
     cells = _Level(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64),
-                   np.zeros(len(ps), dtype=np.int32), ps)
+                   np.zeros(len(ps), dtype=np.int32), ps, np.zeros(len(ps), dtype=bool))
     del ps
     parents = [np.full(1, -1, dtype=np.int64)]
     n_nodes = 1

@@ -1,7 +1,8 @@
 """The region stage's faster forms compute what their plain forms compute,
 bit for bit: sample pairing, leaf-pair deduplication, the sweep's grouped
-sort, the quadtree's covers test asked only where the centre is inside, and
-the merge's queue built from kept costs."""
+sort, the quadtree's covers test asked only where the centre is inside, the
+quadtree's pairs taken as met where the parent's centre was inside, and the
+merge's queue built from kept costs."""
 
 from __future__ import annotations
 
@@ -136,6 +137,8 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
 
     monkeypatch.setattr(vir, "_pairwise", every_pair)
     monkeypatch.setattr(vir, "_meets", meets_all_inside)
+    # centre_in is the parent's centre test for the children too: the plain form asks them everything
+    monkeypatch.setattr(vir, "_parent_centre_is_corner", lambda ix, *args: np.zeros(len(ix), dtype=bool))
     plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
     assert sum(asked) > 0
     assert len(fast.polygons) == len(plain.polygons)
@@ -143,6 +146,47 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
         assert shapely.to_wkb(p) == shapely.to_wkb(q)
     for a, b in zip(fast.lists, plain.lists):
         assert a.tolist() == b.tolist()
+
+
+def test_quadtree_takes_pairs_as_met_where_the_parent_centre_is_inside(monkeypatch):
+    """Children whose pair's region held the parent's centre (their shared
+    corner) are asked nothing at the last level and no box test above it;
+    asking them everything gives the same partition."""
+    import mapkit.vir as vir
+
+    scene = two_rooms()
+    settings = RegionSettings(eps=0.05)
+    known = []
+    real_meets = vir._meets
+
+    def counting(*args, **kwargs):
+        known.append(int(np.count_nonzero(args[7])) if len(args) > 7 else 0)
+        return real_meets(*args, **kwargs)
+
+    monkeypatch.setattr(vir, "_meets", counting)
+    fast = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
+    assert sum(known) > 0
+    monkeypatch.setattr(vir, "_parent_centre_is_corner", lambda ix, *args: np.zeros(len(ix), dtype=bool))
+    plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
+    assert len(fast.polygons) == len(plain.polygons)
+    for p, q in zip(fast.polygons, plain.polygons):
+        assert shapely.to_wkb(p) == shapely.to_wkb(q)
+    for a, b in zip(fast.lists, plain.lists):
+        assert a.tolist() == b.tolist()
+
+
+def test_parent_centre_is_a_corner_of_every_child_where_the_floats_agree():
+    from mapkit.vir import _parent_centre_is_corner
+
+    origin, s = np.array([-3.7, 12.1]), 0.1 * 2.0**3
+    ix, iy = np.meshgrid(np.arange(64), np.arange(64))
+    ix, iy = ix.ravel(), iy.ravel()
+    shared = _parent_centre_is_corner(ix, iy, origin, s)
+    assert shared.mean() > 0.5  # most sums round alike
+    px = (origin[0] + (ix // 2) * (2 * s)) + s
+    bx = origin[0] + ix * s
+    corner_x = np.where(ix % 2 == 0, bx + s, bx)  # left children share their right side
+    assert not (shared & (px != corner_x)).any()
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
