@@ -321,23 +321,33 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
 
 
 def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray,
-           workers: int = 1, known: np.ndarray | None = None, centres: bool = True) -> tuple[np.ndarray, np.ndarray]:
+           workers: int = 1, corner: tuple | None = None, centres: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``(hit, centre_in)`` (P,) bool each: whether ``grown[ps]`` meets cell
     box ``boxes[pc]``, and whether it holds the cell's centre ``(cx, cy)[pc]``
     in its interior. A region holding the centre meets the cell; that point
     test costs a quarter of the box test and settles most pairs (GEOS's
     predicates are exact, so the answers are those of the box test alone).
 
-    ``known`` (P,) bool marks pairs already known to meet (a corner of the
-    box in the region's interior: :func:`_parent_centre_is_corner`); they
-    are asked nothing more, except the centre test if ``centres`` (without
-    it, ``centre_in`` is False where ``known``: the caller needs only ``hit``)."""
-    if known is None:
-        known = np.zeros(len(ps), dtype=bool)
-    ask = np.nonzero(~known)[0] if not centres else np.arange(len(ps))
-    centre_in = np.zeros(len(ps), dtype=bool)
+    ``corner`` is None or ``(pin, qx, qy, shared)`` (:func:`_parent_corner`):
+    ``pin`` (P,) whether the pair's region held the parent cell's centre in
+    its interior, ``(qx, qy)`` (C,) each cell's box corner at that centre,
+    ``shared`` (C,) whether the two are the same point bit for bit. A box
+    corner in the region's interior makes the pair meet, so pairs with
+    ``pin`` where ``shared`` are asked nothing, and where not, the corner
+    before the box. Without ``centres`` the caller needs only ``hit``: the
+    centre is then not asked of pairs with ``pin`` (the corner, next to the
+    point their region held, is the likelier hit), and ``centre_in`` is
+    False for them."""
+    n = len(ps)
+    pin, qx, qy, shared = corner if corner is not None else (np.zeros(n, dtype=bool), None, None, None)
+    known = pin & shared[pc] if corner is not None else pin
+    ask = np.arange(n) if centres else np.nonzero(~pin)[0]
+    centre_in = np.zeros(n, dtype=bool)
     centre_in[ask] = _pairwise(shapely.contains_xy, grown, ps[ask], pc[ask], cx, cy, workers=workers)
     hit = centre_in | known
+    near = np.nonzero(~hit & pin)[0]
+    if len(near):
+        hit[near] = _pairwise(shapely.contains_xy, grown, ps[near], pc[near], qx, qy, workers=workers)
     rest = np.nonzero(~hit)[0]
     hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes, workers=workers)
     return hit, centre_in
@@ -375,21 +385,20 @@ class _Level:
     pin: np.ndarray
 
 
-def _parent_centre_is_corner(ix: np.ndarray, iy: np.ndarray, origin: np.ndarray, s: float) -> np.ndarray:
-    """(C,) bool: whether the centre of each cell's parent, as the parent's
-    level computed it, is a corner of the cell's box, as this level builds
-    it, bit for bit. Mathematically it always is (the parent's centre is
-    the corner its four children share); in floats the two sums may round
-    apart, and where they do the corner is not taken for the centre.
-
-    A region holding that point in its interior then meets the cell: the
-    pair needs no test (GEOS's predicates are exact on the coordinates, so
-    the box test would say the same)."""
+def _parent_corner(ix: np.ndarray, iy: np.ndarray, origin: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(qx, qy, shared)`` (C,) each: the corner of each cell's box (as
+    this level builds it) at the centre of its parent (as the parent's level
+    computed it), and whether the two are the same point bit for bit.
+    Mathematically they always are (the parent's centre is the corner its
+    four children share); in floats the sums giving them may round apart."""
     parent = 2.0 * s  # exact: a power of two apart
     px = (origin[0] + (ix // 2) * parent) + parent / 2
     py = (origin[1] + (iy // 2) * parent) + parent / 2
     bx, by = origin[0] + ix * s, origin[1] + iy * s
-    return ((px == bx) | (px == bx + s)) & ((py == by) | (py == by + s))
+    # Even children lie left of (below) the parent's centre: their right (top) side.
+    qx = np.where(ix % 2 == 0, bx + s, bx)
+    qy = np.where(iy % 2 == 0, by + s, by)
+    return qx, qy, (px == qx) & (py == qy)
 
 
 def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last: bool, workers: int):
@@ -408,10 +417,11 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
     alive = keep[cells.pc]
     pc, ps, pin = remap[cells.pc[alive]], cells.ps[alive], cells.pin[alive]
     ix, iy, node, boxes = cells.ix[keep], cells.iy[keep], cells.node[keep], boxes[keep]
-    # Pairs whose region held the parent's centre meet the cell (that point
-    # is one of its corners); at the last level they are asked nothing.
-    known = pin & _parent_centre_is_corner(ix, iy, origin, s)[pc]
-    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers, known, not last)
+    # Pairs whose region held the parent's centre meet the cell where that
+    # point is one of its corners, and most likely where it is a float away.
+    corner = _parent_corner(ix, iy, origin, s)
+    corner = None if corner is None else (pin, *corner)  # None: the tests' plain form
+    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers, corner, not last)
     pc, ps, centre_in = pc[hit], ps[hit], centre_in[hit]
     if last:  # smallest cells keep every segment that may be seen
         full = np.ones(len(pc), dtype=bool)

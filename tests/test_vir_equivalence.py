@@ -138,7 +138,7 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
     monkeypatch.setattr(vir, "_pairwise", every_pair)
     monkeypatch.setattr(vir, "_meets", meets_all_inside)
     # centre_in is the parent's centre test for the children too: the plain form asks them everything
-    monkeypatch.setattr(vir, "_parent_centre_is_corner", lambda ix, *args: np.zeros(len(ix), dtype=bool))
+    monkeypatch.setattr(vir, "_parent_corner", lambda *args: None)
     plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
     assert sum(asked) > 0
     assert len(fast.polygons) == len(plain.polygons)
@@ -150,23 +150,28 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
 
 def test_quadtree_takes_pairs_as_met_where_the_parent_centre_is_inside(monkeypatch):
     """Children whose pair's region held the parent's centre (their shared
-    corner) are asked nothing at the last level and no box test above it;
-    asking them everything gives the same partition."""
+    corner) are asked nothing where that point is their box's corner bit for
+    bit, and their corner before the box where it is not; asking them
+    everything gives the same partition."""
     import mapkit.vir as vir
 
     scene = two_rooms()
     settings = RegionSettings(eps=0.05)
-    known = []
+    pins = []
     real_meets = vir._meets
 
     def counting(*args, **kwargs):
-        known.append(int(np.count_nonzero(args[7])) if len(args) > 7 else 0)
+        corner = args[7] if len(args) > 7 else None
+        if corner is not None:
+            pin, _, _, shared = corner
+            pc = args[2]
+            pins.append((int(np.count_nonzero(pin & shared[pc])), int(np.count_nonzero(pin & ~shared[pc]))))
         return real_meets(*args, **kwargs)
 
     monkeypatch.setattr(vir, "_meets", counting)
     fast = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
-    assert sum(known) > 0
-    monkeypatch.setattr(vir, "_parent_centre_is_corner", lambda ix, *args: np.zeros(len(ix), dtype=bool))
+    assert sum(p[0] for p in pins) > 0 and sum(p[1] for p in pins) > 0  # both kinds occur
+    monkeypatch.setattr(vir, "_parent_corner", lambda *args: None)
     plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
     assert len(fast.polygons) == len(plain.polygons)
     for p, q in zip(fast.polygons, plain.polygons):
@@ -175,18 +180,20 @@ def test_quadtree_takes_pairs_as_met_where_the_parent_centre_is_inside(monkeypat
         assert a.tolist() == b.tolist()
 
 
-def test_parent_centre_is_a_corner_of_every_child_where_the_floats_agree():
-    from mapkit.vir import _parent_centre_is_corner
+def test_parent_corner_is_a_corner_of_the_child_box():
+    from mapkit.vir import _parent_corner
 
     origin, s = np.array([-3.7, 12.1]), 0.1 * 2.0**3
     ix, iy = np.meshgrid(np.arange(64), np.arange(64))
     ix, iy = ix.ravel(), iy.ravel()
-    shared = _parent_centre_is_corner(ix, iy, origin, s)
-    assert shared.mean() > 0.5  # most sums round alike
+    qx, qy, shared = _parent_corner(ix, iy, origin, s)
+    bx, by = origin[0] + ix * s, origin[1] + iy * s
+    assert ((qx == bx) | (qx == bx + s)).all() and ((qy == by) | (qy == by + s)).all()
     px = (origin[0] + (ix // 2) * (2 * s)) + s
-    bx = origin[0] + ix * s
-    corner_x = np.where(ix % 2 == 0, bx + s, bx)  # left children share their right side
-    assert not (shared & (px != corner_x)).any()
+    py = (origin[1] + (iy // 2) * (2 * s)) + s
+    assert (shared == ((px == qx) & (py == qy))).all()
+    assert 0 < shared.mean() < 1  # both kinds here
+    assert np.abs(qx - px).max() < 1e-12 and np.abs(qy - py).max() < 1e-12
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
