@@ -320,13 +320,14 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
     return map_owned(lambda rows: test(gi[rows], bi[rows]), gi, len(geoms), workers)
 
 
-def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray,
-           workers: int = 1, corner: tuple | None = None, centres: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, centre: tuple, workers: int = 1,
+           corner: tuple | None = None, need_centre: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``(hit, centre_in)`` (P,) bool each: whether ``grown[ps]`` meets cell
-    box ``boxes[pc]``, and whether it holds the cell's centre ``(cx, cy)[pc]``
-    in its interior. A region holding the centre meets the cell; that point
-    test costs a quarter of the box test and settles most pairs (GEOS's
-    predicates are exact, so the answers are those of the box test alone).
+    box ``boxes[pc]``, and whether it holds the cell's centre ``centre =
+    (cx, cy)`` ((C,) each) in its interior. A region holding the centre
+    meets the cell; that point test costs a quarter of the box test and
+    settles most pairs (GEOS's predicates are exact, so the answers are
+    those of the box test alone).
 
     ``corner`` is None or ``(pin, qx, qy, shared)`` (:func:`_parent_corner`):
     ``pin`` (P,) whether the pair's region held the parent cell's centre in
@@ -334,16 +335,16 @@ def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray,
     ``shared`` (C,) whether the two are the same point bit for bit. A box
     corner in the region's interior makes the pair meet, so pairs with
     ``pin`` where ``shared`` are asked nothing, and where not, the corner
-    before the box. Without ``centres`` the caller needs only ``hit``: the
+    before the box. Without ``need_centre`` the caller needs only ``hit``: the
     centre is then not asked of pairs with ``pin`` (the corner, next to the
     point their region held, is the likelier hit), and ``centre_in`` is
     False for them."""
     n = len(ps)
     pin, qx, qy, shared = corner if corner is not None else (np.zeros(n, dtype=bool), None, None, None)
     known = pin & shared[pc] if corner is not None else pin
-    ask = np.arange(n) if centres else np.nonzero(~pin)[0]
+    ask = np.arange(n) if need_centre else np.nonzero(~pin)[0]
     centre_in = np.zeros(n, dtype=bool)
-    centre_in[ask] = _pairwise(shapely.contains_xy, grown, ps[ask], pc[ask], cx, cy, workers=workers)
+    centre_in[ask] = _pairwise(shapely.contains_xy, grown, ps[ask], pc[ask], *centre, workers=workers)
     hit = centre_in | known
     near = np.nonzero(~hit & pin)[0]
     if len(near):
@@ -421,7 +422,7 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
     # point is one of its corners, and most likely where it is a float away.
     corner = _parent_corner(ix, iy, origin, s)
     corner = None if corner is None else (pin, *corner)  # None: the tests' plain form
-    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers, corner, not last)
+    hit, centre_in = _meets(grown, ps, pc, boxes, (bx[keep] + s / 2, by[keep] + s / 2), workers, corner, not last)
     pc, ps, centre_in = pc[hit], ps[hit], centre_in[hit]
     if last:  # smallest cells keep every segment that may be seen
         full = np.ones(len(pc), dtype=bool)

@@ -161,7 +161,7 @@ def test_quadtree_takes_pairs_as_met_where_the_parent_centre_is_inside(monkeypat
     real_meets = vir._meets
 
     def counting(*args, **kwargs):
-        corner = args[7] if len(args) > 7 else None
+        corner = args[6] if len(args) > 6 else None
         if corner is not None:
             pin, _, _, shared = corner
             pc = args[2]
