@@ -320,15 +320,35 @@ def _pairwise(predicate, geoms: np.ndarray, gi: np.ndarray, bi: np.ndarray, *cel
     return map_owned(lambda rows: test(gi[rows], bi[rows]), gi, len(geoms), workers)
 
 
-def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, cx: np.ndarray, cy: np.ndarray,
-           workers: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def _meets(grown: np.ndarray, ps: np.ndarray, pc: np.ndarray, boxes: np.ndarray, centre: tuple, workers: int = 1,
+           corner: tuple | None = None, need_centre: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``(hit, centre_in)`` (P,) bool each: whether ``grown[ps]`` meets cell
-    box ``boxes[pc]``, and whether it holds the cell's centre ``(cx, cy)[pc]``
-    in its interior. A region holding the centre meets the cell; that point
-    test costs a quarter of the box test and settles most pairs (GEOS's
-    predicates are exact, so the answers are those of the box test alone)."""
-    centre_in = _pairwise(shapely.contains_xy, grown, ps, pc, cx, cy, workers=workers)
-    hit = centre_in.copy()
+    box ``boxes[pc]``, and whether it holds the cell's centre ``centre =
+    (cx, cy)`` ((C,) each) in its interior. A region holding the centre
+    meets the cell; that point test costs a quarter of the box test and
+    settles most pairs (GEOS's predicates are exact, so the answers are
+    those of the box test alone).
+
+    ``corner`` is None or ``(pin, qx, qy, shared)`` (:func:`_parent_corner`):
+    ``pin`` (P,) whether the pair's region held the parent cell's centre in
+    its interior, ``(qx, qy)`` (C,) each cell's box corner at that centre,
+    ``shared`` (C,) whether the two are the same point bit for bit. A box
+    corner in the region's interior makes the pair meet, so pairs with
+    ``pin`` where ``shared`` are asked nothing, and where not, the corner
+    before the box. Without ``need_centre`` the caller needs only ``hit``: the
+    centre is then not asked of pairs with ``pin`` (the corner, next to the
+    point their region held, is the likelier hit), and ``centre_in`` is
+    False for them."""
+    n = len(ps)
+    pin, qx, qy, shared = corner if corner is not None else (np.zeros(n, dtype=bool), None, None, None)
+    known = pin & shared[pc] if corner is not None else pin
+    ask = np.arange(n) if need_centre else np.nonzero(~pin)[0]
+    centre_in = np.zeros(n, dtype=bool)
+    centre_in[ask] = _pairwise(shapely.contains_xy, grown, ps[ask], pc[ask], *centre, workers=workers)
+    hit = centre_in | known
+    near = np.nonzero(~hit & pin)[0]
+    if len(near):
+        hit[near] = _pairwise(shapely.contains_xy, grown, ps[near], pc[near], qx, qy, workers=workers)
     rest = np.nonzero(~hit)[0]
     hit[rest] = _pairwise(shapely.intersects, grown, ps[rest], pc[rest], boxes, workers=workers)
     return hit, centre_in
@@ -355,13 +375,31 @@ class _Level:
     """One level of the quadtree while it is built: its cells ``ix``, ``iy``
     (C,) and their node ids ``node`` (C,); the still-undecided (cell,
     segment) pairs ``pc``, ``ps`` (P,) int32 (cell index into this level,
-    segment id)."""
+    segment id), and ``pin`` (P,) bool, whether the pair's region holds the
+    centre of the cell's parent in its interior (False at the root)."""
 
     ix: np.ndarray
     iy: np.ndarray
     node: np.ndarray
     pc: np.ndarray
     ps: np.ndarray
+    pin: np.ndarray
+
+
+def _parent_corner(ix: np.ndarray, iy: np.ndarray, origin: np.ndarray, s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(qx, qy, shared)`` (C,) each: the corner of each cell's box (as
+    this level builds it) at the centre of its parent (as the parent's level
+    computed it), and whether the two are the same point bit for bit.
+    Mathematically they always are (the parent's centre is the corner its
+    four children share); in floats the sums giving them may round apart."""
+    parent = 2.0 * s  # exact: a power of two apart
+    px = (origin[0] + (ix // 2) * parent) + parent / 2
+    py = (origin[1] + (iy // 2) * parent) + parent / 2
+    bx, by = origin[0] + ix * s, origin[1] + iy * s
+    # Even children lie left of (below) the parent's centre: their right (top) side.
+    qx = np.where(ix % 2 == 0, bx + s, bx)
+    qy = np.where(iy % 2 == 0, by + s, by)
+    return qx, qy, (px == qx) & (py == qy)
 
 
 def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last: bool, workers: int):
@@ -378,9 +416,13 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
     keep = shapely.intersects(free, boxes)
     remap = (np.cumsum(keep) - 1).astype(np.int32)
     alive = keep[cells.pc]
-    pc, ps = remap[cells.pc[alive]], cells.ps[alive]
+    pc, ps, pin = remap[cells.pc[alive]], cells.ps[alive], cells.pin[alive]
     ix, iy, node, boxes = cells.ix[keep], cells.iy[keep], cells.node[keep], boxes[keep]
-    hit, centre_in = _meets(grown, ps, pc, boxes, bx[keep] + s / 2, by[keep] + s / 2, workers)
+    # Pairs whose region held the parent's centre meet the cell where that
+    # point is one of its corners, and most likely where it is a float away.
+    corner = _parent_corner(ix, iy, origin, s)
+    corner = None if corner is None else (pin, *corner)  # None: the tests' plain form
+    hit, centre_in = _meets(grown, ps, pc, boxes, (bx[keep] + s / 2, by[keep] + s / 2), workers, corner, not last)
     pc, ps, centre_in = pc[hit], ps[hit], centre_in[hit]
     if last:  # smallest cells keep every segment that may be seen
         full = np.ones(len(pc), dtype=bool)
@@ -393,10 +435,10 @@ def _decide_level(cells: _Level, grown: np.ndarray, free, boxes_at: tuple, last:
         inside = np.nonzero(centre_in)[0]
         full[inside] = _pairwise(shapely.covers, grown, ps[inside], pc[inside], boxes, workers=workers)
     decided = (node[pc[full]].astype(np.int32), ps[full].astype(np.int32))
-    pc, ps = pc[~full], ps[~full]
+    pc, ps, centre_in = pc[~full], ps[~full], centre_in[~full]
     open_count = np.bincount(pc, minlength=len(ix))
     done = open_count == 0 if not last else np.ones(len(ix), dtype=bool)
-    return _Level(ix, iy, node, pc, ps), decided, done
+    return _Level(ix, iy, node, pc, ps, centre_in), decided, done
 
 
 def _split_cells(cells: _Level, done: np.ndarray, n_nodes: int) -> tuple[_Level, np.ndarray]:
@@ -415,7 +457,8 @@ def _split_cells(cells: _Level, done: np.ndarray, n_nodes: int) -> tuple[_Level,
     base = (child_of[cells.pc] * 4).astype(np.int32)
     pc = (base[:, None] + np.arange(4, dtype=np.int32)).ravel()
     ps = np.repeat(cells.ps, 4)
-    return _Level(ix, iy, node, pc, ps), parents
+    pin = np.repeat(cells.pin, 4)  # the parent's centre test, for each child
+    return _Level(ix, iy, node, pc, ps, pin), parents
 
 
 def _node_lists(dec_node: list, dec_seg: list, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -439,9 +482,10 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     (S may be listed) then ``covers`` (S is listed for every child too; asked
     only where S's region holds the cell's centre, and not at the finest
     level, which lists whatever meets it).
-    Children test only their parent's undecided segments; what a cell is
-    covered by is stored once, at that cell (:class:`Leaves`). The pair tests
-    run in ``workers`` threads.
+    Children test only their parent's undecided segments; a child whose
+    segment's region held the parent's centre (a corner of the child) meets
+    it without a test. What a cell is covered by is stored once, at that
+    cell (:class:`Leaves`). The pair tests run in ``workers`` threads.
     """
     from tqdm import tqdm
 
@@ -452,7 +496,7 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     tree = shapely.STRtree(grown)
     ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int32)
     cells = _Level(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64),
-                   np.zeros(len(ps), dtype=np.int32), ps)
+                   np.zeros(len(ps), dtype=np.int32), ps, np.zeros(len(ps), dtype=bool))
     del ps
     parents = [np.full(1, -1, dtype=np.int64)]
     n_nodes = 1
@@ -619,17 +663,19 @@ def _equal_list_components(leaves: Leaves) -> tuple[int, np.ndarray, np.ndarray]
 class _Agglomeration:
     """The greedy merge of :func:`merge_leaves` over regions 0..R-1: each
     region's ``area`` (m2), list ``bits`` (Python int bitsets) and their
-    ``count``, its neighbours ``nbrs`` (sets); ``parent`` says which region
-    each joined (itself while it stands), ``version`` how often it grew."""
+    ``count``; ``nbrs[n]`` maps each current neighbour x of n to the cost of
+    merging n and x (:meth:`entry`'s first member, kept at both ends);
+    ``parent`` says which region each joined (itself while it stands),
+    ``version`` how often it grew."""
 
     def __init__(self, area: list, bits: list, pair_ids: list):
         n = len(area)
         self.area, self.bits = area, bits
         self.count = [b.bit_count() for b in bits]
-        self.nbrs: list[set] = [set() for _ in range(n)]
+        self.nbrs: list[dict] = [{} for _ in range(n)]
         for a, b in pair_ids:
-            self.nbrs[a].add(b)
-            self.nbrs[b].add(a)
+            self.nbrs[a][b] = None  # costed by first_queue
+            self.nbrs[b][a] = None
         self.parent = list(range(n))
         self.version = [0] * n
 
@@ -640,37 +686,63 @@ class _Agglomeration:
         u = (bits[a] | bits[b]).bit_count()
         return (area[a] * (u - count[a]) + area[b] * (u - count[b]), a, b, version[a], version[b], owner)
 
+    def _entry_of(self, n: int, x: int, cost: float) -> tuple:
+        """The entry, owned by ``n``, of merging n with its neighbour x at ``cost``."""
+        version = self.version
+        if n < x:
+            return (cost, n, x, version[n], version[x], n)
+        return (cost, x, n, version[x], version[n], n)
+
     def cheapest(self, n: int):
-        """The entry of n's cheapest merge with a current neighbour, or None
-        (:meth:`entry` inlined: this is the hot loop)."""
-        bits, area, count, version = self.bits, self.area, self.count, self.version
-        bits_n, count_n, area_n, version_n = bits[n], count[n], area[n], version[n]
-        top = None
-        for x in self.nbrs[n]:
+        """The entry of n's cheapest merge with a current neighbour, or None,
+        from the costs kept in ``nbrs``.
+
+        Only the costs are compared, the entry made once at the end: among
+        n's own pairs, entries of equal cost are ordered by the pair, which
+        is the lower partner first whichever side of n it is on, so the
+        entry chosen is the least of all of them."""
+        best_c, best_x = math.inf, -1
+        for x, c in self.nbrs[n].items():
+            if c < best_c or (c == best_c and x < best_x):
+                best_c, best_x = c, x
+        return None if best_x < 0 else self._entry_of(n, best_x, best_c)
+
+    def rescore(self, n: int):
+        """Cost every pair of n anew (n's list or area changed), keep the
+        costs at both ends, and return :meth:`cheapest` of n (inlined: this
+        is the hot loop). Each cost is the sum :meth:`entry` makes, in its
+        order: the same float."""
+        bits, area, count, nbrs = self.bits, self.area, self.count, self.nbrs
+        bits_n, count_n, area_n, nbrs_n = bits[n], count[n], area[n], nbrs[n]
+        best_c, best_x = math.inf, -1
+        for x in nbrs_n:
             u = (bits_n | bits[x]).bit_count()
             if n < x:
-                e = (area_n * (u - count_n) + area[x] * (u - count[x]), n, x, version_n, version[x], n)
+                c = area_n * (u - count_n) + area[x] * (u - count[x])
             else:
-                e = (area[x] * (u - count[x]) + area_n * (u - count_n), x, n, version[x], version_n, n)
-            if top is None or e < top:
-                top = e
-        return top
+                c = area[x] * (u - count[x]) + area_n * (u - count_n)
+            nbrs_n[x] = c  # a value replaced, the keys unchanged: safe while iterating
+            nbrs[x][n] = c
+            if c < best_c or (c == best_c and x < best_x):
+                best_c, best_x = c, x
+        return None if best_x < 0 else self._entry_of(n, best_x, best_c)
 
     def first_queue(self, pair_ids: list) -> list:
-        """A heap holding every region's cheapest merge among ``pair_ids``."""
-        best: list = [None] * len(self.area)
+        """Cost every pair of ``pair_ids`` ((a, b), a < b, each once) into
+        ``nbrs``; a heap holding every region's cheapest merge among them."""
+        bits, area, count, nbrs = self.bits, self.area, self.count, self.nbrs
         for a, b in pair_ids:
-            e = self.entry(a, b, a)
-            if best[a] is None or e < best[a]:
-                best[a] = e
-            if best[b] is None or e[:5] < best[b][:5]:
-                best[b] = e[:5] + (b,)
-        heap = [e for e in best if e is not None]
+            u = (bits[a] | bits[b]).bit_count()
+            c = area[a] * (u - count[a]) + area[b] * (u - count[b])
+            nbrs[a][b] = c
+            nbrs[b][a] = c
+        heap = [e for e in map(self.cheapest, range(len(area))) if e is not None]
         heapq.heapify(heap)
         return heap
 
     def join(self, a: int, b: int) -> None:
-        """Region b joins region a: lists united, areas added, neighbours moved."""
+        """Region b joins region a: lists united, areas added, neighbours
+        moved. The costs of a's pairs are left stale: :meth:`rescore` a next."""
         bits, nbrs = self.bits, self.nbrs
         self.parent[b] = a
         bits[a] |= bits[b]
@@ -678,13 +750,14 @@ class _Agglomeration:
         bits[b] = 0  # b's list lives on in a's
         self.area[a] += self.area[b]
         self.version[a] += 1
+        nbrs_a = nbrs[a]
         for x in nbrs[b]:
-            nbrs[x].discard(b)
+            del nbrs[x][b]
             if x != a:
-                nbrs[x].add(a)
-                nbrs[a].add(x)
-        nbrs[a].discard(b)
-        nbrs[b] = set()
+                nbrs[x][a] = None
+                nbrs_a[x] = None
+        nbrs_a.pop(b, None)
+        nbrs[b] = {}
 
     def run(self, heap: list, budget: float) -> None:
         """Merge the cheapest current pair first until the summed cost would
@@ -697,7 +770,9 @@ class _Agglomeration:
         first current entry popped is the cheapest current pair, ties broken
         by (a, b, versions), as if every pair were queued. When an outdated
         entry's owner is still as it was (its partner changed), the owner's
-        cheapest merge is queued anew; it cannot come before the popped one."""
+        cheapest merge is queued anew; it cannot come before the popped one.
+        Only a join changes costs, those of the joined region's pairs, which
+        are costed anew at once: every kept cost is current."""
         parent, version = self.parent, self.version
         spent = 0.0
         while heap and budget > 0:
@@ -713,7 +788,7 @@ class _Agglomeration:
                 break
             spent += c
             self.join(a, b)
-            e = self.cheapest(a)
+            e = self.rescore(a)
             if e is not None:
                 heapq.heappush(heap, e)
 

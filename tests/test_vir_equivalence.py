@@ -1,12 +1,15 @@
 """The region stage's faster forms compute what their plain forms compute,
 bit for bit: sample pairing, leaf-pair deduplication, the sweep's grouped
-sort, and the quadtree's covers test asked only where the centre is inside."""
+sort, the quadtree's covers test asked only where the centre is inside, the
+quadtree's pairs taken as met where the parent's centre was inside, and the
+merge's queue built from kept costs."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
+import pytest
 import shapely
 
 from mapkit.vir import RegionSettings, build_regions, unique_pairs
@@ -134,6 +137,8 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
 
     monkeypatch.setattr(vir, "_pairwise", every_pair)
     monkeypatch.setattr(vir, "_meets", meets_all_inside)
+    # centre_in is the parent's centre test for the children too: the plain form asks them everything
+    monkeypatch.setattr(vir, "_parent_corner", lambda *args: None)
     plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
     assert sum(asked) > 0
     assert len(fast.polygons) == len(plain.polygons)
@@ -141,3 +146,93 @@ def test_quadtree_asks_covers_only_where_the_centre_is_inside(monkeypatch):
         assert shapely.to_wkb(p) == shapely.to_wkb(q)
     for a, b in zip(fast.lists, plain.lists):
         assert a.tolist() == b.tolist()
+
+
+def test_quadtree_takes_pairs_as_met_where_the_parent_centre_is_inside(monkeypatch):
+    """Children whose pair's region held the parent's centre (their shared
+    corner) are asked nothing where that point is their box's corner bit for
+    bit, and their corner before the box where it is not; asking them
+    everything gives the same partition."""
+    import mapkit.vir as vir
+
+    scene = two_rooms()
+    settings = RegionSettings(eps=0.05)
+    pins = []
+    real_meets = vir._meets
+
+    def counting(*args, **kwargs):
+        corner = args[6] if len(args) > 6 else None
+        if corner is not None:
+            pin, _, _, shared = corner
+            pc = args[2]
+            pins.append((int(np.count_nonzero(pin & shared[pc])), int(np.count_nonzero(pin & ~shared[pc]))))
+        return real_meets(*args, **kwargs)
+
+    monkeypatch.setattr(vir, "_meets", counting)
+    fast = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
+    assert sum(p[0] for p in pins) > 0 and sum(p[1] for p in pins) > 0  # both kinds occur
+    monkeypatch.setattr(vir, "_parent_corner", lambda *args: None)
+    plain = build_regions(scene.segments, scene.walls, scene.free_space, CAMERA, settings)
+    assert len(fast.polygons) == len(plain.polygons)
+    for p, q in zip(fast.polygons, plain.polygons):
+        assert shapely.to_wkb(p) == shapely.to_wkb(q)
+    for a, b in zip(fast.lists, plain.lists):
+        assert a.tolist() == b.tolist()
+
+
+def test_parent_corner_is_a_corner_of_the_child_box():
+    from mapkit.vir import _parent_corner
+
+    origin, s = np.array([-3.7, 12.1]), 0.1 * 2.0**3
+    ix, iy = np.meshgrid(np.arange(64), np.arange(64))
+    ix, iy = ix.ravel(), iy.ravel()
+    qx, qy, shared = _parent_corner(ix, iy, origin, s)
+    bx, by = origin[0] + ix * s, origin[1] + iy * s
+    assert ((qx == bx) | (qx == bx + s)).all() and ((qy == by) | (qy == by + s)).all()
+    px = (origin[0] + (ix // 2) * (2 * s)) + s
+    py = (origin[1] + (iy // 2) * (2 * s)) + s
+    assert (shared == ((px == qx) & (py == qy))).all()
+    assert 0 < shared.mean() < 1  # both kinds here
+    assert np.abs(qx - px).max() < 1e-12 and np.abs(qy - py).max() < 1e-12
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_merge_queue_from_kept_costs_is_the_plain_greedy(seed):
+    """The agglomeration with costs kept per pair and entries made once per
+    region merges as the plain greedy that costs every current pair anew,
+    on a graph with many equal costs (ties go to the lower pair)."""
+    from mapkit.vir import _Agglomeration
+
+    rng = np.random.default_rng(seed)
+    n = 120
+    area = rng.integers(1, 3, n).astype(float).tolist()
+    bits = [int(b) for b in rng.integers(0, 2**6, n)]
+    links = {tuple(sorted(map(int, rng.choice(n, 2, replace=False)))) for _ in range(300)}
+    links |= {(k, k + 1) for k in range(n - 1)}
+    pair_ids = sorted(links)
+    merge = _Agglomeration(list(area), list(bits), pair_ids)
+    budget = 0.3 * sum(a * b.bit_count() for a, b in zip(area, bits))
+    merge.run(merge.first_queue(pair_ids), budget)
+    group, got_bits = merge.groups()
+
+    lists, count, label = list(bits), [b.bit_count() for b in bits], list(range(n))
+
+    def cost(a, b):
+        u = (lists[a] | lists[b]).bit_count()
+        return area[a] * (u - count[a]) + area[b] * (u - count[b])
+
+    current, spent = set(links), 0.0
+    while current:
+        a, b = min(current, key=lambda p: (cost(*p), p))
+        if spent + cost(a, b) > budget:
+            break
+        spent += cost(a, b)
+        lists[a] |= lists[b]
+        count[a], area[a] = lists[a].bit_count(), area[a] + area[b]
+        label = [a if x == b else x for x in label]
+        current = {tuple(sorted((a if x == b else x, a if y == b else y))) for x, y in current}
+        current = {p for p in current if p[0] != p[1]}
+    reps, want = np.unique(np.array(label), return_inverse=True)
+    assert len(reps) < n // 2
+    assert np.array_equal(group, want.ravel())
+    assert got_bits == [lists[r] for r in reps]
