@@ -43,7 +43,6 @@ from mapkit.tolerances import (
     VIR_EPS_SLACK,
     VIR_LIST_CHUNK,
     VIR_MAX_DEPTH,
-    VIR_MERGE_GROWTH,
     VIR_MIN_CELL,
     VIR_PAIR_CHUNK,
     VIR_QUAD_SEGS,
