@@ -240,6 +240,14 @@ CUT_MIN_REACH = 0.3
 #: door when their union fills at least this share of its rotated bounding
 #: box (in line, one wall; two doors meeting at a corner fill about half).
 DOUBLE_DOOR_SQUARENESS = 0.95
+#: A door swing over an unbroken wall (mapkit/importers/dxf/closed_leaf.py)
+#: opens the wall where its leaf closes when the wall crosses the whole
+#: doorway: each of this many probes across it, evenly spaced between the
+#: jambs, meets wall. The closed leaf's direction snaps to the wall edges
+#: within this many degrees of it (the two leaves of a double door drawn
+#: meeting tip to tip close a few degrees off the wall; ciq_building: 13).
+SWING_CUT_PROBES = 5
+WALL_DIRECTION_SNAP_DEG = 15.0
 
 #: A stroke on a door layer whose bounding box's diagonal is longer than
 #: this, metres, is not part of a door drawing (a leaf, its swing and the

@@ -28,6 +28,7 @@ from shapely.ops import unary_union
 from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
+from mapkit.importers.dxf.closed_leaf import closed_leaf_opening
 from mapkit.importers.dxf.closure import closed_footprint
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.enclosure import end_bridges, passable
@@ -217,6 +218,8 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
                 openings.append(Opening(gap, "door", 0.0, options.door_height))
                 continue
             cut = cut_opening(item, walls, options.max_wall_thickness)
+            if cut is None:  # a swing over a wall left unbroken under it: opened where its leaf closes
+                cut = closed_leaf_opening(item, walls, options.max_wall_thickness)
             # A plan drawn one layer per room: a door line is a door where it meets walls at both ends.
             gap = cut if cut is not None or not drawing.role("rooms") else door_line_opening(item, walls)
             if gap is None or _claimed(gap, door_gaps + window_gaps):

@@ -1,0 +1,147 @@
+"""Doors of a house plan drawn over the walls they open: the corpus's
+ciq_building, plan #1 (``--walls DETAILS --units mm``).
+
+Its door swings are drawn over walls left unbroken under them: a facade's
+outer face drawn straight across a bay's French doors, a frame drawn as a
+closed rectangle across a 0.1 m wall (the door hinged in a room's corner,
+its leaf beside the wall there), the main entrance on a diagonal wall of
+four parallel lines (its leaf opened flat along the wall beside it). Each
+sealed the rooms it leads into; a swing's closed leaf now says where its
+opening is (:mod:`mapkit.importers.dxf.closed_leaf`). The drawings are small
+DXF files written here with ezdxf, in metres, everything on one layer.
+"""
+
+from __future__ import annotations
+
+import math
+
+import ezdxf
+import numpy as np
+from shapely.geometry import Point
+
+from mapkit.importers import load_scene
+from mapkit.options import BuildOptions
+from mapkit.shapes import polygon_parts
+
+LAYER = "WALLS"
+
+
+def _write(path, polylines: list, lines: list, arcs: list, turn_deg: float = 0.0):
+    """A DXF in metres on ``LAYER``: closed ``polylines`` (point lists),
+    ``lines`` ((a, b) pairs) and ``arcs`` ((centre, radius, start, end)),
+    all turned by ``turn_deg`` about the origin."""
+    c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+
+    def turn(p):
+        return (c * p[0] - s * p[1], s * p[0] + c * p[1])
+
+    doc = ezdxf.new("R2013", setup=False)
+    doc.header["$INSUNITS"] = 6
+    doc.layers.add(LAYER)
+    msp = doc.modelspace()
+    at = {"layer": LAYER}
+    for pts in polylines:
+        msp.add_lwpolyline([turn(p) for p in pts], close=True, dxfattribs=at)
+    for a, b in lines:
+        msp.add_line(turn(a), turn(b), dxfattribs=at)
+    for centre, radius, start, end in arcs:
+        msp.add_arc(turn(centre), radius, start + turn_deg, end + turn_deg, dxfattribs=at)
+    doc.saveas(path)
+    return path
+
+
+def _box(x0, y0, x1, y1):
+    return [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+
+
+def _scene(path):
+    return load_scene(path, BuildOptions(walls=[LAYER]))
+
+
+def _turned(p, turn_deg: float) -> Point:
+    c, s = math.cos(math.radians(turn_deg)), math.sin(math.radians(turn_deg))
+    return Point(c * p[0] - s * p[1], s * p[0] + c * p[1])
+
+
+def test_french_doors_across_a_facade_line_open_onto_the_bay(tmp_path):
+    """A room 6 x 4 m whose bottom wall is a double line (y 0.05 to 0.15)
+    with a 0.9 m gap, its outer face (y 0) drawn straight across the gap;
+    below it a bay whose slanted sides start beside the jambs. The French
+    doors' leaves swing out across the face line into the bay: before, the
+    line sealed the bay off (two parts, no door found; the bay's side by a
+    leaf was taken for the wall the door is in)."""
+    lines = [((-0.15, 0), (6.15, 0)), ((0, 0.05), (2.55, 0.05)), ((3.45, 0.05), (6, 0.05)),
+             ((0, 0.15), (2.55, 0.15)), ((3.45, 0.15), (6, 0.15)),
+             ((2.5, 0), (2, -0.5)), ((2, -0.5), (2, -1.2)), ((2, -1.2), (4, -1.2)), ((4, -1.2), (4, -0.5)),
+             ((4, -0.5), (3.5, 0)),
+             ((2.55, 0.15), (2.55, -0.31)), ((3.45, 0.15), (3.45, -0.31))]
+    # The room's other walls: a double line 0.15 m thick, meeting the bottom wall's lines.
+    lines += _open_outline([(-0.15, 0), (-0.15, 4.3), (6.15, 4.3), (6.15, 0)])
+    lines += _open_outline([(0, 0.05), (0, 4.15), (6, 4.15), (6, 0.05)])
+    # The leaves 0.46 m, their arcs meeting tip to tip at the middle, 12 degrees short of the wall.
+    tip = math.degrees(math.acos(0.45 / 0.46))
+    arcs = [((2.55, 0.15), 0.46, 270, 360 - tip), ((3.45, 0.15), 0.46, 180 + tip, 270)]
+    path = _write(tmp_path / "bay.dxf", [], lines, arcs)
+    scene = _scene(path)
+    parts = polygon_parts(scene.free_space)
+    assert scene.info["counts"]["doors"] == 1
+    assert len(parts) == 1
+    assert parts[0].contains(Point(3.0, -0.7))  # the bay, through the doors
+    assert parts[0].contains(Point(3.0, 2.0))
+
+
+def _open_outline(pts):
+    return [(a, b) for a, b in zip(pts[:-1], pts[1:])]
+
+
+def _two_rooms(band: list[float], door_lines: list, door_arcs: list, stub: list):
+    """Two rooms 4 x 3 m, one below y 0 and one above the wall between them,
+    whose lines (at each y of ``band``) run unbroken from wall to wall; the
+    outer walls a double line 0.2 m thick; ``stub``: a short wall's closed
+    outline beside the door; the door's ``door_lines`` and ``door_arcs``."""
+    top = band[-1] + 3.0
+    polylines = [_box(-0.2, -3.2, 4.2, top + 0.2), _box(0, -3, 4, top), stub]
+    lines = [((0, y), (4, y)) for y in band] + door_lines
+    return polylines, lines, door_arcs
+
+
+def test_a_swing_over_a_frame_rectangle_in_a_rooms_corner_opens_it(tmp_path):
+    """A 0.1 m wall between two rooms, its doorway closed by the frame (the
+    wall's two lines run across it); the door hinged on the wall's centre
+    line in the corner a short wall makes, its open leaf 5 cm beside that
+    wall. Before, the short wall beside the leaf was taken for the wall the
+    door is in: no opening, the rooms apart."""
+    stub = _box(0.8, 0.1, 1.0, 1.5)
+    polylines, lines, arcs = _two_rooms([0.0, 0.1], [((1.05, 0.05), (1.05, 0.85))], [((1.05, 0.05), 0.8, 0, 90)],
+                                        stub)
+    scene = _scene(_write(tmp_path / "frame.dxf", polylines, lines, arcs))
+    parts = polygon_parts(scene.free_space)
+    assert scene.info["counts"]["doors"] == 1
+    assert len(parts) == 1
+    assert parts[0].contains(Point(2.0, -1.5)) and parts[0].contains(Point(2.0, 1.5))
+
+
+def test_an_entrance_on_a_diagonal_wall_of_parallel_lines_opens_it(tmp_path):
+    """The ciq main entrance: a wall 0.2 m thick drawn as four parallel
+    lines unbroken across the doorway, at 45 degrees, the door 1 m wide
+    hinged inside the wall, its leaf opened flat along the short wall beside
+    it. Before, that short wall was taken for the wall the door is in."""
+    stub = _box(0.8, -1.6, 1.0, 0.0)
+    band = [0.0, 0.05, 0.15, 0.2]
+    polylines, lines, arcs = _two_rooms(band, [((1.05, 0.1), (1.05, -0.9))], [((1.05, 0.1), 1.0, 270, 360)], stub)
+    scene = _scene(_write(tmp_path / "entrance.dxf", polylines, lines, arcs, turn_deg=45.0))
+    parts = polygon_parts(scene.free_space)
+    assert scene.info["counts"]["doors"] == 1
+    assert len(parts) == 1
+    assert parts[0].contains(_turned((2.5, -1.5), 45.0)) and parts[0].contains(_turned((2.5, 1.5), 45.0))
+
+
+def test_a_swing_beside_a_wall_cuts_nothing(tmp_path):
+    """A door drawn in a room, its closed leaf 0.3 m off the wall (a
+    cupboard's door, not a doorway): the wall stays whole, the room one."""
+    polylines, lines, arcs = _two_rooms([0.0, 0.1], [((1.05, 0.4), (1.05, 1.2))], [((1.05, 0.4), 0.8, 0, 90)],
+                                        _box(0.8, 0.1, 1.0, 1.5))
+    scene = _scene(_write(tmp_path / "beside.dxf", polylines, lines, arcs))
+    assert scene.info["counts"]["doors"] == 0
+    assert not any(p.contains(Point(2.0, -1.5)) and p.contains(Point(2.0, 1.5))
+                   for p in polygon_parts(scene.free_space))
