@@ -145,3 +145,23 @@ def test_a_swing_beside_a_wall_cuts_nothing(tmp_path):
     assert scene.info["counts"]["doors"] == 0
     assert not any(p.contains(Point(2.0, -1.5)) and p.contains(Point(2.0, 1.5))
                    for p in polygon_parts(scene.free_space))
+
+
+def test_a_wc_door_opens_where_its_leaf_closes_not_beside_the_bowl(tmp_path):
+    """A WC 1 x 2 m off a hall, the wall between 0.1 m thick, its WC face
+    drawn straight across the doorway; the door hinged at the doorway's top,
+    its leaf open along the WC's top wall, its arc passing by the bowl.
+    Before, the gap between the doorway's jamb and the bowl was taken for
+    the door's: the WC stayed a sliver of free space of its own."""
+    lines = [((0, -2), (0, -0.75)), ((0, -0.75), (0.1, -0.75)), ((0.1, -2), (0.1, 0)),  # the wall, its doorway
+             ((0, 0), (1.1, 0)), ((0, 0.1), (1.1, 0.1)), ((0, 0), (0, 0.1)),  # the WC's top wall
+             ((0.05, -0.075), (0.725, -0.075))]  # the leaf
+    lines += _open_outline([(-3, -2), (1.1, -2), (1.1, 1), (-3, 1), (-3, -2)])
+    lines += _open_outline([(-3.2, -2.2), (1.3, -2.2), (1.3, 1.2), (-3.2, 1.2), (-3.2, -2.2)])
+    polylines = [_box(0.6, -0.95, 1.05, -0.45)]  # the bowl
+    arcs = [((0.05, -0.075), 0.675, 270, 360)]
+    scene = _scene(_write(tmp_path / "wc.dxf", polylines, lines, arcs))
+    parts = polygon_parts(scene.free_space)
+    assert scene.info["counts"]["doors"] == 1
+    assert len(parts) == 1
+    assert parts[0].contains(Point(0.35, -1.5)) and parts[0].contains(Point(-1.5, 0))

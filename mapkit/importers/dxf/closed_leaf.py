@@ -68,6 +68,18 @@ def closed_leaf_opening(item: MultiLineString, walls, max_wall_thickness: float)
     return _rectangle(axis, normal, t0, t1, s0, s1)
 
 
+def walled_swing_doorway(item: MultiLineString, gap: Polygon, walls, max_wall_thickness: float) -> Polygon | None:
+    """The opening where the swing ``item`` closes (:func:`closed_leaf_opening`)
+    when a wall crosses it there and ``gap``, the wall gap found for the
+    drawing, lies mostly elsewhere: a gap between a jamb and the fixture
+    beside the swing (a WC's bowl) is not the door's, its doorway is where
+    the leaf closes, across the line drawn there. None otherwise."""
+    walled = closed_leaf_opening(item, walls, max_wall_thickness)
+    if walled is None or walled.intersection(gap).area >= 0.5 * min(walled.area, gap.area):
+        return None
+    return walled
+
+
 def _closed_leaf(item: MultiLineString) -> tuple[np.ndarray, np.ndarray] | None:
     """``(hinge, latch)`` of a swing drawing: one arc (a polyline of at least
     three points on a circle of a door's radius) and one straight leaf from
@@ -144,4 +156,4 @@ def _rectangle(axis: np.ndarray, normal: np.ndarray, t0: float, t1: float, s0: f
     return Polygon([axis * t0 + normal * s0, axis * t1 + normal * s0, axis * t1 + normal * s1, axis * t0 + normal * s1])
 
 
-__all__ = ["closed_leaf_opening"]
+__all__ = ["closed_leaf_opening", "walled_swing_doorway"]

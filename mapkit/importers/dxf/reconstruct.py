@@ -28,7 +28,7 @@ from shapely.ops import unary_union
 from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
-from mapkit.importers.dxf.closed_leaf import closed_leaf_opening
+from mapkit.importers.dxf.closed_leaf import closed_leaf_opening, walled_swing_doorway
 from mapkit.importers.dxf.closure import closed_footprint
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.enclosure import end_bridges, passable
@@ -210,6 +210,10 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     cuts = []
     pockets = []
     for item, gap in door_openings(door_items, barriers, options.max_wall_thickness):
+        walled = walled_swing_doorway(item, gap, walls, options.max_wall_thickness) if gap is not None else None
+        if walled is not None:  # the gap found beside a swing is not where its leaf closes: a wall is
+            gap = walled
+            cuts.append(walled)
         if gap is None:
             gap = pocket_opening(item, walls, options.max_wall_thickness)
             if gap is not None and not _claimed(gap, door_gaps + window_gaps):
