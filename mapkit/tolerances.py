@@ -249,6 +249,23 @@ DOUBLE_DOOR_SQUARENESS = 0.95
 SWING_CUT_PROBES = 5
 WALL_DIRECTION_SNAP_DEG = 15.0
 
+#: Cross marks (mapkit/importers/dxf/cross_marks.py): the X across a box
+#: that marks a lift or a shaft is two straight lines, each of strokes at
+#: least ``CROSS_MARK_MIN_ARM`` metres long (one, or two in line with a gap
+#: of at most ``CROSS_MARK_MAX_GAP`` metres at the crossing: ciq_building's
+#: lift, 0.4 m), crossing at ``CROSS_MARK_MIN_ANGLE_DEG`` or more, each
+#: within ``CROSS_MARK_MIDDLE_SHARE`` of its half length of its middle (a
+#: box's diagonals cross at their middles; one stopping short where a door
+#: swings, a little off it: 44 %), the shorter line at least
+#: ``CROSS_MARK_LENGTH_RATIO`` of the longer (a box's diagonals are equal;
+#: the one stopping short at a door, 0.88 of the other; a wall line crossed
+#: by a chamfer, 0.3).
+CROSS_MARK_LENGTH_RATIO = 0.75
+CROSS_MARK_MIN_ARM = 0.3
+CROSS_MARK_MAX_GAP = 0.5
+CROSS_MARK_MIN_ANGLE_DEG = 30.0
+CROSS_MARK_MIDDLE_SHARE = 0.5
+
 #: A stroke on a door layer whose bounding box's diagonal is longer than
 #: this, metres, is not part of a door drawing (a leaf, its swing and the
 #: jambs of the widest door, ``MAX_DOOR_WIDTH``, fit in a box under 4 m

@@ -17,7 +17,7 @@ import math
 
 import ezdxf
 import numpy as np
-from shapely.geometry import Point
+from shapely.geometry import Point, Polygon
 
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
@@ -165,3 +165,42 @@ def test_a_wc_door_opens_where_its_leaf_closes_not_beside_the_bowl(tmp_path):
     assert scene.info["counts"]["doors"] == 1
     assert len(parts) == 1
     assert parts[0].contains(Point(0.35, -1.5)) and parts[0].contains(Point(-1.5, 0))
+
+
+def _hall_with_box(box_lines: list):
+    """A plan 6 x 4 m (double-line outer walls): a room 2 m wide off a hall,
+    its door a swing in the single-line wall between them; in the hall's
+    corner, against the outer walls, ``box_lines`` (single lines)."""
+    lines = [((2, 0), (2, 1)), ((2, 1.9), (2, 4)), ((2, 1), (2.9, 1))] + list(box_lines)  # the wall, the door's leaf
+    return [_box(-0.2, -0.2, 6.2, 4.2), _box(0, 0, 6, 4)], lines, [((2, 1), 0.9, 0, 90)]
+
+
+#: A lift's box in the hall's corner, 1.9 x 1.83 m, its right side a little
+#: slanted (as drawn), and its X: four strokes from the corners stopping
+#: 0.2 to 0.3 m short of the centre, unevenly.
+LIFT_BOX = [((4.059, 2.17), (5.958, 2.17)), ((4.059, 2.17), (4.059, 4.0)), ((5.958, 2.17), (6.0, 4.0))]
+LIFT_X = [((4.059, 4.0), (4.836, 3.251)), ((6.0, 4.0), (5.211, 3.256)), ((4.059, 2.17), (4.934, 2.995)),
+          ((5.127, 2.971), (5.958, 2.17))]
+
+
+def test_an_x_across_a_box_is_a_mark_not_walls(tmp_path):
+    """A lift marked by an X. Before, the X cut its box into triangles of
+    free space, joined to each other through the gaps between the strokes'
+    ends at the centre as through doorways: four parts. Now the box is one
+    space no door leads into, left out."""
+    polylines, lines, arcs = _hall_with_box(LIFT_BOX + LIFT_X)
+    scene = _scene(_write(tmp_path / "lift.dxf", polylines, lines, arcs))
+    parts = polygon_parts(scene.free_space)
+    assert scene.info["counts"]["doors"] == 1
+    assert len(parts) == 1
+    assert not scene.free_space.intersects(Polygon([(4.06, 2.17), (5.96, 2.17), (6.0, 4.0), (4.06, 4.0)]))
+
+
+def test_walls_crossing_in_a_plus_stay_walls(tmp_path):
+    """Two walls crossing in the box's middle, ending on the sides of its
+    walls (not at its corners): four rooms' walls, not a mark."""
+    box = [((4, 2), (6, 2)), ((4, 2), (4, 4)), ((4, 3), (6, 3)), ((5, 2), (5, 4))]
+    polylines, lines, arcs = _hall_with_box(box)
+    scene = _scene(_write(tmp_path / "plus.dxf", polylines, lines, arcs))
+    assert not any("marks, not walls" in w for w in scene.info["warnings"])
+    assert scene.walls.contains(Point(5.0, 2.5)) or scene.walls.distance(Point(5.0, 2.5)) < 0.06

@@ -30,6 +30,7 @@ from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.closed_leaf import closed_leaf_opening, walled_swing_doorway
 from mapkit.importers.dxf.closure import closed_footprint
+from mapkit.importers.dxf.cross_marks import split_cross_marks
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
@@ -57,6 +58,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
 
     # Jamb ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
     wall_strokes, ticks = split_jamb_ticks(drawing.role("walls"))
+    wall_strokes, crosses = split_cross_marks(wall_strokes)  # the X of a lift or shaft is no wall
+    if crosses:
+        warn(f"{len(crosses)} stroke(s) crossing boxes corner to corner (an X marking a lift or shaft) are marks, "
+             "not walls")
     wall_result = build_walls(wall_strokes, options.max_wall_thickness)
     walls = wall_result.walls
     if walls.is_empty:
