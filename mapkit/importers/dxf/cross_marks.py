@@ -29,7 +29,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
 from scipy.spatial import cKDTree
+from shapely.geometry import LineString
 
 from mapkit.importers.dxf.strokes import Stroke
 from mapkit.tolerances import (CROSS_MARK_LENGTH_RATIO, CROSS_MARK_MAX_GAP, CROSS_MARK_MIDDLE_SHARE, CROSS_MARK_MIN_ANGLE_DEG,
@@ -47,13 +49,18 @@ def split_cross_marks(strokes: list[Stroke]) -> tuple[list[Stroke], list[Stroke]
         return strokes, []
     lines = _lines(strokes, straight)
     corners = _corners(strokes)
+    # Candidate pairs: lines whose extents cross (a box's diagonals cross at their middles).
+    extents = [LineString([ln.p, ln.q]) for ln in lines]
+    left, right = shapely.STRtree(extents).query(extents, predicate="intersects")
     marked: set[int] = set()
-    for i, a in enumerate(lines):
-        for b in lines[i + 1:]:
-            if marked & (set(a.pieces) | set(b.pieces)) or set(a.pieces) & set(b.pieces):
-                continue
-            if _crossing(a, b) and _at_corners(a, b, corners, strokes):
-                marked |= set(a.pieces) | set(b.pieces)
+    for i, j in zip(left.tolist(), right.tolist()):
+        if j <= i:
+            continue
+        a, b = lines[i], lines[j]
+        if marked & (set(a.pieces) | set(b.pieces)) or set(a.pieces) & set(b.pieces):
+            continue
+        if _crossing(a, b) and _at_corners(a, b, corners):
+            marked |= set(a.pieces) | set(b.pieces)
     if not marked:
         return strokes, []
     return ([s for k, s in enumerate(strokes) if k not in marked],
@@ -82,32 +89,30 @@ def _lines(strokes: list[Stroke], straight: list[int]) -> list[_Line]:
     single = [_Line(np.asarray(strokes[k].coords[0][:2], float), np.asarray(strokes[k].coords[1][:2], float), (k,))
               for k in straight]
     out = list(single)
-    mids = np.array([(ln.p + ln.q) / 2 for ln in single])
-    half = np.array([ln.length / 2 for ln in single])
-    tree = cKDTree(mids)
+    ends = np.array([[ln.p, ln.q] for ln in single]).reshape(-1, 2)
+    tree = cKDTree(ends)
     cos_in_line = math.cos(math.radians(_IN_LINE_DEG))
-    for i, a in enumerate(single):
-        for j in tree.query_ball_point(mids[i], a.length / 2 + float(half.max()) + CROSS_MARK_MAX_GAP):
-            if j <= i:
-                continue
-            b = single[j]
-            if abs(float(a.u @ b.u)) < cos_in_line:
-                continue
-            normal = np.array([-a.u[1], a.u[0]])
-            if max(abs(float((b.p - a.p) @ normal)), abs(float((b.q - a.p) @ normal))) > SNAP_GAP:
-                continue
-            tb = sorted((float((b.p - a.p) @ a.u), float((b.q - a.p) @ a.u)))
-            if tb[0] >= a.length:
-                gap = (a.length, tb[0])
-            elif tb[1] <= 0:
-                gap = (tb[1], 0.0)
-            else:
-                continue  # overlapping: one line drawn twice, no crossing's halves
-            if not 0 < gap[1] - gap[0] <= CROSS_MARK_MAX_GAP:
-                continue
-            lo, hi = min(0.0, tb[0]), max(a.length, tb[1])
-            p, q = a.p + a.u * lo, a.p + a.u * hi
-            out.append(_Line(p, q, (a.pieces[0], b.pieces[0]), (gap[0] - lo, gap[1] - lo)))
+    for e, f in tree.query_pairs(CROSS_MARK_MAX_GAP, output_type="ndarray").tolist():
+        i, j = sorted((e // 2, f // 2))
+        if i == j:
+            continue
+        a, b = single[i], single[j]
+        if abs(float(a.u @ b.u)) < cos_in_line:
+            continue
+        normal = np.array([-a.u[1], a.u[0]])
+        if max(abs(float((b.p - a.p) @ normal)), abs(float((b.q - a.p) @ normal))) > SNAP_GAP:
+            continue
+        tb = sorted((float((b.p - a.p) @ a.u), float((b.q - a.p) @ a.u)))
+        if tb[0] >= a.length:
+            gap = (a.length, tb[0])
+        elif tb[1] <= 0:
+            gap = (tb[1], 0.0)
+        else:
+            continue  # overlapping: one line drawn twice, not a crossing's halves
+        if not 0 < gap[1] - gap[0] <= CROSS_MARK_MAX_GAP:
+            continue
+        lo, hi = min(0.0, tb[0]), max(a.length, tb[1])
+        out.append(_Line(a.p + a.u * lo, a.p + a.u * hi, (a.pieces[0], b.pieces[0]), (gap[0] - lo, gap[1] - lo)))
     return out
 
 
@@ -145,7 +150,7 @@ def _corners(strokes: list[Stroke]) -> tuple[cKDTree, np.ndarray]:
     return cKDTree(np.concatenate(pts)), np.concatenate(owner)
 
 
-def _at_corners(a: _Line, b: _Line, corners, strokes: list[Stroke]) -> bool:
+def _at_corners(a: _Line, b: _Line, corners) -> bool:
     """Whether at least three of the four ends of ``a`` and ``b`` lie on an
     end or vertex of a wall stroke that is not part of the cross."""
     tree, owner = corners

@@ -3,12 +3,15 @@
 1. Walls (:mod:`mapkit.importers.dxf.walls`): solids from double lines,
    outlines, fills and columns; single lines thickened. Jamb ticks across
    single-line walls (:mod:`mapkit.importers.dxf.jamb_ticks`) are marks,
-   not walls; two with no door drawing at them mark a doorway.
+   not walls; two with no door drawing at them mark a doorway. The X
+   across a lift's or a shaft's box is a mark, not walls
+   (:mod:`mapkit.importers.dxf.cross_marks`).
    A single wall line that seals part of a room's outline off with no door
    is not a wall (:mod:`mapkit.importers.dxf.room_outlines`).
 2. Openings (:mod:`mapkit.importers.dxf.openings`): each door or window
    drawing claims the wall gap it sits in; free-standing glass becomes an
-   obstacle.
+   obstacle. A door swing over a wall left unbroken under it opens the
+   wall where its leaf closes (:mod:`mapkit.importers.dxf.closed_leaf`).
 3. Free space: the interior (what closed outlines enclose once door and
    window gaps are shut; for open plans a floor layer's extent, else the
    footprint closed from the walls, :mod:`.closure`) minus walls and
