@@ -47,6 +47,8 @@ def closed_leaf_opening(item: MultiLineString, walls, max_wall_thickness: float)
     n_lo = min(float(hinge @ normal), float(latch @ normal)) - JAMB_REACH
     n_hi = max(float(hinge @ normal), float(latch @ normal)) + JAMB_REACH
     band = _rectangle(axis, normal, t0, t1, n_lo, n_hi)
+    wide_band = _rectangle(axis, normal, t0, t1, n_lo - max_wall_thickness, n_hi + max_wall_thickness)
+    walls = _clipped(walls, wide_band)  # (a whole building's walls are costly to cut per door)
     inside = walls.intersection(band)
     if inside.is_empty or inside.area <= 0:
         return None
@@ -59,7 +61,7 @@ def closed_leaf_opening(item: MultiLineString, walls, max_wall_thickness: float)
     # Across, the opening spans the whole wall the leaf closes in (the
     # leaf may lie along one of its faces): the wall material between the
     # jambs, within a wall's thickness, that the probes met.
-    wide = walls.intersection(_rectangle(axis, normal, t0, t1, n_lo - max_wall_thickness, n_hi + max_wall_thickness))
+    wide = walls.intersection(wide_band)
     crossing = [p for p in shapely.get_parts(wide) if isinstance(p, Polygon) and p.intersects(inside)]
     across = np.concatenate([np.asarray(p.exterior.coords)[:, :2] @ normal for p in crossing])
     s0, s1 = float(across.min()), float(across.max())
@@ -129,12 +131,7 @@ def _wall_direction(axis: np.ndarray, near: Polygon, walls) -> np.ndarray:
     """The direction of the longest wall edge in ``near`` within
     ``WALL_DIRECTION_SNAP_DEG`` of ``axis`` (a leaf drawn shut meets its
     pair's a few degrees off the wall); ``axis`` when there is none."""
-    x0, y0, x1, y1 = near.bounds
-    try:
-        local = shapely.clip_by_rect(walls, x0, y0, x1, y1)
-    except shapely.errors.GEOSException:  # GEOS's fast clip refuses some valid inputs
-        local = walls.intersection(near.envelope)
-    edges = local.boundary.intersection(near)
+    edges = _clipped(walls, near).boundary.intersection(near)
     best, best_len = axis, 0.0
     cos_max = np.cos(np.radians(WALL_DIRECTION_SNAP_DEG))
     for part in shapely.get_parts(edges):
@@ -149,6 +146,15 @@ def _wall_direction(axis: np.ndarray, near: Polygon, walls) -> np.ndarray:
             if abs(c) >= cos_max and length > best_len:
                 best, best_len = (d if c > 0 else -d), length
     return best
+
+
+def _clipped(walls, area: Polygon):
+    """``walls`` cut to the bounding box of ``area``."""
+    x0, y0, x1, y1 = area.bounds
+    try:
+        return shapely.clip_by_rect(walls, x0, y0, x1, y1)
+    except shapely.errors.GEOSException:  # GEOS's fast clip refuses some valid inputs
+        return walls.intersection(area.envelope)
 
 
 def _rectangle(axis: np.ndarray, normal: np.ndarray, t0: float, t1: float, s0: float, s1: float) -> Polygon:
