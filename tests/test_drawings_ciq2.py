@@ -197,10 +197,14 @@ def test_an_x_across_a_box_is_a_mark_not_walls(tmp_path):
 
 
 def test_walls_crossing_in_a_plus_stay_walls(tmp_path):
-    """Two walls crossing in the box's middle, ending on the sides of its
-    walls (not at its corners): four rooms' walls, not a mark."""
-    box = [((4, 2), (6, 2)), ((4, 2), (4, 4)), ((4, 3), (6, 3)), ((5, 2), (5, 4))]
+    """Two walls crossing in a box's middle, one drawn in two strokes with a
+    gap where they cross (as a plan's walls are), each ending on a vertex
+    of the walls around it: they meet those square or run on in line, as
+    walls do, not at a slant as a box's diagonals: walls, not a mark."""
+    box = [((4, 2), (5, 2)), ((5, 2), (6, 2)), ((4, 2), (4, 3)), ((4, 3), (4, 4)),
+           ((4, 3), (6, 3)), ((5, 2), (5, 2.9)), ((5, 3.1), (5, 4)), ((6, 2), (6, 3))]
     polylines, lines, arcs = _hall_with_box(box)
+    polylines[1] = [(0, 0), (6, 0), (6, 2), (6, 3), (6, 4), (5, 4), (0, 4)]  # the hall's walls, a vertex at each wall's end
     scene = _scene(_write(tmp_path / "plus.dxf", polylines, lines, arcs))
     assert not any("marks, not walls" in w for w in scene.info["warnings"])
-    assert scene.walls.contains(Point(5.0, 2.5)) or scene.walls.distance(Point(5.0, 2.5)) < 0.06
+    assert scene.walls.distance(Point(5.0, 2.5)) < 0.06 and scene.walls.distance(Point(4.5, 3.0)) < 0.06

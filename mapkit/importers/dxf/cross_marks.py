@@ -19,8 +19,9 @@ that cross at
 diagonal drawn in two strokes, in the gap between them), and whose ends
 lie at the box's corners: at least three of the four ends on a corner of
 the other wall strokes (an end or a vertex, within ``SNAP_GAP``; one
-diagonal may stop short where a door swings). Walls crossing in a '+' end
-on the side of a wall, not at a corner. Strokes of a block insert and
+diagonal may stop short where a door swings) whose side there runs at a
+slant to it. Walls crossing in a '+' end on the side of a wall, or meet
+the walls at their ends square or in line. Strokes of a block insert and
 fills are kept.
 """
 
@@ -137,28 +138,47 @@ def _crossing(a: _Line, b: _Line) -> bool:
     return True
 
 
-def _corners(strokes: list[Stroke]) -> tuple[cKDTree, np.ndarray]:
-    """The ends and vertices of all strokes (a KD-tree over them) and, per
-    point, the index of its stroke."""
-    pts, owner = [], []
+def _corners(strokes: list[Stroke]) -> tuple[cKDTree, np.ndarray, np.ndarray]:
+    """The ends and vertices of all strokes: a KD-tree over them, per point
+    the index of its stroke, and per point the unit directions of the (one
+    or two) segments of its stroke that meet there, ``(P, 2, 2)`` (a
+    missing one repeats the other)."""
+    pts, owner, dirs = [], [], []
     for k, s in enumerate(strokes):
         if s.filled:
             continue
         c = np.asarray(s.coords, float)[:, :2]
+        ring = np.vstack([c, c[:1]]) if s.closed else c
+        seg = np.diff(ring, axis=0)
+        seg = seg / np.maximum(np.linalg.norm(seg, axis=1, keepdims=True), MERGE)
+        n = len(c)
+        after = np.array([seg[i] if i < len(seg) else seg[i - 1] for i in range(n)])
+        before = np.array([seg[i - 1] if (i > 0 or s.closed) else seg[0] for i in range(n)])
         pts.append(c)
-        owner.append(np.full(len(c), k))
-    return cKDTree(np.concatenate(pts)), np.concatenate(owner)
+        owner.append(np.full(n, k))
+        dirs.append(np.stack([before, after], axis=1))
+    return cKDTree(np.concatenate(pts)), np.concatenate(owner), np.concatenate(dirs)
 
 
 def _at_corners(a: _Line, b: _Line, corners) -> bool:
     """Whether at least three of the four ends of ``a`` and ``b`` lie on an
-    end or vertex of a wall stroke that is not part of the cross."""
-    tree, owner = corners
+    end or vertex of a wall stroke that is not part of the cross, a side of
+    the box there running oblique to the line (between
+    ``CROSS_MARK_MIN_ANGLE_DEG / 2`` and 90 less that from it: a box's
+    diagonal meets its sides at a slant; a wall crossing others in a '+'
+    meets them square, or runs on in line)."""
+    tree, owner, dirs = corners
     ours = set(a.pieces) | set(b.pieces)
+    lo, hi = math.sin(math.radians(CROSS_MARK_MIN_ANGLE_DEG / 2)), math.cos(math.radians(CROSS_MARK_MIN_ANGLE_DEG / 2))
     hits = 0
-    for end in (a.p, a.q, b.p, b.q):
-        near = tree.query_ball_point(end, SNAP_GAP)
-        hits += any(int(owner[k]) not in ours for k in near)
+    for line, end in ((a, a.p), (a, a.q), (b, b.p), (b, b.q)):
+        for k in tree.query_ball_point(end, SNAP_GAP):
+            if int(owner[k]) in ours:
+                continue
+            sines = np.abs(dirs[k] @ np.array([-line.u[1], line.u[0]]))
+            if np.any((sines >= lo) & (sines <= hi)):
+                hits += 1
+                break
     return hits >= 3
 
 
