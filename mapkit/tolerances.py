@@ -265,6 +265,9 @@ CROSS_MARK_MIN_ARM = 0.3
 CROSS_MARK_MAX_GAP = 0.5
 CROSS_MARK_MIN_ANGLE_DEG = 30.0
 CROSS_MARK_MIDDLE_SHARE = 0.5
+#: Two strokes are one line (a diagonal drawn in two pieces) when their
+#: directions differ by at most this many degrees.
+CROSS_MARK_IN_LINE_DEG = 1.0
 
 #: A stroke on a door layer whose bounding box's diagonal is longer than
 #: this, metres, is not part of a door drawing (a leaf, its swing and the

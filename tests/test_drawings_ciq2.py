@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 
 import ezdxf
-import numpy as np
 from shapely.geometry import Point, Polygon
 
 from mapkit.importers import load_scene
@@ -204,7 +203,8 @@ def test_walls_crossing_in_a_plus_stay_walls(tmp_path):
     box = [((4, 2), (5, 2)), ((5, 2), (6, 2)), ((4, 2), (4, 3)), ((4, 3), (4, 4)),
            ((4, 3), (6, 3)), ((5, 2), (5, 2.9)), ((5, 3.1), (5, 4)), ((6, 2), (6, 3))]
     polylines, lines, arcs = _hall_with_box(box)
-    polylines[1] = [(0, 0), (6, 0), (6, 2), (6, 3), (6, 4), (5, 4), (0, 4)]  # the hall's walls, a vertex at each wall's end
+    # The hall's walls, with a vertex at each wall's end.
+    polylines[1] = [(0, 0), (6, 0), (6, 2), (6, 3), (6, 4), (5, 4), (0, 4)]
     scene = _scene(_write(tmp_path / "plus.dxf", polylines, lines, arcs))
     assert not any("marks, not walls" in w for w in scene.info["warnings"])
     assert scene.walls.distance(Point(5.0, 2.5)) < 0.06 and scene.walls.distance(Point(4.5, 3.0)) < 0.06

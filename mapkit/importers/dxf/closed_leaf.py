@@ -105,7 +105,8 @@ def _closed_leaf(item: MultiLineString) -> tuple[np.ndarray, np.ndarray] | None:
     for pts in straights:
         for hinge, tip in ((pts[0], pts[-1]), (pts[-1], pts[0])):
             off = float(np.linalg.norm(hinge - centre))
-            if off <= snap and abs(float(np.linalg.norm(tip - hinge)) - radius) <= snap and (best is None or off < best[0]):
+            leaf_ok = abs(float(np.linalg.norm(tip - hinge)) - radius) <= snap
+            if off <= snap and leaf_ok and (best is None or off < best[0]):
                 best = (off, hinge, tip)
     if best is None:
         return None

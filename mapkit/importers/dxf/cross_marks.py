@@ -35,12 +35,8 @@ from scipy.spatial import cKDTree
 from shapely.geometry import LineString
 
 from mapkit.importers.dxf.strokes import Stroke
-from mapkit.tolerances import (CROSS_MARK_LENGTH_RATIO, CROSS_MARK_MAX_GAP, CROSS_MARK_MIDDLE_SHARE, CROSS_MARK_MIN_ANGLE_DEG,
-                               CROSS_MARK_MIN_ARM, MERGE, SNAP_GAP)
-
-#: Strokes in line: their directions within this angle, metres off each other's line within ``SNAP_GAP``.
-_IN_LINE_DEG = 1.0
-
+from mapkit.tolerances import (CROSS_MARK_IN_LINE_DEG, CROSS_MARK_LENGTH_RATIO, CROSS_MARK_MAX_GAP,
+                               CROSS_MARK_MIDDLE_SHARE, CROSS_MARK_MIN_ANGLE_DEG, CROSS_MARK_MIN_ARM, MERGE, SNAP_GAP)
 
 def split_cross_marks(strokes: list[Stroke]) -> tuple[list[Stroke], list[Stroke]]:
     """``(kept, marks)``: the wall strokes less the strokes of cross marks,
@@ -92,7 +88,7 @@ def _lines(strokes: list[Stroke], straight: list[int]) -> list[_Line]:
     out = list(single)
     ends = np.array([[ln.p, ln.q] for ln in single]).reshape(-1, 2)
     tree = cKDTree(ends)
-    cos_in_line = math.cos(math.radians(_IN_LINE_DEG))
+    cos_in_line = math.cos(math.radians(CROSS_MARK_IN_LINE_DEG))
     for e, f in tree.query_pairs(CROSS_MARK_MAX_GAP, output_type="ndarray").tolist():
         i, j = sorted((e // 2, f // 2))
         if i == j:
