@@ -38,6 +38,7 @@ from mapkit.importers.dxf.strokes import Stroke
 from mapkit.tolerances import (CROSS_MARK_IN_LINE_DEG, CROSS_MARK_LENGTH_RATIO, CROSS_MARK_MAX_GAP,
                                CROSS_MARK_MIDDLE_SHARE, CROSS_MARK_MIN_ANGLE_DEG, CROSS_MARK_MIN_ARM, MERGE, SNAP_GAP)
 
+
 def split_cross_marks(strokes: list[Stroke]) -> tuple[list[Stroke], list[Stroke]]:
     """``(kept, marks)``: the wall strokes less the strokes of cross marks,
     and those (see the module docstring)."""
