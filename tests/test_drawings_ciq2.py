@@ -208,3 +208,29 @@ def test_walls_crossing_in_a_plus_stay_walls(tmp_path):
     scene = _scene(_write(tmp_path / "plus.dxf", polylines, lines, arcs))
     assert not any("marks, not walls" in w for w in scene.info["warnings"])
     assert scene.walls.distance(Point(5.0, 2.5)) < 0.06 and scene.walls.distance(Point(4.5, 3.0)) < 0.06
+
+
+def test_a_swing_between_glass_panes_is_found_in_their_gap(tmp_path):
+    """A door swing between two glass panes (a glass front): its gap is
+    the panes', and no wall is near where its leaf closes. Checking
+    whether a wall crosses there must not fail for want of walls (it did:
+    an internal error)."""
+    doc = ezdxf.new("R2013", setup=False)
+    doc.header["$INSUNITS"] = 6
+    for name in (LAYER, "GLASS"):
+        doc.layers.add(name)
+    msp = doc.modelspace()
+    walls, glass = {"layer": LAYER}, {"layer": "GLASS"}
+    msp.add_lwpolyline([(0, 0), (0, 4), (6, 4), (6, 0)], dxfattribs=walls)
+    msp.add_lwpolyline([(-0.2, 0), (-0.2, 4.2), (6.2, 4.2), (6.2, 0)], dxfattribs=walls)
+    msp.add_line((-0.2, 0), (0, 0), dxfattribs=walls)
+    msp.add_line((6, 0), (6.2, 0), dxfattribs=walls)
+    msp.add_line((0, 0), (2.5, 0), dxfattribs=glass)
+    msp.add_line((3.4, 0), (6, 0), dxfattribs=glass)
+    msp.add_line((2.5, 0), (2.5, 0.9), dxfattribs=walls)  # the leaf, open into the room
+    msp.add_arc((2.5, 0), 0.9, 0, 90, dxfattribs=walls)
+    path = tmp_path / "glass.dxf"
+    doc.saveas(path)
+    scene = load_scene(path, BuildOptions(walls=[LAYER], windows=["GLASS"]))
+    assert scene.info["counts"]["doors"] == 1
+    assert len(polygon_parts(scene.free_space)) == 1

@@ -132,7 +132,10 @@ def _wall_direction(axis: np.ndarray, near: Polygon, walls) -> np.ndarray:
     """The direction of the longest wall edge in ``near`` within
     ``WALL_DIRECTION_SNAP_DEG`` of ``axis`` (a leaf drawn shut meets its
     pair's a few degrees off the wall); ``axis`` when there is none."""
-    edges = _clipped(walls, near).boundary.intersection(near)
+    local = _clipped(walls, near)
+    if local.is_empty:  # (an empty collection has no boundary)
+        return axis
+    edges = local.boundary.intersection(near)
     best, best_len = axis, 0.0
     cos_max = np.cos(np.radians(WALL_DIRECTION_SNAP_DEG))
     for part in shapely.get_parts(edges):
