@@ -13,8 +13,10 @@ door's opening.
 The opening is the rectangle along the wall from the hinge to the latch
 (the closed leaf projected on the wall's direction), across the whole
 wall the closed leaf lies in or beside (within ``JAMB_REACH``). It is
-only an opening when that material crosses the whole doorway (the door
-is over a wall, not beside one) and is no thicker than a wall.
+only an opening when that wall crosses the whole doorway, the open leaf
+runs through it from the hinge (the door is drawn in the wall, not
+against its face, where a walled-up doorway's swing may be left), and it
+is no thicker than a wall.
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ def closed_leaf_opening(item: MultiLineString, walls, max_wall_thickness: float)
     leaf = _closed_leaf(item)
     if leaf is None:
         return None
-    hinge, latch = leaf
+    hinge, latch, tip = leaf
     axis = (latch - hinge) / np.linalg.norm(latch - hinge)
     axis = _wall_direction(axis, LineString([hinge, latch]).buffer(JAMB_REACH), walls)
     normal = np.array([-axis[1], axis[0]])
@@ -63,6 +65,10 @@ def closed_leaf_opening(item: MultiLineString, walls, max_wall_thickness: float)
     # jambs, within a wall's thickness, that the probes met.
     wide = walls.intersection(wide_band)
     crossing = [p for p in shapely.get_parts(wide) if isinstance(p, Polygon) and p.intersects(inside)]
+    # Drawn in the wall, not against it: the open leaf runs through wall
+    # from the hinge (a leaf drawn against a wall's face only touches it).
+    if LineString([hinge, tip]).intersection(walls).length <= 2 * MERGE:
+        return None
     across = np.concatenate([np.asarray(p.exterior.coords)[:, :2] @ normal for p in crossing])
     s0, s1 = float(across.min()), float(across.max())
     if s1 - s0 > max_wall_thickness:
@@ -82,8 +88,8 @@ def walled_swing_doorway(item: MultiLineString, gap: Polygon, walls, max_wall_th
     return walled
 
 
-def _closed_leaf(item: MultiLineString) -> tuple[np.ndarray, np.ndarray] | None:
-    """``(hinge, latch)`` of a swing drawing: one arc (a polyline of at least
+def _closed_leaf(item: MultiLineString) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """``(hinge, latch, tip)`` of a swing drawing (the open leaf's tip): one arc (a polyline of at least
     three points on a circle of a door's radius) and one straight leaf from
     its centre (within ``DOOR_SWING_TIP_SHARE`` of the radius); the latch
     is the arc's end farther from the leaf's tip. None for anything else."""
@@ -114,7 +120,7 @@ def _closed_leaf(item: MultiLineString) -> tuple[np.ndarray, np.ndarray] | None:
     latch = max((arc[0], arc[-1]), key=lambda end: float(np.linalg.norm(end - tip)))
     if np.linalg.norm(latch - hinge) <= MERGE:
         return None
-    return hinge, latch
+    return hinge, latch, tip
 
 
 def _circle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, float] | None:
