@@ -261,6 +261,34 @@ CUT_MIN_REACH = 0.3
 #: door when their union fills at least this share of its rotated bounding
 #: box (in line, one wall; two doors meeting at a corner fill about half).
 DOUBLE_DOOR_SQUARENESS = 0.95
+#: A door swing over an unbroken wall (mapkit/importers/dxf/closed_leaf.py)
+#: opens the wall where its leaf closes when the wall crosses the whole
+#: doorway: each of this many probes across it, evenly spaced between the
+#: jambs, meets wall. The closed leaf's direction snaps to the wall edges
+#: within this many degrees of it (the two leaves of a double door drawn
+#: meeting tip to tip close a few degrees off the wall; ciq_building: 13).
+SWING_CUT_PROBES = 5
+WALL_DIRECTION_SNAP_DEG = 15.0
+
+#: Cross marks (mapkit/importers/dxf/cross_marks.py): the X across a box
+#: that marks a lift or a shaft is two straight lines, each of strokes at
+#: least ``CROSS_MARK_MIN_ARM`` metres long (one, or two in line with a gap
+#: of at most ``CROSS_MARK_MAX_GAP`` metres at the crossing: ciq_building's
+#: lift, 0.4 m), crossing at ``CROSS_MARK_MIN_ANGLE_DEG`` or more, each
+#: within ``CROSS_MARK_MIDDLE_SHARE`` of its half length of its middle (a
+#: box's diagonals cross at their middles; one stopping short where a door
+#: swings, a little off it: 44 %), the shorter line at least
+#: ``CROSS_MARK_LENGTH_RATIO`` of the longer (a box's diagonals are equal;
+#: the one stopping short at a door, 0.88 of the other; a wall line crossed
+#: by a chamfer, 0.3).
+CROSS_MARK_LENGTH_RATIO = 0.75
+CROSS_MARK_MIN_ARM = 0.3
+CROSS_MARK_MAX_GAP = 0.5
+CROSS_MARK_MIN_ANGLE_DEG = 30.0
+CROSS_MARK_MIDDLE_SHARE = 0.5
+#: Two strokes are one line (a diagonal drawn in two pieces) when their
+#: directions differ by at most this many degrees.
+CROSS_MARK_IN_LINE_DEG = 1.0
 
 #: A stroke on a door layer whose bounding box's diagonal is longer than
 #: this, metres, is not part of a door drawing (a leaf, its swing and the

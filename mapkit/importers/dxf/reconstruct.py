@@ -3,12 +3,15 @@
 1. Walls (:mod:`mapkit.importers.dxf.walls`): solids from double lines,
    outlines, fills and columns; single lines thickened. Jamb ticks across
    single-line walls (:mod:`mapkit.importers.dxf.jamb_ticks`) are marks,
-   not walls; two with no door drawing at them mark a doorway.
+   not walls; two with no door drawing at them mark a doorway. The X
+   across a lift's or a shaft's box is a mark, not walls
+   (:mod:`mapkit.importers.dxf.cross_marks`).
    A single wall line that seals part of a room's outline off with no door
    is not a wall (:mod:`mapkit.importers.dxf.room_outlines`).
 2. Openings (:mod:`mapkit.importers.dxf.openings`): each door or window
    drawing claims the wall gap it sits in; free-standing glass becomes an
-   obstacle.
+   obstacle. A door swing over a wall left unbroken under it opens the
+   wall where its leaf closes (:mod:`mapkit.importers.dxf.closed_leaf`).
 3. Free space: the interior (what closed outlines enclose once door and
    window gaps are shut; for open plans a floor layer's extent, else the
    footprint closed from the walls, :mod:`.closure`) minus walls and
@@ -30,7 +33,9 @@ from shapely.ops import unary_union
 from mapkit.importers import warn_decision
 from mapkit.errors import NoFreeSpaceError, NoWallsError
 from mapkit.options import BuildOptions
+from mapkit.importers.dxf.closed_leaf import closed_leaf_opening, walled_swing_doorway
 from mapkit.importers.dxf.closure import closed_footprint
+from mapkit.importers.dxf.cross_marks import split_cross_marks
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
@@ -62,6 +67,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     # ticks across single-line walls are marks, not walls (:mod:`.jamb_ticks`).
     stair_runs = find_stair_runs(drawing.role("walls"))
     wall_strokes, ticks = split_jamb_ticks(without_treads(drawing.role("walls"), stair_runs))
+    wall_strokes, crosses = split_cross_marks(wall_strokes)  # the X of a lift or shaft is no wall
+    if crosses:
+        warn(f"{len(crosses)} stroke(s) crossing boxes corner to corner (an X marking a lift or shaft) are marks, "
+             "not walls")
     wall_result = build_walls(wall_strokes, options.max_wall_thickness)
     walls = wall_result.walls
     if walls.is_empty:
@@ -220,6 +229,10 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
     cuts = []
     pockets = []
     for item, gap in door_openings(door_items, barriers, options.max_wall_thickness):
+        walled = walled_swing_doorway(item, gap, walls, options.max_wall_thickness) if gap is not None else None
+        if walled is not None:  # the gap found beside a swing is not where its leaf closes: a wall is
+            gap = walled
+            cuts.append(walled)
         if gap is None:
             gap = pocket_opening(item, walls, options.max_wall_thickness)
             if gap is not None and not _claimed(gap, door_gaps + window_gaps):
@@ -228,6 +241,8 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
                 openings.append(Opening(gap, "door", 0.0, options.door_height))
                 continue
             cut = cut_opening(item, walls, options.max_wall_thickness)
+            if cut is None:  # a swing over a wall left unbroken under it: opened where its leaf closes
+                cut = closed_leaf_opening(item, walls, options.max_wall_thickness)
             # A plan drawn one layer per room: a door line is a door where it meets walls at both ends.
             gap = cut if cut is not None or not drawing.role("rooms") else door_line_opening(item, walls)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
