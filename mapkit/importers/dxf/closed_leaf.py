@@ -25,6 +25,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, MultiLineString, Polygon
 
+from mapkit.importers.dxf.openings import longest_edge_along
 from mapkit.tolerances import (DOOR_SWING_RADIUS, DOOR_SWING_SNAP, DOOR_SWING_TIP_SHARE, JAMB_REACH, MAX_DOOR_WIDTH,
                                MERGE, MIN_OPENING_WIDTH, SWING_CUT_PROBES, WALL_DIRECTION_SNAP_DEG)
 
@@ -142,20 +143,7 @@ def _wall_direction(axis: np.ndarray, near: Polygon, walls) -> np.ndarray:
     if local.is_empty:  # (an empty collection has no boundary)
         return axis
     edges = local.boundary.intersection(near)
-    best, best_len = axis, 0.0
-    cos_max = np.cos(np.radians(WALL_DIRECTION_SNAP_DEG))
-    for part in shapely.get_parts(edges):
-        coords = np.asarray(getattr(part, "coords", []))
-        for p, q in zip(coords[:-1], coords[1:]):
-            d = np.asarray(q[:2]) - np.asarray(p[:2])
-            length = float(np.hypot(*d))
-            if length <= MERGE:
-                continue
-            d = d / length
-            c = float(d @ axis)
-            if abs(c) >= cos_max and length > best_len:
-                best, best_len = (d if c > 0 else -d), length
-    return best
+    return longest_edge_along(edges, axis, WALL_DIRECTION_SNAP_DEG)
 
 
 def _clipped(walls, area: Polygon):

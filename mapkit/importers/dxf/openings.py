@@ -214,8 +214,15 @@ def _wall_direction(axis: np.ndarray, barriers, jambs) -> np.ndarray:
     x0, y0, x1, y1 = near.bounds
     pad = 10 * MERGE
     edges = _clipped(barriers, (x0 - pad, y0 - pad, x1 + pad, y1 + pad)).boundary.intersection(near)
+    return longest_edge_along(edges, axis, 15.0)
+
+
+def longest_edge_along(edges, axis: np.ndarray, max_angle_deg: float) -> np.ndarray:
+    """The unit direction of the longest straight piece of ``edges`` (lines)
+    within ``max_angle_deg`` of ``axis`` (unit 2-vector), turned to point
+    along it; ``axis`` when no piece longer than ``MERGE`` is that close."""
     best, best_len = axis, 0.0
-    cos_max = np.cos(np.radians(15.0))
+    cos_max = np.cos(np.radians(max_angle_deg))
     for part in shapely.get_parts(edges):
         coords = np.asarray(getattr(part, "coords", []))
         for p, q in zip(coords[:-1], coords[1:]):

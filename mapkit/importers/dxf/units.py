@@ -109,6 +109,20 @@ def units_from_doors(door_widths_m, unit: str, extent_m: float) -> tuple[str, st
 _GAP_UNITS = {"metric": ("mm", "cm", "dm", "m"), "imperial": ("in", "ft")}
 
 
+def _gaps_no_door_fits(gap_widths_m) -> tuple[np.ndarray, float] | None:
+    """The positive doorway widths (metres as read) and their median, when
+    there are ``GAP_UNITS_MIN_GAPS`` of them or more and the median is no
+    door's width (``DOOR_WIDTH_PLAUSIBLE``); None otherwise."""
+    widths = np.asarray([w for w in gap_widths_m if w > 0], dtype=float)
+    if len(widths) < GAP_UNITS_MIN_GAPS:
+        return None
+    median = float(np.median(widths))
+    lo, hi = DOOR_WIDTH_PLAUSIBLE
+    if lo <= median <= hi:
+        return None
+    return widths, median
+
+
 def units_from_gaps(gap_widths_m, unit: str, extent_m: float) -> tuple[str, str] | None:
     """The unit the doorway gaps of a plan without door symbols say it is
     in, when its stated or guessed ``unit`` makes them no door's width:
@@ -118,13 +132,11 @@ def units_from_gaps(gap_widths_m, unit: str, extent_m: float) -> tuple[str, str]
     ``unit``, are too few (``GAP_UNITS_MIN_GAPS``), or no unit of the same
     system makes most of them a door's width (``GAP_UNITS_AGREE_SHARE``)
     and the plan closer to a building's typical size."""
-    widths = np.asarray([w for w in gap_widths_m if w > 0], dtype=float)
-    if len(widths) < GAP_UNITS_MIN_GAPS:
+    gaps = _gaps_no_door_fits(gap_widths_m)
+    if gaps is None:
         return None
-    median = float(np.median(widths))
+    widths, median = gaps
     lo, hi = DOOR_WIDTH_PLAUSIBLE
-    if lo <= median <= hi:
-        return None
     system = _GAP_UNITS["imperial" if unit in _IMPERIAL_UNITS else "metric"]
 
     def ratio(u: str) -> float:
@@ -150,13 +162,10 @@ def scale_from_gaps(gap_widths_m) -> tuple[int, float, float] | None:
     (metres as read); None when they are too few (``GAP_UNITS_MIN_GAPS``)
     or already a door's width. Only an estimate (real doorways are 0.7 to
     2 m wide): named in a refusal, never applied."""
-    widths = np.asarray([w for w in gap_widths_m if w > 0], dtype=float)
-    if len(widths) < GAP_UNITS_MIN_GAPS:
+    gaps = _gaps_no_door_fits(gap_widths_m)
+    if gaps is None:
         return None
-    median = float(np.median(widths))
-    lo, hi = DOOR_WIDTH_PLAUSIBLE
-    if lo <= median <= hi:
-        return None
+    widths, median = gaps
     return len(widths), median, float(f"{TYPICAL_DOOR_WIDTH / median:.2g}")
 
 
