@@ -51,16 +51,21 @@ def entered_parts(free: MultiPolygon, entries: list, robot_radius: float) -> tup
     return MultiPolygon(kept), left_out
 
 
-def describe_left_out(left_out: list[Polygon]) -> str:
-    """One warning line about the spaces :func:`entered_parts` left out."""
-    area = sum(p.area for p in left_out)
+def where_left_out(left_out: list[Polygon]) -> str:
+    """The largest three of ``left_out`` by area and place, for a warning:
+    ``"3.8 m2 at (115.7, 5.1), ... and 7 more"`` (metres)."""
     largest = sorted(left_out, key=lambda p: -p.area)[:3]
     where = ", ".join(f"{p.area:.1f} m2 at ({p.representative_point().x:.1f}, {p.representative_point().y:.1f})"
                       for p in largest)
-    more = f" and {len(left_out) - len(largest)} more" if len(left_out) > len(largest) else ""
+    return where + (f" and {len(left_out) - len(largest)} more" if len(left_out) > len(largest) else "")
+
+
+def describe_left_out(left_out: list[Polygon]) -> str:
+    """One warning line about the spaces :func:`entered_parts` left out."""
+    area = sum(p.area for p in left_out)
     return (f"{len(left_out)} enclosed space(s) that no door or doorway leads into ({area:.1f} m2: shafts, light "
             f"wells, roofs, or rooms whose doors are not drawn or were not found) left out of the free space: "
-            f"{where}{more}; check them in 'mapkit preview'")
+            f"{where_left_out(left_out)}; check them in 'mapkit preview'")
 
 
-__all__ = ["describe_left_out", "entered_parts"]
+__all__ = ["describe_left_out", "entered_parts", "where_left_out"]

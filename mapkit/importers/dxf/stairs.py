@@ -25,6 +25,7 @@ import numpy as np
 import shapely
 from shapely.geometry import MultiPolygon, Polygon
 
+from mapkit.importers.dxf.reachable import where_left_out
 from mapkit.importers.dxf.strokes import Stroke
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (COLLINEAR_DEG, DOOR_REACH_SLACK, MERGE, MIN_FREE_AREA, STAIR_GOING, STAIR_GOING_EVEN,
@@ -262,13 +263,9 @@ def describe_runs(runs: list[StairRun]) -> str:
 def describe_stair_reached(left_out: list[Polygon]) -> str:
     """One warning line about the spaces :func:`stair_reached_parts` left out."""
     area = sum(p.area for p in left_out)
-    largest = sorted(left_out, key=lambda p: -p.area)[:3]
-    where = ", ".join(f"{p.area:.1f} m2 at ({p.representative_point().x:.1f}, {p.representative_point().y:.1f})"
-                      for p in largest)
-    more = f" and {len(left_out) - len(largest)} more" if len(left_out) > len(largest) else ""
     return (f"{len(left_out)} space(s) in a stair well that only the stair leads to from this storey ({area:.1f} m2: "
             f"landings up the steps, or a stair's exit with doors to the outside only) left out of the free space: "
-            f"{where}{more}; check them in 'mapkit preview'")
+            f"{where_left_out(left_out)}; check them in 'mapkit preview'")
 
 
 def stair_footprint(runs: list[StairRun]):
