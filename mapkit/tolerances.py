@@ -228,7 +228,12 @@ DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 #: The corpus's drawing sheet (ciq_building): 27 on its plans' layer, 2 on
 #: a section's.
 SWING_LAYER_MIN_SWINGS = 5
-#: ... and only when its swings hang in walls drawn with them (a layer of
+#: ... and only when most of the layer's door-sized arcs (radius in
+#: ``DOOR_SWING_RADIUS``, sweep at most ``DOOR_SWING_MAX_SWEEP_DEG``) are
+#: swings, at least ``SWING_LAYER_ARC_SHARE`` of them (ciq_building's
+#: 'DETAILS' 27 of 27 in mm, hal9k's layer 0 13 of 13 in cm; a framing
+#: plan's lettering, walldet_sample's 'F-0': 6 of 90, 12 and 28 in dm, m
+#: and ft), and its swings hang in walls drawn with them (a layer of
 #: doors alone, or of doors and furniture beside walls on another layer,
 #: is no wall layer): at least ``SWING_LAYER_HINGED_SHARE`` of the swings'
 #: hinges within ``SWING_LAYER_HINGE_GAP`` metres of the layer's other
@@ -237,6 +242,7 @@ SWING_LAYER_MIN_SWINGS = 5
 #: ``SWING_LAYER_LINES_PER_SWING`` metres long per swing (ciq_building's
 #: 'DETAILS': 52 m; a room of 3 x 3 m with its door, single-line walls:
 #: 12 m; a door layer's frames and double-line leaves: 1 to 3 m).
+SWING_LAYER_ARC_SHARE = 0.67
 SWING_LAYER_HINGE_GAP = 0.15
 SWING_LAYER_HINGED_SHARE = 0.5
 SWING_LAYER_LINES_PER_SWING = 5.0

@@ -30,14 +30,17 @@ CORRIDOR = 1800.0
 LEAF = 850.0
 
 
-def write_plan(path, insunits: int = 1, swings: bool = True, walls_layer: str = "A1", frames: bool = False):
+def write_plan(path, insunits: int = 1, swings: bool = True, walls_layer: str = "A1", frames: bool = False,
+               lettering: int = 0):
     """A drawing in millimetres, its header saying ``insunits`` (1: inches):
     on 'A1' a plan of ``ROOMS`` rooms along a corridor, single wall lines,
     each room's doorway in the corridor wall with its swing (an arc and its
     leaf; with ``swings`` False an arc alone, a window's head in a wall
     face, no leaf; with ``frames`` a jamb block each side) and a washbasin
-    against a room's back wall; on 'ELEV' an elevation beside it (no layer
-    says walls). The walls may be on a layer of their own, ``walls_layer``."""
+    against a room's back wall, and ``lettering`` letters 'C' in its title
+    block below (each an arc a door's radius); on 'ELEV' an
+    elevation beside it (no layer says walls). The walls may be on a layer
+    of their own, ``walls_layer``."""
     doc = ezdxf.new("R2013", setup=False)
     doc.header["$INSUNITS"] = insunits
     msp = doc.modelspace()
@@ -61,6 +64,8 @@ def write_plan(path, insunits: int = 1, swings: bool = True, walls_layer: str = 
                                     (x, CORRIDOR + 50)], close=True, dxfattribs={"layer": "A1"})
     msp.add_lwpolyline([(1200, DEPTH - 450), (1700, DEPTH - 450), (1700, DEPTH), (1200, DEPTH)], close=True,
                        dxfattribs={"layer": "A1"})  # a washbasin against the back wall
+    for k in range(lettering):  # a 'C': an arc of 120 degrees, no stroke from its ends
+        msp.add_arc((1000.0 * k + 800, -2250), 866, 120, 240, dxfattribs={"layer": "A1"})
     elev = {"layer": "ELEV"}
     msp.add_lwpolyline([(0, 9000), (width, 9000), (width, 12000), (0, 12000)], close=True, dxfattribs=elev)
     for k in range(ROOMS):  # windows of the elevation
@@ -129,6 +134,16 @@ def test_arcs_without_leaves_are_not_swings_and_name_no_walls(tmp_path):
     with pytest.raises(NoWallsError, match=r"no recognisable walls: layers are 'A1', 'ELEV'; name the wall layers "
                                            r"with --walls \(see 'mapkit layers PLAN'\)$"):
         load_scene(write_plan(tmp_path / "plan.dxf", swings=False), BuildOptions())
+
+
+def test_a_layer_whose_door_sized_arcs_are_mostly_no_swings_is_not_adopted(tmp_path):
+    """The five swings beside twelve letters whose bowls are arcs a door's
+    radius (a title block drawn on the plan's layer, a framing plan's
+    lettering): most of the layer's door-sized arcs are no door's; refused."""
+    path = write_plan(tmp_path / "plan.dxf", lettering=12)
+    with pytest.raises(NoWallsError, match="name the wall layers with --walls"):
+        load_scene(path, BuildOptions())
+    assert len(load_scene(write_plan(tmp_path / "few.dxf", lettering=2), BuildOptions()).openings) == ROOMS
 
 
 @pytest.mark.parametrize("frames", [False, True], ids=["doors and furniture", "doors and their frames"])

@@ -21,11 +21,12 @@ The swings must say one unit: read in each unit a plan is drawn in
 swings on the layer, and no other layer as many. Door leaves are 0.6 to
 1.2 m wide, within a factor of ten of each other; arcs found as swings in
 units a factor of ten or more apart are not one building's doors (a
-framing plan's lettering drawn as arcs of every size). And they must hang
-in walls drawn with them (:func:`swings_in_walls`): a layer of doors alone,
-or of doors and furniture beside walls drawn on another layer, is no wall
-layer. Otherwise no layer is taken, and the drawing is refused for want of
-walls.
+framing plan's lettering drawn as arcs of every size). And the layer must
+draw doors in walls (:func:`draws_doors_in_walls`): most of its door-sized
+arcs are swings (of a framing plan's lettering, few are), and the swings
+hang in lines of that layer (a layer of doors alone, or of doors and
+furniture beside walls drawn on another layer, is no wall layer).
+Otherwise no layer is taken, and the drawing is refused for want of walls.
 """
 
 from __future__ import annotations
@@ -43,8 +44,9 @@ from mapkit.importers.dxf.layer_roles import assign_roles
 from mapkit.importers.dxf.read import model_space
 from mapkit.importers.dxf.units import INSUNITS
 from mapkit.options import BuildOptions
-from mapkit.tolerances import (CURVE_SAGITTA, SWING_LAYER_HINGE_GAP, SWING_LAYER_HINGED_SHARE,
-                               SWING_LAYER_LINES_PER_SWING, SWING_LAYER_MIN_SWINGS)
+from mapkit.tolerances import (CURVE_SAGITTA, DOOR_SWING_MAX_SWEEP_DEG, DOOR_SWING_RADIUS, SWING_LAYER_ARC_SHARE,
+                               SWING_LAYER_HINGE_GAP, SWING_LAYER_HINGED_SHARE, SWING_LAYER_LINES_PER_SWING,
+                               SWING_LAYER_MIN_SWINGS)
 from mapkit.units import UNIT_METRES
 
 #: Units a floor plan is drawn in, tried in turn to read the arcs as door swings.
@@ -111,7 +113,7 @@ def adopt_swing_layer(doc, counts: dict[str, Counter], options: BuildOptions) ->
     if found is None:
         return None
     layer, n, unit = found
-    if not swings_in_walls([e for e in msp if e.dxf.get("layer", "0") == layer], UNIT_METRES[unit]):
+    if not draws_doors_in_walls([e for e in msp if e.dxf.get("layer", "0") == layer], UNIT_METRES[unit]):
         return None
     roles = roles | {layer: "walls"}
     header_unit = INSUNITS.get(int(doc.header.get("$INSUNITS", 0) or 0))
@@ -129,16 +131,21 @@ def adopt_swing_layer(doc, counts: dict[str, Counter], options: BuildOptions) ->
     return AdoptedSwingLayer(roles, layer, read_in, warning, why)
 
 
-def swings_in_walls(entities, metres_per_unit: float) -> bool:
-    """Whether the door swings of ``entities`` (one layer's model-space
-    entities, ``metres_per_unit`` the unit the swings read in) hang in
-    walls drawn with them: most hinges (``SWING_LAYER_HINGED_SHARE``) within
+def draws_doors_in_walls(entities, metres_per_unit: float) -> bool:
+    """Whether one layer's model-space ``entities`` draw doors in walls, read
+    in the unit of ``metres_per_unit`` (the one its swings are found in):
+    at least ``SWING_LAYER_ARC_SHARE`` of its door-sized arcs are door
+    swings (a framing plan's lettering has arcs of every size, few with a
+    leaf), most of their hinges (``SWING_LAYER_HINGED_SHARE``) lie within
     ``SWING_LAYER_HINGE_GAP`` of the layer's other linework, and that
-    linework ``SWING_LAYER_LINES_PER_SWING`` metres long per swing. A layer
-    of doors alone (their frames, double-line leaves) or of doors and
+    linework is ``SWING_LAYER_LINES_PER_SWING`` metres long per swing. A
+    layer of doors alone (their frames, double-line leaves) or of doors and
     furniture beside walls drawn on another layer is not the walls."""
     swings = find_door_swings([e for e in entities if e.dxftype() in ("ARC", "LINE")], metres_per_unit)
-    if not swings:
+    door_sized = [e for e in entities if e.dxftype() == "ARC"
+                  and DOOR_SWING_RADIUS[0] <= float(e.dxf.radius) * metres_per_unit <= DOOR_SWING_RADIUS[1]
+                  and 0 < (float(e.dxf.end_angle) - float(e.dxf.start_angle)) % 360.0 <= DOOR_SWING_MAX_SWEEP_DEG]
+    if not swings or len(swings) < SWING_LAYER_ARC_SHARE * len(door_sized):
         return False
     in_swings = {id(e) for pair in swings for e in pair}
     strokes, _ = flatten_entities([e for e in entities if id(e) not in in_swings], metres_per_unit,
