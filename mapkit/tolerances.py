@@ -222,12 +222,30 @@ DOOR_SWING_MIN_CROSSING_DEG = 50.0
 DOOR_SWING_LEAF_LENGTH = (0.6, 1.9)
 
 #: A drawing no layer of which is named like walls: the layer of unknown
-#: role holding at least this many door swings, in one unit only, is named
-#: in the refusal as where the floor plans are drawn
-#: (mapkit/importers/dxf/swing_layer.py): as many as tell a drawing's units
-#: by its doors (``DOOR_UNITS_MIN_DOORS``). The corpus's drawing sheet
-#: (ciq_building): 27 on its plans' layer, 2 on a section's.
+#: role holding at least this many door swings, in one unit only, is taken
+#: as its walls, read in that unit (mapkit/importers/dxf/swing_layer.py):
+#: as many as tell a drawing's units by its doors (``DOOR_UNITS_MIN_DOORS``).
+#: The corpus's drawing sheet (ciq_building): 27 on its plans' layer, 2 on
+#: a section's.
 SWING_LAYER_MIN_SWINGS = 5
+#: ... and only when most of the layer's door-sized arcs (radius in
+#: ``DOOR_SWING_RADIUS``, sweep at most ``DOOR_SWING_MAX_SWEEP_DEG``) are
+#: swings, at least ``SWING_LAYER_ARC_SHARE`` of them (ciq_building's
+#: 'DETAILS' 27 of 27 in mm, hal9k's layer 0 13 of 13 in cm; a framing
+#: plan's lettering, walldet_sample's 'F-0': 6 of 90, 12 and 28 in dm, m
+#: and ft), and its swings hang in walls drawn with them (a layer of
+#: doors alone, or of doors and furniture beside walls on another layer,
+#: is no wall layer): at least ``SWING_LAYER_HINGED_SHARE`` of the swings'
+#: hinges within ``SWING_LAYER_HINGE_GAP`` metres of the layer's other
+#: linework (ciq_building: all 27 within 0.075 m, the jamb or the wall
+#: face the leaf turns on), and that linework at least
+#: ``SWING_LAYER_LINES_PER_SWING`` metres long per swing (ciq_building's
+#: 'DETAILS': 52 m; a room of 3 x 3 m with its door, single-line walls:
+#: 12 m; a door layer's frames and double-line leaves: 1 to 3 m).
+SWING_LAYER_ARC_SHARE = 0.67
+SWING_LAYER_HINGE_GAP = 0.15
+SWING_LAYER_HINGED_SHARE = 0.5
+SWING_LAYER_LINES_PER_SWING = 5.0
 
 #: A room's outline (mapkit/importers/dxf/room_outlines.py) that the walls
 #: cut into more than one part of at least this many square metres is

@@ -4,9 +4,11 @@ The corpus's ciq_building: four floor plans, two sections, an elevation and
 a site plan on one sheet; the plans' walls, doors and furniture on
 'DETAILS', the sections on 'SECTION-A', 'SECTION-B', no layer named like
 walls; its header says inches, it is drawn in millimetres. Refused before
-with "name the wall layers with --walls" and no word of which; the
-refusal now names the layer its door swings are drawn on and the unit they
-are read in. The drawings are small DXF files written here with ezdxf."""
+with "name the wall layers with --walls" and no word of which; then the
+refusal named the layer its door swings are drawn on and the unit they are
+read in; now that layer is taken as the walls, read in that unit, with a
+warning (tests/test_drawings_swing_walls.py). The drawings are small DXF
+files written here with ezdxf."""
 
 from __future__ import annotations
 
@@ -59,15 +61,17 @@ def write_sheet(path, insunits: int = 1):
     return path
 
 
-def test_a_sheet_without_wall_layers_is_refused_naming_its_swings_layer_and_unit(tmp_path):
-    """Refused as before, now naming the layer of the door swings and the
+def test_a_sheet_without_wall_layers_builds_the_layer_of_its_swings(tmp_path):
+    """Built as with '--walls DETAILS --units mm' (what the refusal named
+    before), with a warning naming the layer of the door swings and the
     unit they are read in (not the header's)."""
-    with pytest.raises(NoWallsError) as caught:
-        load_scene(write_sheet(tmp_path / "sheet.dxf"), BuildOptions())
-    message = str(caught.value)
-    assert message.startswith("no recognisable walls: layers are 'DETAILS', 'NOTES', 'SECTION-A'")
-    assert "on 'DETAILS' (6 door swings" in message and "its header says in" in message
-    assert "try --walls DETAILS --units mm" in message
+    path = write_sheet(tmp_path / "sheet.dxf")
+    scene = load_scene(path, BuildOptions())
+    named = load_scene(path, BuildOptions(walls=["DETAILS"], units="mm"))
+    assert scene.walls.equals(named.walls) and scene.free_space.equals(named.free_space)
+    [message] = [w for w in scene.info["warnings"] if "named like walls" in w]
+    assert "taking 'DETAILS', the layer of the drawing's 6 door swings" in message
+    assert "read in mm as the swings are (its header says in)" in message
     assert "\n" not in message
 
 
@@ -81,10 +85,10 @@ def test_the_options_named_build_the_plan(tmp_path):
 
 
 def test_a_header_in_the_swings_unit_is_not_overruled(tmp_path):
-    """With the header in millimetres the refusal names the layer only."""
-    with pytest.raises(NoWallsError, match=r"\(6 door swings, each an arc and its leaf, read in mm\): "
-                                           r"try --walls DETAILS and check"):
-        load_scene(write_sheet(tmp_path / "sheet.dxf", insunits=4), BuildOptions())
+    """With the header in millimetres the warning names the layer only."""
+    scene = load_scene(write_sheet(tmp_path / "sheet.dxf", insunits=4), BuildOptions())
+    [message] = [w for w in scene.info["warnings"] if "named like walls" in w]
+    assert "the layer of the drawing's 6 door swings" in message and "read in" not in message
 
 
 def test_arcs_that_read_as_swings_in_several_units_name_no_layer(tmp_path):
@@ -108,8 +112,8 @@ def test_arcs_that_read_as_swings_in_several_units_name_no_layer(tmp_path):
 
 
 def test_layers_notes_the_swings_layer(tmp_path, capsys):
-    """'mapkit layers', where the refusal sends the user, says it too."""
+    """'mapkit layers' says it too."""
     from mapkit.cli import main
 
     assert main(["layers", str(write_sheet(tmp_path / "sheet.dxf"))]) == 0
-    assert "try --walls DETAILS --units mm" in capsys.readouterr().out
+    assert "note: no layer is named like walls: taking 'DETAILS'" in capsys.readouterr().out

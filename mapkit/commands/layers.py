@@ -21,10 +21,10 @@ def run(args) -> int:
 
     from mapkit.commands._import_args import import_options_from_args
     from mapkit.errors import MapkitError, NoWallsError
-    from mapkit.importers.dxf import no_walls_with_hint
     from mapkit.importers.dxf.layers import layer_counts, resolve_roles, room_roles
     from mapkit.importers.dxf.read import read_dxf
     from mapkit.importers.dxf.layer_roles import assign_roles
+    from mapkit.importers.dxf.swing_layer import adopt_swing_layer
 
     options = import_options_from_args(args)
     path = Path(args.plan)
@@ -46,9 +46,15 @@ def run(args) -> int:
         roles, more = resolve_roles(counts, options)
         warnings += more
     except NoWallsError as exc:
-        # Listing the layers is how a user finds the wall layers: show them anyway.
-        roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore)
-        warnings.append(str(no_walls_with_hint(exc, doc, counts, options)))
+        adopted = adopt_swing_layer(doc, counts, options)  # the layer of the door swings, as the build takes it
+        if adopted is not None:
+            roles = adopted.roles
+            decided[adopted.layer] = adopted.why
+            warnings.append(adopted.warning)
+        else:
+            # Listing the layers is how a user finds the wall layers: show them anyway.
+            roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore)
+            warnings.append(str(exc))
 
     rows = [
         {

@@ -29,14 +29,13 @@ from ezdxf import bbox
 from mapkit.errors import MapkitError, NoWallsError
 from mapkit.importers.dxf.door_swings import find_door_swings
 from mapkit.importers.dxf.entities import SILENT, check_entity_count, flatten_entities
-from mapkit.importers.dxf.layer_roles import assign_roles
 from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
 from mapkit.importers.dxf.openings import drawing_items
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
-from mapkit.importers.dxf.swing_layer import swing_layer, swing_layer_hint
-from mapkit.importers.dxf.units import INSUNITS, decide_units, units_from_doors, units_from_gaps
+from mapkit.importers.dxf.swing_layer import adopt_swing_layer
+from mapkit.importers.dxf.units import decide_units, units_from_doors, units_from_gaps
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.room_layers import door_lines_apart
@@ -84,8 +83,15 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
     counts = layer_counts(doc)
     try:
         roles, role_warnings, room_outlines = resolve_layer_roles(counts, options)
-    except NoWallsError as exc:
-        raise no_walls_with_hint(exc, doc, counts, options) from None
+    except NoWallsError:
+        # No layer is walls by name: the one holding the plan's door swings
+        # is, read in their unit (:mod:`.swing_layer`); else the refusal stands.
+        adopted = adopt_swing_layer(doc, counts, options)
+        if adopted is None:
+            raise
+        roles, role_warnings, room_outlines = adopted.roles, [adopted.warning], []
+        if adopted.unit is not None:
+            options = replace(options, units=adopted.unit)
     for w in role_warnings:
         log.warning(w)
     warnings += role_warnings
@@ -141,22 +147,6 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
     if len(plans) > 1:
         info["plans"] = [p.to_dict() for p in plans]
     return drawing, info
-
-
-def no_walls_with_hint(exc: NoWallsError, doc, counts: dict, options: BuildOptions) -> NoWallsError:
-    """``exc``, the refusal of a drawing with no wall layer, naming the
-    layer of unknown role that holds the plan's door swings and the options
-    that read it (:mod:`.swing_layer`), when one does and the user named no
-    wall layer; ``exc`` as it is otherwise."""
-    if options.walls:
-        return exc
-    roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore,
-                         list(getattr(options, "floor", []) or []))
-    found = swing_layer(model_space(doc), counts, roles)
-    if found is None:
-        return exc
-    header_unit = INSUNITS.get(int(doc.header.get("$INSUNITS", 0) or 0))
-    return NoWallsError(f"{exc}; {swing_layer_hint(found, header_unit)}")
 
 
 def _flatten(msp, roles: dict, far: list, factor: float, options: BuildOptions, note) -> tuple[list, list]:

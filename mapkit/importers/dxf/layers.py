@@ -39,8 +39,9 @@ def resolve_layer_roles(counts: dict[str, Counter],
     (:func:`room_roles`), with a warning. When no wall layer is named or recognised but
     exactly one layer of unknown role holds linework, that layer is taken
     as the walls (simple drawings keep everything on one layer). Raises :class:`NoWallsError`
-    listing the layers otherwise, and :class:`MapkitError` for globs that
-    match no layer.
+    listing the layers otherwise (the importer then takes the layer of the
+    door swings, :mod:`.swing_layer`, where one qualifies), and
+    :class:`MapkitError` for globs that match no layer.
     """
     floor = list(getattr(options, "floor", []) or [])
     missing = unmatched_globs(

@@ -4,30 +4,49 @@ A drawing sheet keeps its floor plans on a layer whose name says nothing of
 walls ('DETAILS'), beside layers of sections, elevations and a site plan
 that hold as much linework ('SECTION-A', 'FRONT-ELEVATION', 'SITE-PLAN').
 No layer is named like walls and several of unknown role hold lines, so
-the plan is refused (:func:`mapkit.importers.dxf.layers.resolve_layer_roles`).
-The floor plans are where the doors swing: of the layers of unknown role,
-the one holding the most door swings (an arc a door's width in radius and
-its leaf line, :func:`.door_swings.find_door_swings`) is named in the
-refusal, with the unit its swings are read in when the header says
-another; the plan is not built from it unasked, since such a layer also
-holds furniture, fittings and details that the user should look at first
-('mapkit preview --walls LAYER').
+no rule of :func:`mapkit.importers.dxf.layers.resolve_layer_roles` finds
+the walls. The floor plans are where the doors swing: of the layers of
+unknown role, the one holding the most door swings (an arc a door's width
+in radius and its leaf line, :func:`.door_swings.find_door_swings`) is
+taken as the walls (:func:`adopt_swing_layer`), and the drawing is read in
+the unit its swings are read in, with a warning naming both and the
+options that choose otherwise (``--walls``, ``--units``). The options the
+user gives win: ``--walls`` names the walls, ``--units`` or ``--scale``
+the size. Such a layer also holds furniture and fittings; they are built
+as the walls are (obstacles the robot keeps off), which the warning sends
+the user to check in 'mapkit preview'.
 
 The swings must say one unit: read in each unit a plan is drawn in
 (``SWING_LAYER_UNITS``), only one may find at least ``SWING_LAYER_MIN_SWINGS``
-swings on the layer. Door leaves are 0.6 to 1.2 m wide, within a factor
-of ten of each other; arcs found as swings in units a factor of ten or more
-apart are not one building's doors (a framing plan's lettering drawn as
-arcs of every size).
+swings on the layer, and no other layer as many. Door leaves are 0.6 to
+1.2 m wide, within a factor of ten of each other; arcs found as swings in
+units a factor of ten or more apart are not one building's doors (a
+framing plan's lettering drawn as arcs of every size). And the layer must
+draw doors in walls (:func:`draws_doors_in_walls`): most of its door-sized
+arcs are swings (of a framing plan's lettering, few are), and the swings
+hang in lines of that layer (a layer of doors alone, or of doors and
+furniture beside walls drawn on another layer, is no wall layer).
+Otherwise no layer is taken, and the drawing is refused for want of walls.
 """
 
 from __future__ import annotations
 
 from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Point
 
 from mapkit.importers.dxf.door_swings import find_door_swings
-from mapkit.importers.dxf.entities import SILENT
-from mapkit.tolerances import SWING_LAYER_MIN_SWINGS
+from mapkit.importers.dxf.entities import SILENT, flatten_entities
+from mapkit.importers.dxf.layer_roles import assign_roles
+from mapkit.importers.dxf.read import model_space
+from mapkit.importers.dxf.units import INSUNITS
+from mapkit.options import BuildOptions
+from mapkit.tolerances import (CURVE_SAGITTA, DOOR_SWING_MAX_SWEEP_DEG, DOOR_SWING_RADIUS, SWING_LAYER_ARC_SHARE,
+                               SWING_LAYER_HINGE_GAP, SWING_LAYER_HINGED_SHARE, SWING_LAYER_LINES_PER_SWING,
+                               SWING_LAYER_MIN_SWINGS)
 from mapkit.units import UNIT_METRES
 
 #: Units a floor plan is drawn in, tried in turn to read the arcs as door swings.
@@ -63,16 +82,87 @@ def swing_layer(msp, counts: dict[str, Counter], roles: dict[str, str | None]) -
     return layer, n, unit
 
 
-def swing_layer_hint(found: tuple[str, int, str], header_unit: str | None) -> str:
-    """The refusal's clause naming the options that read the plan of the
-    swing layer ``found`` (:func:`swing_layer`); ``--units`` too when the
-    header's unit (``header_unit``, None if it states none) is not the
-    swings'."""
+@dataclass(frozen=True)
+class AdoptedSwingLayer:
+    """The swing layer taken as the walls of a drawing with no wall layer.
+
+    ``roles``: every layer's role, ``layer`` the walls'; ``unit``: the unit
+    to read the drawing in (its swings'), None when the user's ``--units``
+    or ``--scale`` decide; ``warning``: what was assumed and the options
+    that choose otherwise; ``why``: the rule, for 'mapkit layers'."""
+
+    roles: dict[str, str | None]
+    layer: str
+    unit: str | None
+    warning: str
+    why: str
+
+
+def adopt_swing_layer(doc, counts: dict[str, Counter], options: BuildOptions) -> AdoptedSwingLayer | None:
+    """The layer of unknown role holding the plan's door swings
+    (:func:`swing_layer`), taken as the walls of the DXF document ``doc``
+    (``counts``: its entity counts per layer and type) when no layer is
+    walls by name and the user named none; None when the user named wall
+    layers or no layer holds the swings as :func:`swing_layer` requires."""
+    if options.walls:
+        return None
+    roles = assign_roles(counts, options.walls, options.doors, options.windows, options.ignore,
+                         list(getattr(options, "floor", []) or []))
+    msp = model_space(doc)
+    found = swing_layer(msp, counts, roles)
+    if found is None:
+        return None
     layer, n, unit = found
-    plain = layer.replace("-", "").replace("_", "").isalnum()
-    options = f"--walls {layer}" if plain else f"--walls '{layer}'"
-    why = f"{n} door swings, each an arc and its leaf, read in {unit}"
-    if header_unit != unit:
-        options += f" --units {unit}"
-        why += f"; its header says {header_unit}" if header_unit else "; its header gives no unit"
-    return f"the floor plans are probably drawn on '{layer}' ({why}): try {options} and check it with 'mapkit preview'"
+    if not draws_doors_in_walls([e for e in msp if e.dxf.get("layer", "0") == layer], UNIT_METRES[unit]):
+        return None
+    roles = roles | {layer: "walls"}
+    header_unit = INSUNITS.get(int(doc.header.get("$INSUNITS", 0) or 0))
+    # The user's --units or --scale say the size: the swings' unit gives way.
+    read_in = unit if options.units is None and float(options.scale) == 1.0 else None
+    warning = (f"no layer is named like walls: taking '{layer}', the layer of the drawing's {n} door swings (each an "
+               f"arc and its leaf), as the walls (all it holds is built as walls, furniture too)")
+    options_named = "--walls"
+    if read_in is not None and read_in != header_unit:
+        said = f"its header says {header_unit}" if header_unit else "its header gives no unit"
+        warning += f", read in {read_in} as the swings are ({said})"
+        options_named += " and --units"
+    warning += f"; check it with 'mapkit preview' and pass {options_named} to choose otherwise"
+    why = f"no layer is named like walls: it holds the drawing's door swings ({n}, read in {unit})"
+    return AdoptedSwingLayer(roles, layer, read_in, warning, why)
+
+
+def draws_doors_in_walls(entities, metres_per_unit: float) -> bool:
+    """Whether one layer's model-space ``entities`` draw doors in walls, read
+    in the unit of ``metres_per_unit`` (the one its swings are found in):
+    at least ``SWING_LAYER_ARC_SHARE`` of its door-sized arcs are door
+    swings (a framing plan's lettering has arcs of every size, few with a
+    leaf), most of their hinges (``SWING_LAYER_HINGED_SHARE``) lie within
+    ``SWING_LAYER_HINGE_GAP`` of the layer's other linework, and that
+    linework is ``SWING_LAYER_LINES_PER_SWING`` metres long per swing. A
+    layer of doors alone (their frames, double-line leaves) or of doors and
+    furniture beside walls drawn on another layer is not the walls."""
+    swings = find_door_swings([e for e in entities if e.dxftype() in ("ARC", "LINE")], metres_per_unit)
+    door_sized = [e for e in entities if e.dxftype() == "ARC"
+                  and DOOR_SWING_RADIUS[0] <= float(e.dxf.radius) * metres_per_unit <= DOOR_SWING_RADIUS[1]
+                  and 0 < (float(e.dxf.end_angle) - float(e.dxf.start_angle)) % 360.0 <= DOOR_SWING_MAX_SWEEP_DEG]
+    if not swings or len(swings) < SWING_LAYER_ARC_SHARE * len(door_sized):
+        return False
+    in_swings = {id(e) for pair in swings for e in pair}
+    strokes, _ = flatten_entities([e for e in entities if id(e) not in in_swings], metres_per_unit,
+                                  CURVE_SAGITTA / metres_per_unit, lambda layer: True)
+    lines = [LineString(np.vstack([s.coords, s.coords[:1]]) if s.closed else s.coords) for s in strokes]
+    if sum(line.length for line in lines) < SWING_LAYER_LINES_PER_SWING * len(swings):
+        return False
+    tree = shapely.STRtree(lines)
+    hinged = sum(len(tree.query(_hinge(arc, leaf, metres_per_unit), predicate="dwithin",
+                                distance=SWING_LAYER_HINGE_GAP)) > 0 for arc, leaf in swings)
+    return hinged >= SWING_LAYER_HINGED_SHARE * len(swings)
+
+
+def _hinge(arc, leaf, metres_per_unit: float) -> Point:
+    """The hinge of a swing ``(arc, leaf)``, metres: the leaf's end away from
+    its arc (the other end, the leaf's tip, lies on the arc)."""
+    path = LineString([(v.x * metres_per_unit, v.y * metres_per_unit)
+                       for v in arc.flattening(CURVE_SAGITTA / metres_per_unit)])
+    ends = [Point(p.x * metres_per_unit, p.y * metres_per_unit) for p in (leaf.dxf.start, leaf.dxf.end)]
+    return max(ends, key=path.distance)
