@@ -67,17 +67,23 @@ def crosses_an_edge(origin: np.ndarray, targets: np.ndarray, ea: np.ndarray, eb:
     along an edge, does not count. The one sight test of the simulator and
     of :class:`VisibilityOracle` (their occluders differ, not the test)."""
     q = np.asarray(origin, dtype=float)
+    targets = np.asarray(targets, dtype=float)
+    ea, eb = np.asarray(ea, dtype=float), np.asarray(eb, dtype=float)
+    # The orientation tests cross(u, v) = u.x v.y - u.y v.x, written out on
+    # x and y arrays of their own: the same differences and products as on
+    # stacked (..., 2) vectors, so the same floating-point values, without
+    # the (targets, edges, 2) temporaries. o3 depends on the edges alone.
+    ax, ay = ea[:, 0] - q[0], ea[:, 1] - q[1]  # ea - q
+    bx, by = eb[:, 0] - q[0], eb[:, 1] - q[1]  # eb - q
+    dx, dy = eb[:, 0] - ea[:, 0], eb[:, 1] - ea[:, 1]  # eb - ea
+    o3 = dx * (q[1] - ea[:, 1]) - dy * (q[0] - ea[:, 0])  # cross(eb - ea, q - ea)
     out = np.empty(len(targets), dtype=bool)
     for i in range(0, len(targets), 2000):
-        s = targets[i : i + 2000, None, :]
-
-        def cross(u, v):
-            return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
-
-        o1 = cross(s - q, ea - q)
-        o2 = cross(s - q, eb - q)
-        o3 = cross(eb - ea, q - ea)
-        o4 = cross(eb - ea, s - ea)
+        sx, sy = targets[i : i + 2000, 0, None], targets[i : i + 2000, 1, None]
+        ux, uy = sx - q[0], sy - q[1]  # s - q
+        o1 = ux * ay - uy * ax  # cross(s - q, ea - q)
+        o2 = ux * by - uy * bx  # cross(s - q, eb - q)
+        o4 = dx * (sy - ea[:, 1]) - dy * (sx - ea[:, 0])  # cross(eb - ea, s - ea)
         out[i : i + 2000] = ((o1 * o2 < 0) & (o3 * o4 < 0)).any(axis=1)
     return out
 

@@ -39,15 +39,17 @@ def inputs(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def one_at_a_time(inputs, tmp_path_factory):
-    """Each good input built on its own, ``mapkit build X -o Y``: {stem: map bytes}."""
+    """Each good input built on its own, ``mapkit build X -o Y``: {stem: map bytes}.
+    The flat's is the committed example map (test_build_real checks it is
+    flat.dxf's build, and the map does not depend on the plan's folder)."""
     import contextlib
     import io
 
     from mapkit.cli import main
 
     out = tmp_path_factory.mktemp("single")
-    maps = {}
-    for stem in ("flat", "office2", "office1"):
+    maps = {"flat": FLAT.with_suffix(".lmap").read_bytes()}
+    for stem in ("office2", "office1"):
         with contextlib.redirect_stdout(io.StringIO()):
             assert main(["build", str(inputs / f"{stem}.dxf"), "-o", str(out / f"{stem}.lmap"), "-q"]) == 0
         maps[stem] = (out / f"{stem}.lmap").read_bytes()
@@ -176,9 +178,10 @@ def test_workers_must_be_positive(capsys, inputs, tmp_path):
 
 
 @pytest.mark.slow
-def test_one_input_to_one_map_does_not_load_dask(tmp_path):
+def test_one_input_to_one_map_does_not_load_dask(inputs, tmp_path):
+    plan = inputs / "office1.dxf"  # the smallest plan: any one input takes the same path
     script = ("import sys\nfrom mapkit.cli import main\n"
-              f"assert main(['build', {str(FLAT)!r}, '-o', {str(tmp_path / 'f.lmap')!r}, '-q']) == 0\n"
+              f"assert main(['build', {str(plan)!r}, '-o', {str(tmp_path / 'f.lmap')!r}, '-q']) == 0\n"
               "assert not {'dask', 'distributed'} & {m.split('.')[0] for m in sys.modules}, 'dask loaded'\n")
     subprocess.run([sys.executable, "-c", script], check=True, cwd=ROOT, timeout=300,
                    env={**os.environ, "PYTHONPATH": str(ROOT)})

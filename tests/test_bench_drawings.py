@@ -11,6 +11,8 @@ import bench_drawings
 import fetch_drawings
 import pytest
 
+from mapkit_harness.plans import office_grid
+
 ROOT = Path(__file__).resolve().parent.parent
 FLAT = ROOT / "maps" / "flat.dxf"
 NO_WALLS = ROOT / "tests" / "data" / "dxf" / "no_walls.dxf"
@@ -25,22 +27,24 @@ def test_a_folder_of_drawings_is_built_and_judged(tmp_path, capsys):
     folder = tmp_path / "drawings"
     folder.mkdir()
     shutil.copy(FLAT, folder / "flat.dxf")
-    shutil.copy(FLAT, folder / "flat_miscounted.dxf")
+    # Any plan with its doors drawn shows a miscount: an office of 2 x 2 rooms builds in a fraction of the flat's time.
+    office = office_grid(folder / "office_miscounted.dxf", n=2)
     shutil.copy(NO_WALLS, folder / "no_walls.dxf")
     (folder / "manifest.tsv").write_text(
         "# what a person sees\n"
         "id\tdoors_drawn\trooms\toutline_m2\tsha256_12\n"
         f"flat\t7\t\t100\t{_sha12(FLAT)}\n"
-        "flat_miscounted\t20\t\t\t000000000000\n")
+        "office_miscounted\t20\t\t\t000000000000\n")
     assert bench_drawings.main([str(folder)]) == 0
     out, err = capsys.readouterr()
     rows = {line.split(" | ")[0].strip("| "): line.split(" | ") for line in out.splitlines() if line.startswith("| ")}
     assert rows["flat"][1] == "right", rows["flat"]
     assert rows["flat"][6] == "7 / 7"
-    assert rows["flat_miscounted"][1] == "built wrong" and "7 of 20 doors found" in rows["flat_miscounted"][-1]
+    assert rows["office_miscounted"][1] == "built wrong", rows["office_miscounted"]
+    assert f"{office.doors} of 20 doors found" in rows["office_miscounted"][-1]
     assert rows["no_walls"][1] == "refused" and "--walls" in rows["no_walls"][-1]
     assert "3 drawings: 1 right, 0 built, 1 built wrong, 1 refused, 0 bug" in out
-    assert "flat_miscounted.dxf: SHA-256" in err and "another version" in err
+    assert "office_miscounted.dxf: SHA-256" in err and "another version" in err
 
 
 def test_judging_names_each_failed_fact():

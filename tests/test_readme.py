@@ -206,10 +206,16 @@ def test_example_chains_follow_the_files_under_out():
     assert example_chains([a, c, d, b]) == [[a, c, d, b]]
 
 
+@pytest.fixture(scope="session")  # not module: the chains must stay free to run on different workers
+def clean_clone(tmp_path_factory):
+    """A fresh clone, made once per process: each chain runs in a copy of it."""
+    return fresh_clone(tmp_path_factory.mktemp("readme-clone"))
+
+
 @pytest.mark.slow  # the README's examples, one chain each: builds maps, simulates frames, tracks a run
 @pytest.mark.parametrize("chain", CHAINS, ids=[chain_name(c) for c in CHAINS])
-def test_readme_examples_run_as_written(chain, tmp_path):
-    repo = fresh_clone(tmp_path / "clone")
+def test_readme_examples_run_as_written(chain, clean_clone, tmp_path):
+    repo = shutil.copytree(clean_clone, tmp_path / "clone", symlinks=True)
     (repo / "out").mkdir()
     env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=str(repo), MPLBACKEND="Agg")
     env.pop("PYTHONSTARTUP", None)
