@@ -18,7 +18,13 @@ from dataclasses import MISSING, asdict, dataclass, field, fields
 
 from mapkit.errors import MapkitError
 from mapkit.parallel import MAX_DEFAULT_JOBS, default_jobs
-from mapkit.tolerances import DXF_MAX_ENTITIES, MAX_FLOOR_AREA_M2, MAX_SIGHT_WORK_PER_M2, VIR_MERGE_GROWTH
+from mapkit.tolerances import (
+    DXF_MAX_ENTITIES,
+    MAX_FLOOR_AREA_M2,
+    MAX_REGION_SECONDS_PER_100M2,
+    REGION_BOUND_MIN_AREA_M2,
+    VIR_MERGE_GROWTH,
+)
 
 #: Groups of flags, in the order ``--help`` lists them: the import groups
 #: every command that reads a plan takes, then the build's own. ``""``:
@@ -181,10 +187,11 @@ class BuildOptions:
         MAX_FLOOR_AREA_M2, group="edges and visibility", metavar="M2", allowed=Range(0.0, lo_open=True, unit="m2"),
         help="largest floor a map is built for, square metres, bounding box of the free space (default {default}; "
              "the region builder's time and memory grow with it)")
-    max_sight_work: float = option(
-        MAX_SIGHT_WORK_PER_M2, group="edges and visibility", metavar="N", allowed=POSITIVE,
-        help="most sight tests of the region builder per square metre of free space (default {default}; buildings "
-             "need under 5000, walls tangled by faces crossing the building far more)")
+    max_region_seconds_per_100m2: float = option(
+        MAX_REGION_SECONDS_PER_100M2, group="edges and visibility", metavar="S", allowed=POSITIVE,
+        help="most seconds the region stage may take per 100 m2 of free space, predicted before it runs "
+             f"(default {{default}}; floors under {REGION_BOUND_MIN_AREA_M2:g} m2 count as that large; real buildings "
+             "need up to 8, walls tangled by faces crossing the building more)")
     jobs: int = option(
         factory=default_jobs, group="", flag=("-j", "--jobs"), metavar="N", allowed=Range(1),
         help="threads for the region stage's geometry work (default {default}: the cores available, at most "
@@ -225,7 +232,16 @@ class BuildOptions:
 
 
 #: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
-LIMITS = ("max_entities", "max_floor_area", "max_sight_work", "jobs")
+LIMITS = ("max_entities", "max_floor_area", "max_region_seconds_per_100m2", "jobs")
+#: Flags no longer taken: each with the field that replaced it (the flag is
+#: taken where that field's is) and the one-line error that names it.
+RETIRED_FLAGS = {
+    "--max-sight-work": (
+        "max_region_seconds_per_100m2",
+        "--max-sight-work (sight tests per m2) was replaced by --max-region-seconds-per-100m2 (the region stage's "
+        f"predicted seconds per 100 m2 of free space, default {MAX_REGION_SECONDS_PER_100M2:g}); give that instead",
+    ),
+}
 #: Fields added after format 1.0, recorded in a map only when set, so maps
 #: built without them keep their bytes.
 RECORDED_WHEN_SET = ("plan_number",)

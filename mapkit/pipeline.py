@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -98,7 +99,7 @@ def build_map_of_scene(scene, plan: str | Path, options: BuildOptions | None = N
     if len(segments) == 0:
         raise MapkitError(f"{plan}: no straight wall edges found; check the layer choice with 'mapkit preview'")
 
-    _check_sight_work(segments, scene, options, plan)
+    _check_region_time(segments, scene, options, plan)
     t = time.perf_counter()
     part = build_regions(segments, scene.walls, scene.free_space, camera, RegionSettings.from_options(options),
                          progress=progress, workers=options.jobs)
@@ -149,27 +150,32 @@ def _check_floor(free_space, options: BuildOptions, plan: Path) -> None:
         )
 
 
-def _check_sight_work(segments: np.ndarray, scene, options: BuildOptions, plan: Path) -> None:
-    """MapkitError naming --max-sight-work when the region builder would
-    make more sight tests per square metre of free space than any building
-    needs (``MAX_SIGHT_WORK_PER_M2``): wall sections tangled by faces that
-    cross the building, which would keep it busy for minutes."""
-    from mapkit.tolerances import SIGHT_WORK_MIN_AREA_M2
-    from mapkit.visibility import sight_work
+def _check_region_time(segments: np.ndarray, scene, options: BuildOptions, plan: Path) -> None:
+    """MapkitError naming --max-region-seconds-per-100m2 when the region
+    stage's predicted time (``mapkit.region_cost``) is past the seconds per
+    100 m2 of free space a building needs (``MAX_REGION_SECONDS_PER_100M2``;
+    floors under ``REGION_BOUND_MIN_AREA_M2`` count as that large): wall
+    sections tangled by faces that cross the building, segments kilometres
+    long."""
+    from mapkit.region_cost import region_cost
+    from mapkit.tolerances import REGION_BOUND_MIN_AREA_M2
 
     if scene.free_space is None or scene.free_space.is_empty:
         return
     area = float(scene.free_space.area)
-    allowed = options.max_sight_work * max(area, SIGHT_WORK_MIN_AREA_M2)
-    points, work = sight_work(segments, scene.walls, max_range=options.max_range,
-                              min_visible_length=options.min_visible_length, stop_above=allowed)
-    if work > allowed:
+    counted = max(area, REGION_BOUND_MIN_AREA_M2)
+    allowed = options.max_region_seconds_per_100m2 * counted / 100.0
+    cost = region_cost(segments, scene.walls, max_range=options.max_range,
+                       min_visible_length=options.min_visible_length, stop_above=allowed)
+    if cost.seconds > allowed:
+        tests = f", {cost.sight_tests:.2g} sight tests" if math.isfinite(cost.sight_tests) else ""
         raise MapkitError(
-            f"{plan.name}: the region builder would make {work:.2g} sight tests ({points} sample points, each against "
-            f"the wall edges near it) over {area:.0f} m2 of free space, {work / max(area, SIGHT_WORK_MIN_AREA_M2):.0f} "
-            f"per m2 where buildings need under 5000 (limit {options.max_sight_work:g}, MAX_SIGHT_WORK_PER_M2): walls "
-            f"tangled by faces that cross the building, or segments kilometres long? repair the input, or raise the "
-            f"limit with --max-sight-work"
+            f"{plan.name}: the region stage would take about {cost.seconds:.3g} s ({cost.points} sample points"
+            f"{tests}) over {area:.0f} m2 of free space, "
+            f"{100.0 * cost.seconds / counted:.3g} s per 100 m2 where buildings need up to 8 (limit "
+            f"{options.max_region_seconds_per_100m2:g}, MAX_REGION_SECONDS_PER_100M2): walls tangled by faces that "
+            f"cross the building, or segments kilometres long? repair the input, or raise the limit with "
+            f"--max-region-seconds-per-100m2"
         )
 
 

@@ -657,24 +657,70 @@ DXF_MAX_ENTITIES = 100_000
 #: raises it.
 MAX_FLOOR_AREA_M2 = 250_000.0
 
-#: Most sight tests per square metre of free space the region builder may
-#: make (``mapkit.visibility.sight_work``: its sample points, each against
-#: the wall edges within --max-range of it, plus ``SIGHT_POINT_COST``).
-#: Buildings need 1 000 to 4 500 (tests/data/hospital.stl 3 000,
-#: maps/flat.dxf 4 100, a 10 x 10 office 4 150); a mesh whose faces cross
-#: the building leaves a tangle of wall edges in its section: 54 000 for a
-#: damaged hospital.stl that built in 60 to 130 s against 4 s; segments
-#: kilometres long over a small floor, millions. Floors smaller than
-#: ``SIGHT_WORK_MIN_AREA_M2`` are judged as that large (their work is
-#: seconds whatever their detail). ``--max-sight-work`` raises it.
-MAX_SIGHT_WORK_PER_M2 = 20_000.0
-SIGHT_WORK_MIN_AREA_M2 = 100.0
+#: Most seconds the region stage (``mapkit.vir.build_regions``) may take per
+#: 100 m2 of free space, predicted before it runs (``mapkit.region_cost``);
+#: floors smaller than ``REGION_BOUND_MIN_AREA_M2`` are allowed as much as
+#: that large (15 s). Real buildings need 0.5 to 7.2 (predicted; measured
+#: 0.5 to 8.6), the detailed ones the most (pms_b001_f3's facility plan 7.2,
+#: ciq_building's house with door swings and furniture on its wall layer
+#: 7.0); a mesh whose faces cross the building leaves a tangle of wall edges
+#: in its section (tests/data/fuzz/mesh_tangled_walls_slow_regions: 13.9
+#: predicted, 15.5 measured, 27 s against 4 s for the undamaged mesh);
+#: segments kilometres long over a small floor, thousands. The bound is a
+#: rate, not a total: the largest corpus floor (daoshi_f1, 3400 m2) takes
+#: 60 s, twice the tangle, and is as plain a building as any.
+#: ``--max-region-seconds-per-100m2`` raises it.
+MAX_REGION_SECONDS_PER_100M2 = 10.0
+REGION_BOUND_MIN_AREA_M2 = 150.0
 
-#: A sample point's own cost in the sight-work estimate, counted in sight
-#: tests: its sweep's setup, the square's sides and its polygon take about
-#: 0.3 ms, as long as 150 tests of an edge in sight (2 us each). The
-#: estimate is then about the region builder's time in units of 2 us.
-SIGHT_POINT_COST = 150
+#: The region stage's predicted seconds (``mapkit.region_cost``): per sight
+#: test (a sample point against an occluder edge within --max-range of it),
+#: per vertex of a sample point's visibility polygon (the overlays that
+#: follow pay per vertex) and per sample point. Processor seconds (both
+#: threads of -j 2) on the benchmarks' machine (2-core AMD EPYC) under load
+#: 4 to 7, where the stage's wall time was 1.2 to 2.3 times them. Fitted
+#: (non-negative least squares of the relative error) on the first 10
+#: builds below, measured once; the table is a second measurement of all
+#: 18, the last 8 held out of the fit (defaults unless named):
+#:
+#:   ======================  =========  ========  ====  ===========
+#:   build                   predicted  measured  free  predicted s
+#:                                 s         s    m2    per 100 m2
+#:   ======================  =========  ========  ====  ===========
+#:   daoshi_f1                    59.8      58.6  3382     1.8
+#:   jps_einkauf                  35.5      37.4   643     5.5
+#:   office 7 x 7 rooms           22.1      20.1   987     2.2
+#:   office 4 x 4 rooms            5.8       5.3   319     1.8
+#:   hospital.stl                  4.7       4.1   235     2.0
+#:   qs_jiao --units cm            3.0       3.2   589     0.5
+#:   smh_dxf28                     2.5       2.4    81     1.7
+#:   maps/flat.dxf                 2.3       2.0    62     1.5
+#:   pms_giraffe360                1.6       1.6    43     1.1
+#:   apartment_a                   1.1       1.1    40     0.7
+#:   held out:
+#:   daoshi_f3                    67.6      65.0  2837     2.4
+#:   pms_b001_f3                  28.2      33.9   392     7.2
+#:   the tangled hospital (1)     24.0      26.7   172    13.9
+#:   dmx_gallery --scale 14       12.5      14.8  1120     1.1
+#:   ciq_building (2)             10.5      10.7    62     7.0
+#:   anand_plan                    4.8       4.2   169     2.8
+#:   hal9k                         2.6       2.5   124     1.7
+#:   raytracer                     1.1       1.4    66     0.7
+#:   ======================  =========  ========  ====  ===========
+#:
+#: (1) tests/data/fuzz/mesh_tangled_walls_slow_regions, refused. (2) with
+#: ``--walls DETAILS --units mm``. Predicted / measured 0.82 to 1.18 (held
+#: out 0.82 to 1.13). Without the vertex term (sight tests and points
+#: only) the first measurement gave 0.54 to 1.49: the tangle and
+#: ciq_building overestimated by half, the offices underestimated. The
+#: per-test cost is the old sight-work estimate's 2 us; its fixed 150
+#: tests a point were too few where polygons are large, too many where
+#: they are small. The check itself takes 0.05 to 1.3 s (ciq_building).
+#: Refit (``mapkit.region_cost``'s docstring says how) when the region
+#: stage's speed changes.
+REGION_SECONDS_PER_SIGHT_TEST = 2.2e-6
+REGION_SECONDS_PER_VISIBLE_VERTEX = 38e-6
+REGION_SECONDS_PER_POINT = 140e-6
 
 # ---- work sizes ---------------------------------------------------------------
 # Memory bounds of vectorised steps, not geometry: results do not depend on them.
@@ -703,9 +749,12 @@ VIR_PAIR_CHUNK = 500_000
 #: walls, a room's own few; see ``mapkit.visibility._nearest_hits``).
 VIS_FIRST_EDGES = 8
 
-#: Sample points whose edges in sight are counted to estimate the region
-#: builder's sight tests (the mean over them stands for all).
-SIGHT_WORK_PROBES = 512
+#: Sample points whose edges in range are counted to predict the region
+#: stage's time (the mean over them stands for all), and how many of them
+#: are swept for their visibility polygons' vertices (a sweep costs up to
+#: 10 ms a point in a detailed drawing: about 1 s at most for the check).
+REGION_COST_PROBES = 512
+REGION_COST_POLYGON_PROBES = 96
 
 #: Points per chunk in the mesh sections' winding-number tests (memory:
 #: chunk x segments booleans).

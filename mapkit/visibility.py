@@ -14,8 +14,8 @@ Conventions (docs/visibility.md has the full definition):
 
 Public names: :class:`Occluders` (edge arrays ready for sweeps),
 :func:`visibility_polygon`, :func:`distance_band`,
-:func:`vertical_distance_band`, :func:`segment_regions` and its cost
-before it runs, :func:`sight_work`.
+:func:`vertical_distance_band`, :func:`segment_regions` (its time,
+predicted before it runs: :mod:`mapkit.region_cost`).
 """
 
 from __future__ import annotations
@@ -34,8 +34,6 @@ from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (
     CIRCLE_SIDES,
     OVERLAY_GRID,
-    SIGHT_POINT_COST,
-    SIGHT_WORK_PROBES,
     VIS_BLOCK,
     VIS_BUILD_SHRINK,
     VIS_COLLINEAR,
@@ -376,42 +374,6 @@ def sample_segment(seg: np.ndarray, spacing: float) -> np.ndarray:
     return seg[0] + t[:, None] * (seg[1] - seg[0])
 
 
-def sight_work(segments: np.ndarray, occluders, *, max_range: float, min_visible_length: float,
-               stop_above: float = math.inf) -> tuple[int, float]:
-    """What :func:`segment_regions` is about to do, estimated cheaply:
-    ``(points, work)``, its distinct sample points (one visibility polygon
-    each) and its sight tests, each point against the occluder edges within
-    ``max_range`` of it (the edges its sweep considers), plus
-    ``SIGHT_POINT_COST`` for the point itself: ``points * (SIGHT_POINT_COST
-    + mean edges near a point)``, the mean over at most
-    ``SIGHT_WORK_PROBES`` points spread over them.
-
-    ``segments`` (N, 2, 3) metres; ``occluders`` the wall solids (shapely).
-    Sampling is skipped, ``points`` is their upper bound and ``work`` that
-    times ``SIGHT_POINT_COST``, when this alone is past ``stop_above`` (a
-    damaged segment kilometres long would take gigabytes to sample)."""
-    segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
-    spacing = float(min_visible_length) / 2.0
-    with np.errstate(over="ignore", invalid="ignore"):  # far coordinates: an infinite bound, refused
-        vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
-        lengths = np.linalg.norm(segs[~vertical, 1] - segs[~vertical, 0], axis=1)
-        bound = float(vertical.sum() + np.sum(np.ceil(lengths / spacing) + 1.0))
-    if not math.isfinite(bound):
-        return 0, math.inf
-    if bound * SIGHT_POINT_COST > stop_above:
-        return int(bound), bound * SIGHT_POINT_COST
-    pts = [segs[vertical, 0, :2]] + [sample_segment(s, spacing)[:, :2] for s in segs[~vertical]]
-    xy = np.unique(np.round(np.concatenate(pts), 7), axis=0) if len(segs) else np.zeros((0, 2))
-    if not len(xy):
-        return 0, 0.0
-    occ = Occluders.from_geometry(occluders)
-    box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
-    probes = xy[:: max(1, -(-len(xy) // SIGHT_WORK_PROBES))]
-    near = [int(np.count_nonzero((occ.hi[:, 0] >= p[0] - box) & (occ.lo[:, 0] <= p[0] + box)
-                                 & (occ.hi[:, 1] >= p[1] - box) & (occ.lo[:, 1] <= p[1] + box))) for p in probes]
-    return len(xy), len(xy) * (SIGHT_POINT_COST + float(np.mean(near)))
-
-
 @dataclass
 class _Samples:
     """The sample points of :func:`segment_regions` and the pairs of
@@ -651,7 +613,6 @@ __all__ = [
     "polygonal",
     "sample_segment",
     "segment_regions",
-    "sight_work",
     "vertical_distance_band",
     "vertical_extent",
     "visibility_polygon",

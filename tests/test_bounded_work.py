@@ -156,28 +156,3 @@ def test_the_entity_limit_counts_plain_entities_and_is_an_option(tmp_path, capsy
     _one_line_error(code, out, err, "more than 500 entities", "--max-entities")
     code, out, err = run(capsys, "layers", tmp_path / "lines.dxf")
     assert code == 0
-
-
-def test_the_sight_work_limit_is_an_option(tmp_path, capsys):
-    """The region builder's sight tests per square metre of free space are
-    estimated before it runs (maps/flat.dxf: about 2000); past
-    --max-sight-work the build is refused in one line naming it."""
-    flat = Path(__file__).resolve().parents[1] / "maps" / "flat.dxf"
-    code, out, err = run(capsys, "build", flat, "-o", tmp_path / "a.lmap", "--max-sight-work", "500")
-    _one_line_error(code, out, err, "sight tests", "per m2", "--max-sight-work")
-    assert not (tmp_path / "a.lmap").exists()
-
-
-def test_the_sight_work_estimate_counts_points_and_edges_in_sight():
-    import numpy as np
-    from shapely.geometry import box
-
-    from mapkit.tolerances import SIGHT_POINT_COST
-    from mapkit.visibility import sight_work
-
-    segs = np.array([[[0, 0, 0], [3, 0, 0]], [[1, 1, 0], [1, 1, 2]]], float)  # 3 m at 0.15 m: 21 points, 1 foot
-    walls = box(-1, -1, 0, 0)  # 4 edges, in sight of every point
-    points, work = sight_work(segs, walls, max_range=10.0, min_visible_length=0.3)
-    assert points == 22 and work == 22 * (SIGHT_POINT_COST + 4)
-    points, work = sight_work(segs, walls, max_range=10.0, min_visible_length=0.3, stop_above=10)
-    assert points == 22 and work == 22 * SIGHT_POINT_COST  # not sampled: the upper bound of points

@@ -9,11 +9,12 @@ and one check of the output file every command that writes one makes.
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import fields
 from pathlib import Path
 
 from mapkit.errors import MapkitError
-from mapkit.options import IMPORT_GROUPS, BuildOptions, flags_of
+from mapkit.options import IMPORT_GROUPS, RETIRED_FLAGS, BuildOptions, flags_of
 
 #: argparse ``type`` of each field type that takes a value.
 _PARSERS = {"float": float, "int": int, "int | None": int, "str": str, "str | None": str}
@@ -64,11 +65,22 @@ def add_option_flags(p, groups) -> None:
             else:
                 kw.update(type=_PARSERS[f.type], default=default)
             g.add_argument(*flags_of(f), **kw)
+    group_of = {f.name: f.metadata["group"] for f in fields(BuildOptions)}
+    for flag, (replaced_by, _) in RETIRED_FLAGS.items():  # taken, unlisted: options_from_args names the new flag
+        if group_of[replaced_by] in groups:
+            p.add_argument(flag, dest=_retired_dest(flag), help=argparse.SUPPRESS, default=None)
+
+
+def _retired_dest(flag: str) -> str:
+    return "retired_" + flag.lstrip("-").replace("-", "_")
 
 
 def options_from_args(args, groups=IMPORT_GROUPS, **others) -> BuildOptions:
     """BuildOptions holding the flags of ``groups`` in ``args`` and the
     fields ``others`` (the rest default); validated on construction."""
+    for flag, (_, message) in RETIRED_FLAGS.items():
+        if getattr(args, _retired_dest(flag), None) is not None:
+            raise MapkitError(message)
     values = {}
     for f in fields(BuildOptions):
         if f.metadata["group"] in groups:
