@@ -9,6 +9,7 @@ what it made and a note of what was done.
 from __future__ import annotations
 
 import contextlib
+import copy
 import json
 import math
 import random
@@ -171,7 +172,10 @@ def mutate_json_doc(doc, rng: random.Random) -> tuple[str, str]:
             parent[key] = marker
         else:
             op = "value"
-            parent[key] = rng.choice(HOSTILE_JSON_VALUES)
+            # A copy: a later mutation may edit inside it, and the table must
+            # stay as written for the next case (else the same seed draws
+            # differently, and hypothesis calls the family flaky).
+            parent[key] = copy.deepcopy(rng.choice(HOSTILE_JSON_VALUES))
         done.append(f"{op}@{'/'.join(map(str, path))}")
     text = json.dumps(doc, indent=rng.choice((None, 1)))
     for marker, depth in nests.items():
