@@ -153,6 +153,7 @@ def build_regions(
         camera.elevation_range(),
         max_range=settings.max_range,
         min_visible_length=settings.min_visible_length,
+        within=free_space,
         progress=progress,
         workers=workers,
     )

@@ -43,6 +43,7 @@ from mapkit.tolerances import (
     VIS_HIDDEN_SLACK,
     VIS_RAY_OFFSET_DEG,
     VIS_VERTICAL_XY,
+    VIS_WITHIN_MARGIN,
     ZERO,
 )
 
@@ -525,6 +526,20 @@ def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress:
     return vp
 
 
+def _samples_seeing(samples: _Samples, vp: np.ndarray, within) -> _Samples:
+    """``samples`` without the vertical segments and the pairs that a
+    sample's visibility polygon ``vp`` (P,) shows nothing of ``within``
+    from: nothing of it lies within ``VIS_WITHIN_MARGIN`` of that polygon
+    (far more than the overlay grid moves a piece)."""
+    near = shapely.buffer(within, VIS_WITHIN_MARGIN, join_style="mitre")
+    shapely.prepare(near)
+    sees = shapely.intersects(near, vp)
+    v = sees[samples.vert_keys]
+    k = sees[samples.pair_a] & sees[samples.pair_b]
+    return _Samples(samples.xy, samples.vert_ids[v], samples.vert_keys[v], samples.pair_seg[k], samples.pair_a[k],
+                    samples.pair_b[k], samples.pair_mid[k], samples.pair_rin[k], samples.pair_rout[k])
+
+
 def _vertical_regions(regions: np.ndarray, segs: np.ndarray, samples: _Samples, vp: np.ndarray, sight: _Sight,
                       workers: int) -> None:
     """Fill ``regions`` at the vertical segments: the visibility polygon of
@@ -588,6 +603,7 @@ def segment_regions(
     *,
     max_range: float,
     min_visible_length: float,
+    within=None,
     progress: bool = False,
     workers: int = 1,
 ) -> SegmentRegions:
@@ -606,6 +622,12 @@ def segment_regions(
     Vertical S: visibility polygon of its xy point within the distance band
     where its visible z-extent reaches min(L, its length).
 
+    ``within`` (shapely (Multi)Polygon or None): where the regions are used,
+    the free space. A piece can only meet it if both its samples see some of
+    it, so pieces (and vertical segments) whose visibility polygon stays
+    ``VIS_WITHIN_MARGIN`` away from it are left out: ``R_S & within`` is
+    unchanged, and a segment seen from nowhere in it gets an empty region.
+
     The overlays run in ``workers`` threads (:mod:`mapkit.parallel`); the
     regions do not depend on it.
     """
@@ -622,6 +644,9 @@ def segment_regions(
     vp = _sample_polygons(samples.xy, occ, max_range, progress, workers)
     t_vis = time.perf_counter()
 
+    sample_pairs = len(samples.pair_seg)  # all of them, whether overlaid or not
+    if within is not None:
+        samples = _samples_seeing(samples, vp, within)
     regions = np.array([Polygon()] * n, dtype=object)
     _vertical_regions(regions, segs, samples, vp, sight, workers)
     n_pairs = len(samples.pair_seg)
@@ -635,7 +660,7 @@ def segment_regions(
         "segments": n,
         "vertical_segments": int(vertical.sum()),
         "visibility_polygons": len(samples.xy),
-        "sample_pairs": int(n_pairs),
+        "sample_pairs": int(sample_pairs),
         "time_sampling_s": t_sample - t0,
         "time_visibility_polygons_s": t_vis - t_sample,
         "time_segment_regions_s": t_union - t_vis,
