@@ -503,15 +503,19 @@ def _samples(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> _Samples:
                     ((pts[j, :2] + pts[j + 1, :2]) / 2.0).reshape(-1, 2), r_in[seen], r_out[seen])
 
 
-def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int) -> np.ndarray:
+def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int,
+                     within=None) -> np.ndarray:
     """(P,) the visibility polygon of each point of ``xy`` (P, 2) within
     ``max_range``, collinear vertices dropped, empty for a point buried in a
-    wall."""
+    wall, and empty for a point that cannot see anything of ``within``
+    (:func:`_cut_off`; None: every point is swept)."""
     box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
     from mapkit.visibility_batch import polygons_of, visibility_polygons
 
+    swept = np.arange(len(xy)) if within is None else np.nonzero(~_cut_off(xy, occ, box, within))[0]
     with step("visibility polygons", progress):
-        raw = polygons_of(*visibility_polygons(xy, occ, box, workers), len(xy))
+        coords, owner = visibility_polygons(xy[swept], occ, box, workers)
+        raw = polygons_of(coords, swept[owner], len(xy))
     # Rays hitting one edge give collinear points; each later overlay pays per
     # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
     vp = map_chunks(_simplified, [raw], workers)
@@ -524,6 +528,29 @@ def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress:
         buried = shapely.contains_xy(occ.geometry, xy[:, 0], xy[:, 1])
         vp[buried] = Polygon()
     return vp
+
+
+def _cut_off(xy: np.ndarray, occ: Occluders, box: float, within) -> np.ndarray:
+    """(P,) bool: the points of ``xy`` (P, 2) whose open space stays
+    ``VIS_WITHIN_MARGIN`` away from ``within``: the part of the plane
+    outside the (shrunk) occluders that holds them, within the squares of
+    half-side ``box`` the sweep looks at (a shaft no door leads to, a room
+    left out of the free space). A sight line leaves that part only through
+    an occluder, so the point's visibility polygon lies in it and shows
+    nothing of ``within``; its sweep is skipped. A point buried in an
+    occluder lies in no part and is swept as before."""
+    if not len(xy):
+        return np.zeros(0, dtype=bool)
+    (x0, y0), (x1, y1) = xy.min(axis=0) - box, xy.max(axis=0) + box
+    parts = shapely.get_parts(shapely.difference(shapely.box(x0, y0, x1, y1), occ.geometry))
+    near = shapely.buffer(within, VIS_WITHIN_MARGIN, join_style="mitre")
+    shapely.prepare(near)
+    apart = parts[~shapely.intersects(near, parts)]
+    if not len(apart):
+        return np.zeros(len(xy), dtype=bool)
+    apart = shapely.multipolygons(apart)
+    shapely.prepare(apart)
+    return shapely.contains_xy(apart, xy[:, 0], xy[:, 1])
 
 
 def _samples_seeing(samples: _Samples, vp: np.ndarray, within) -> _Samples:
@@ -641,7 +668,7 @@ def segment_regions(
     samples = _samples(segs, vertical, sight)
     t_sample = time.perf_counter()
 
-    vp = _sample_polygons(samples.xy, occ, max_range, progress, workers)
+    vp = _sample_polygons(samples.xy, occ, max_range, progress, workers, within)
     t_vis = time.perf_counter()
 
     sample_pairs = len(samples.pair_seg)  # all of them, whether overlaid or not

@@ -51,3 +51,21 @@ def test_outer_faces_are_listed_nowhere_in_the_partition():
     assert n_inner not in listed and n_inner + 1 not in listed
     assert set(range(n_inner)) <= set(listed.tolist())
     assert sum(p.area for p in part.polygons) == pytest.approx(shapely.area(scene.free_space))
+
+
+def test_points_walled_off_from_the_free_space_are_not_swept():
+    """A room no opening leads into, seen from a free space outside it: the
+    room's points are skipped (their polygons lie in the room), and its
+    faces get no region, as if swept and found to see nothing outside."""
+    from mapkit.tolerances import CIRCLE_SIDES
+    from mapkit.visibility import _cut_off
+
+    scene = single_room(6.0, 4.0)
+    outside = shapely.box(7.0, 0.0, 9.0, 4.0)
+    occ = Occluders.from_geometry(scene.walls)
+    box = RANGE / np.cos(np.pi / CIRCLE_SIDES) + 0.01
+    xy = np.array([[0.1, 0.1], [3.0, 2.0], [6.25, 2.0], [8.0, 1.0], [3.0, -0.1]])  # room x2, outside x2, in a wall
+    assert _cut_off(xy, occ, box, outside).tolist() == [True, True, False, False, False]
+    assert not _cut_off(xy, occ, box, scene.free_space)[:2].any()
+    res = _regions(scene.segments, scene, within=outside)
+    assert all(g.is_empty for g in res.regions)
