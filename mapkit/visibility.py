@@ -612,14 +612,17 @@ def _unite_pieces(regions: np.ndarray, pieces: np.ndarray, pair_seg: np.ndarray,
     bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
 
     def unite(ids: np.ndarray) -> np.ndarray:
-        out = regions[ids]
-        for k, i in enumerate(ids):
-            if bounds[i + 1] > bounds[i]:
-                out[k] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
-        return polygonal(out)
+        return polygonal(np.array([shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]]) for i in ids] + [None])[:-1])
 
+    # Only the segments with pieces are shared out among the threads (the
+    # vertical ones, a block at the end, have none: even chunks of all ids
+    # would leave some threads idle).
+    united = np.nonzero(bounds[1:] > bounds[:-1])[0]
+    out = regions.copy()
     with step("segment regions", progress):
-        return map_chunks(unite, [np.arange(n)], workers)
+        if len(united):
+            out[united] = map_chunks(unite, [united], workers)
+    return out
 
 
 def segment_regions(
