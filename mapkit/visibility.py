@@ -14,8 +14,9 @@ Conventions (docs/visibility.md has the full definition):
 
 Public names: :class:`Occluders` (edge arrays ready for sweeps),
 :func:`visibility_polygon`, :func:`distance_band`,
-:func:`vertical_distance_band`, :func:`segment_regions` and its cost
-before it runs, :func:`sight_work`.
+:func:`vertical_distance_band`, :func:`segment_regions` (and
+:func:`segment_regions_within` of a :class:`Sight`, skipping what cannot
+reach the free space) and its cost before it runs, :func:`sight_work`.
 """
 
 from __future__ import annotations
@@ -440,7 +441,7 @@ class _Samples:
 
 
 @dataclass(frozen=True)
-class _Sight:
+class Sight:
     """What a segment's visibility depends on besides the walls: the camera
     height ``h`` (m), its (lowest, highest) ``elevation`` angles (radians),
     ``max_range`` and ``min_visible_length`` (m)."""
@@ -470,7 +471,7 @@ def _pair_annuli(pts: np.ndarray, dmin: np.ndarray, dmax: np.ndarray, j: np.ndar
     return seen, r_in, r_out
 
 
-def _samples(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> _Samples:
+def _samples(segs: np.ndarray, vertical: np.ndarray, sight: Sight) -> _Samples:
     """Sample every segment of ``segs`` (N, 2, 3) (``vertical`` (N,) bool:
     one sample at its xy point; else spaced <= ``min_visible_length / 2``)
     and pair the consecutive samples seen from a common annulus.
@@ -567,7 +568,7 @@ def _samples_seeing(samples: _Samples, vp: np.ndarray, within) -> _Samples:
                     samples.pair_b[k], samples.pair_mid[k], samples.pair_rin[k], samples.pair_rout[k])
 
 
-def _vertical_regions(regions: np.ndarray, segs: np.ndarray, samples: _Samples, vp: np.ndarray, sight: _Sight,
+def _vertical_regions(regions: np.ndarray, segs: np.ndarray, samples: _Samples, vp: np.ndarray, sight: Sight,
                       workers: int) -> None:
     """Fill ``regions`` at the vertical segments: the visibility polygon of
     each one's xy point within the distance band where its visible z-extent
@@ -633,7 +634,6 @@ def segment_regions(
     *,
     max_range: float,
     min_visible_length: float,
-    within=None,
     progress: bool = False,
     workers: int = 1,
 ) -> SegmentRegions:
@@ -652,26 +652,35 @@ def segment_regions(
     Vertical S: visibility polygon of its xy point within the distance band
     where its visible z-extent reaches min(L, its length).
 
-    ``within`` (shapely (Multi)Polygon or None): where the regions are used,
-    the free space. A piece can only meet it if both its samples see some of
-    it, so pieces (and vertical segments) whose visibility polygon stays
-    ``VIS_WITHIN_MARGIN`` away from it are left out: ``R_S & within`` is
-    unchanged, and a segment seen from nowhere in it gets an empty region.
-
     The overlays run in ``workers`` threads (:mod:`mapkit.parallel`); the
     regions do not depend on it.
+    """
+    sight = Sight(h, elevation, max_range, float(min_visible_length))
+    return segment_regions_within(segments, occ, sight, None, progress=progress, workers=workers)
+
+
+def segment_regions_within(segments: np.ndarray, occ: Occluders, sight: Sight, within, *, progress: bool = False,
+                           workers: int = 1) -> SegmentRegions:
+    """:func:`segment_regions` for the regions' use ``within`` a shapely
+    (Multi)Polygon, the free space (None: everywhere), ``sight`` saying
+    what visible means.
+
+    A piece can only meet ``within`` if both its samples see some of it, so
+    sample points walled off from it are not swept, and pieces (and
+    vertical segments) whose visibility polygon stays ``VIS_WITHIN_MARGIN``
+    away from it are left out: ``R_S & within`` is unchanged, and a segment
+    seen from nowhere in it gets an empty region.
     """
     import time
 
     t0 = time.perf_counter()
     segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
     n = len(segs)
-    sight = _Sight(h, elevation, max_range, float(min_visible_length))
     vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
     samples = _samples(segs, vertical, sight)
     t_sample = time.perf_counter()
 
-    vp = _sample_polygons(samples.xy, occ, max_range, progress, workers, within)
+    vp = _sample_polygons(samples.xy, occ, sight.max_range, progress, workers, within)
     t_vis = time.perf_counter()
 
     sample_pairs = len(samples.pair_seg)  # all of them, whether overlaid or not
@@ -701,11 +710,13 @@ def segment_regions(
 __all__ = [
     "Occluders",
     "SegmentRegions",
+    "Sight",
     "annuli",
     "distance_band",
     "polygonal",
     "sample_segment",
     "segment_regions",
+    "segment_regions_within",
     "sight_work",
     "vertical_distance_band",
     "vertical_extent",

@@ -8,7 +8,7 @@ import pytest
 import shapely
 
 from linemap.camera import Camera
-from mapkit.visibility import Occluders, segment_regions
+from mapkit.visibility import Occluders, Sight, segment_regions_within
 from mapkit.vir import build_regions
 from mapkit_harness.plans import single_room
 
@@ -25,9 +25,9 @@ def _room_with_outer_faces():
     return scene, np.concatenate([scene.segments, outer]), len(scene.segments)
 
 
-def _regions(segments, scene, **kw):
-    return segment_regions(segments, Occluders.from_geometry(scene.walls), CAMERA.height_m, CAMERA.elevation_range(),
-                           max_range=RANGE, min_visible_length=MIN_LEN, **kw)
+def _regions(segments, scene, within=None):
+    sight = Sight(CAMERA.height_m, CAMERA.elevation_range(), RANGE, MIN_LEN)
+    return segment_regions_within(segments, Occluders.from_geometry(scene.walls), sight, within)
 
 
 def test_faces_seen_only_from_outside_get_no_region():
