@@ -629,6 +629,15 @@ VIR_MAX_DEPTH = 11
 #: like any other, so a millimetre of slant never hides a grazing view.
 VIS_VERTICAL_XY = 1e-6
 
+#: The region builder overlays a pair of samples (or a vertical segment's
+#: point) only if their visibility polygons come within this of the free
+#: space, metres: farther, the piece cannot meet it (the overlay grid moves
+#: a piece by under 1e-5 m) and would be cut away with the rest of the
+#: region outside the free space. Outer faces of exterior walls and faces
+#: in shafts no door leads to: a third of the pairs of the corpus's college
+#: floor (daoshi_f1).
+VIS_WITHIN_MARGIN = 1e-3
+
 # ---- 3D model of a plan (mapkit.extrude) -------------------------------------
 
 #: Footprints are closed and opened by this much, metres, with mitre joins,

@@ -48,7 +48,7 @@ from mapkit.tolerances import (
     VIR_QUAD_SEGS,
     ZERO,
 )
-from mapkit.visibility import Occluders, polygonal, segment_regions
+from mapkit.visibility import Occluders, Sight, polygonal, segment_regions_within
 
 
 @dataclass
@@ -146,16 +146,9 @@ def build_regions(
     segs = _checked_segments(segments, free_space)
     stats: dict = {"segments": len(segs)}
     t0 = time.perf_counter()
-    sr = segment_regions(
-        segs,
-        Occluders.from_geometry(occluders),
-        camera.height_m,
-        camera.elevation_range(),
-        max_range=settings.max_range,
-        min_visible_length=settings.min_visible_length,
-        progress=progress,
-        workers=workers,
-    )
+    sight = Sight(camera.height_m, camera.elevation_range(), settings.max_range, float(settings.min_visible_length))
+    sr = segment_regions_within(segs, Occluders.from_geometry(occluders), sight, free_space, progress=progress,
+                                workers=workers)
     stats.update(sr.stats)
     t1 = time.perf_counter()
     stats["time_segment_regions_total_s"] = t1 - t0

@@ -14,8 +14,10 @@ Conventions (docs/visibility.md has the full definition):
 
 Public names: :class:`Occluders` (edge arrays ready for sweeps),
 :func:`visibility_polygon`, :func:`distance_band`,
-:func:`vertical_distance_band`, :func:`segment_regions` (its time,
-predicted before it runs: :mod:`mapkit.region_cost`).
+:func:`vertical_distance_band`, :func:`segment_regions` (and
+:func:`segment_regions_within` of a :class:`Sight`, skipping what cannot
+reach the free space; its time, predicted before it runs:
+:mod:`mapkit.region_cost`).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from mapkit.tolerances import (
     VIS_HIDDEN_SLACK,
     VIS_RAY_OFFSET_DEG,
     VIS_VERTICAL_XY,
+    VIS_WITHIN_MARGIN,
     ZERO,
 )
 
@@ -401,7 +404,7 @@ class _Samples:
 
 
 @dataclass(frozen=True)
-class _Sight:
+class Sight:
     """What a segment's visibility depends on besides the walls: the camera
     height ``h`` (m), its (lowest, highest) ``elevation`` angles (radians),
     ``max_range`` and ``min_visible_length`` (m)."""
@@ -431,7 +434,7 @@ def _pair_annuli(pts: np.ndarray, dmin: np.ndarray, dmax: np.ndarray, j: np.ndar
     return seen, r_in, r_out
 
 
-def _samples(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> _Samples:
+def _samples(segs: np.ndarray, vertical: np.ndarray, sight: Sight) -> _Samples:
     """Sample every segment of ``segs`` (N, 2, 3) (``vertical`` (N,) bool:
     one sample at its xy point; else spaced <= ``min_visible_length / 2``)
     and pair the consecutive samples seen from a common annulus.
@@ -464,15 +467,19 @@ def _samples(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> _Samples:
                     ((pts[j, :2] + pts[j + 1, :2]) / 2.0).reshape(-1, 2), r_in[seen], r_out[seen])
 
 
-def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int) -> np.ndarray:
+def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int,
+                     within=None) -> np.ndarray:
     """(P,) the visibility polygon of each point of ``xy`` (P, 2) within
     ``max_range``, collinear vertices dropped, empty for a point buried in a
-    wall."""
+    wall, and empty for a point that cannot see anything of ``within``
+    (:func:`_cut_off`; None: every point is swept)."""
     box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
     from mapkit.visibility_batch import polygons_of, visibility_polygons
 
+    swept = np.arange(len(xy)) if within is None else np.nonzero(~_cut_off(xy, occ, box, within))[0]
     with step("visibility polygons", progress):
-        raw = polygons_of(*visibility_polygons(xy, occ, box, workers), len(xy))
+        coords, owner = visibility_polygons(xy[swept], occ, box, workers)
+        raw = polygons_of(coords, swept[owner], len(xy))
     # Rays hitting one edge give collinear points; each later overlay pays per
     # vertex, so drop them (the outline moves by at most VIS_COLLINEAR m).
     vp = map_chunks(_simplified, [raw], workers)
@@ -487,7 +494,44 @@ def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress:
     return vp
 
 
-def _vertical_regions(regions: np.ndarray, segs: np.ndarray, samples: _Samples, vp: np.ndarray, sight: _Sight,
+def _cut_off(xy: np.ndarray, occ: Occluders, box: float, within) -> np.ndarray:
+    """(P,) bool: the points of ``xy`` (P, 2) whose open space stays
+    ``VIS_WITHIN_MARGIN`` away from ``within``: the part of the plane
+    outside the (shrunk) occluders that holds them, within the squares of
+    half-side ``box`` the sweep looks at (a shaft no door leads to, a room
+    left out of the free space). A sight line leaves that part only through
+    an occluder, so the point's visibility polygon lies in it and shows
+    nothing of ``within``; its sweep is skipped. A point buried in an
+    occluder lies in no part and is swept as before."""
+    if not len(xy):
+        return np.zeros(0, dtype=bool)
+    (x0, y0), (x1, y1) = xy.min(axis=0) - box, xy.max(axis=0) + box
+    parts = shapely.get_parts(shapely.difference(shapely.box(x0, y0, x1, y1), occ.geometry))
+    near = shapely.buffer(within, VIS_WITHIN_MARGIN, join_style="mitre")
+    shapely.prepare(near)
+    apart = parts[~shapely.intersects(near, parts)]
+    if not len(apart):
+        return np.zeros(len(xy), dtype=bool)
+    apart = shapely.multipolygons(apart)
+    shapely.prepare(apart)
+    return shapely.contains_xy(apart, xy[:, 0], xy[:, 1])
+
+
+def _samples_seeing(samples: _Samples, vp: np.ndarray, within) -> _Samples:
+    """``samples`` without the vertical segments and the pairs that a
+    sample's visibility polygon ``vp`` (P,) shows nothing of ``within``
+    from: nothing of it lies within ``VIS_WITHIN_MARGIN`` of that polygon
+    (far more than the overlay grid moves a piece)."""
+    near = shapely.buffer(within, VIS_WITHIN_MARGIN, join_style="mitre")
+    shapely.prepare(near)
+    sees = shapely.intersects(near, vp)
+    v = sees[samples.vert_keys]
+    k = sees[samples.pair_a] & sees[samples.pair_b]
+    return _Samples(samples.xy, samples.vert_ids[v], samples.vert_keys[v], samples.pair_seg[k], samples.pair_a[k],
+                    samples.pair_b[k], samples.pair_mid[k], samples.pair_rin[k], samples.pair_rout[k])
+
+
+def _vertical_regions(regions: np.ndarray, segs: np.ndarray, samples: _Samples, vp: np.ndarray, sight: Sight,
                       workers: int) -> None:
     """Fill ``regions`` at the vertical segments: the visibility polygon of
     each one's xy point within the distance band where its visible z-extent
@@ -532,14 +576,17 @@ def _unite_pieces(regions: np.ndarray, pieces: np.ndarray, pair_seg: np.ndarray,
     bounds = np.searchsorted(pair_seg[order], np.arange(n + 1))
 
     def unite(ids: np.ndarray) -> np.ndarray:
-        out = regions[ids]
-        for k, i in enumerate(ids):
-            if bounds[i + 1] > bounds[i]:
-                out[k] = shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]])
-        return polygonal(out)
+        return polygonal(np.array([shapely.union_all(pieces[order[bounds[i] : bounds[i + 1]]]) for i in ids] + [None])[:-1])
 
+    # Only the segments with pieces are shared out among the threads (the
+    # vertical ones, a block at the end, have none: even chunks of all ids
+    # would leave some threads idle).
+    united = np.nonzero(bounds[1:] > bounds[:-1])[0]
+    out = regions.copy()
     with step("segment regions", progress):
-        return map_chunks(unite, [np.arange(n)], workers)
+        if len(united):
+            out[united] = map_chunks(unite, [united], workers)
+    return out
 
 
 def segment_regions(
@@ -571,19 +618,37 @@ def segment_regions(
     The overlays run in ``workers`` threads (:mod:`mapkit.parallel`); the
     regions do not depend on it.
     """
+    sight = Sight(h, elevation, max_range, float(min_visible_length))
+    return segment_regions_within(segments, occ, sight, None, progress=progress, workers=workers)
+
+
+def segment_regions_within(segments: np.ndarray, occ: Occluders, sight: Sight, within, *, progress: bool = False,
+                           workers: int = 1) -> SegmentRegions:
+    """:func:`segment_regions` for the regions' use ``within`` a shapely
+    (Multi)Polygon, the free space (None: everywhere), ``sight`` saying
+    what visible means.
+
+    A piece can only meet ``within`` if both its samples see some of it, so
+    sample points walled off from it are not swept, and pieces (and
+    vertical segments) whose visibility polygon stays ``VIS_WITHIN_MARGIN``
+    away from it are left out: ``R_S & within`` is unchanged, and a segment
+    seen from nowhere in it gets an empty region.
+    """
     import time
 
     t0 = time.perf_counter()
     segs = np.asarray(segments, dtype=float).reshape(-1, 2, 3)
     n = len(segs)
-    sight = _Sight(h, elevation, max_range, float(min_visible_length))
     vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY
     samples = _samples(segs, vertical, sight)
     t_sample = time.perf_counter()
 
-    vp = _sample_polygons(samples.xy, occ, max_range, progress, workers)
+    vp = _sample_polygons(samples.xy, occ, sight.max_range, progress, workers, within)
     t_vis = time.perf_counter()
 
+    sample_pairs = len(samples.pair_seg)  # all of them, whether overlaid or not
+    if within is not None:
+        samples = _samples_seeing(samples, vp, within)
     regions = np.array([Polygon()] * n, dtype=object)
     _vertical_regions(regions, segs, samples, vp, sight, workers)
     n_pairs = len(samples.pair_seg)
@@ -597,7 +662,7 @@ def segment_regions(
         "segments": n,
         "vertical_segments": int(vertical.sum()),
         "visibility_polygons": len(samples.xy),
-        "sample_pairs": int(n_pairs),
+        "sample_pairs": int(sample_pairs),
         "time_sampling_s": t_sample - t0,
         "time_visibility_polygons_s": t_vis - t_sample,
         "time_segment_regions_s": t_union - t_vis,
@@ -608,11 +673,13 @@ def segment_regions(
 __all__ = [
     "Occluders",
     "SegmentRegions",
+    "Sight",
     "annuli",
     "distance_band",
     "polygonal",
     "sample_segment",
     "segment_regions",
+    "segment_regions_within",
     "vertical_distance_band",
     "vertical_extent",
     "visibility_polygon",

@@ -13,7 +13,7 @@ import pytest
 import shapely
 
 from mapkit.vir import RegionSettings, build_regions, unique_pairs
-from mapkit.visibility import _samples, _Sight, distance_band, sample_segment
+from mapkit.visibility import _samples, Sight, distance_band, sample_segment
 from mapkit.visibility_batch import _by_group
 from mapkit_harness.plans import two_rooms
 from linemap.camera import Camera
@@ -21,7 +21,7 @@ from linemap.camera import Camera
 CAMERA = Camera(640, 480, 457.0, 457.0, 320.0, 240.0, 1.2, 0.0)
 
 
-def _samples_one_by_one(segs: np.ndarray, vertical: np.ndarray, sight: _Sight) -> dict:
+def _samples_one_by_one(segs: np.ndarray, vertical: np.ndarray, sight: Sight) -> dict:
     """The per-segment, per-pair loop :func:`mapkit.visibility._samples` replaced."""
     e_min, e_max = sight.elevation
     keys: dict = {}
@@ -76,7 +76,7 @@ def test_samples_match_the_per_pair_loop():
     b[20:25] = b[25:30]
     segs = np.stack([a, b], axis=1)
     vertical = np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= 1e-9
-    for sight in (_Sight(1.2, (-0.4, 0.4), 6.0, 0.3), _Sight(1.2, (-0.9, 0.1), 3.0, 0.5)):
+    for sight in (Sight(1.2, (-0.4, 0.4), 6.0, 0.3), Sight(1.2, (-0.9, 0.1), 3.0, 0.5)):
         got = _samples(segs, vertical, sight)
         want = _samples_one_by_one(segs, vertical, sight)
         assert len(want["pair_seg"]) > 0
@@ -88,7 +88,7 @@ def test_samples_match_the_per_pair_loop():
 
 def test_samples_of_vertical_segments_only():
     segs = np.array([[[0.0, 0.0, 0.0], [0.0, 0.0, 2.6]], [[1.0, 0.0, 0.0], [1.0, 0.0, 2.6]]])
-    got = _samples(segs, np.array([True, True]), _Sight(1.2, (-0.4, 0.4), 6.0, 0.3))
+    got = _samples(segs, np.array([True, True]), Sight(1.2, (-0.4, 0.4), 6.0, 0.3))
     assert got.xy.shape == (2, 2) and got.vert_keys.tolist() == [0, 1]
     assert got.pair_seg.shape == (0,) and got.pair_mid.shape == (0, 2)
 
