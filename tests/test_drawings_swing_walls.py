@@ -11,7 +11,6 @@ DXF files written here with ezdxf."""
 
 from __future__ import annotations
 
-import math
 
 import ezdxf
 import pytest
@@ -156,25 +155,6 @@ def test_a_layer_of_swings_whose_walls_are_on_another_is_not_adopted(tmp_path, f
     with pytest.raises(NoWallsError, match=r"layers are 'A1', 'A3', 'ELEV'; name the wall layers with --walls"):
         load_scene(path, BuildOptions())
     assert load_scene(path, BuildOptions(walls=["A3"], doors=["A1"])).openings  # the walls named: built
-
-
-def test_arcs_that_read_as_swings_in_units_ten_times_apart_are_not_adopted(tmp_path):
-    """A framing plan's lettering drawn as arcs of every size, each with a
-    radial stroke (the corpus's walldet_sample): read as door swings in
-    decimetres, metres and feet alike, no building's doors; refused."""
-    doc = ezdxf.new("R2013", setup=False)
-    msp = doc.modelspace()
-    for name in ("F-0", "F-4"):
-        doc.layers.add(name)
-    for k, radius in enumerate([0.5, 0.8, 1.2] * 2 + [5.0, 8.0, 12.0] * 2):
-        cx = 40.0 * k
-        msp.add_arc((cx, 0), radius, 0, 60, dxfattribs={"layer": "F-0"})
-        a = math.radians(60)
-        msp.add_line((cx + radius * math.cos(a), radius * math.sin(a)), (cx, 0), dxfattribs={"layer": "F-0"})
-    msp.add_line((0, -50), (400, -50), dxfattribs={"layer": "F-4"})
-    doc.saveas(tmp_path / "framing.dxf")
-    with pytest.raises(NoWallsError, match="name the wall layers with --walls"):
-        load_scene(tmp_path / "framing.dxf", BuildOptions())
 
 
 def test_two_layers_with_as_many_swings_are_not_adopted(tmp_path):
