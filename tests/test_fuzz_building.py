@@ -38,3 +38,21 @@ def test_the_undamaged_building_loads(tmp_path):
         (tmp_path / s["map"]).write_bytes((ROOT / "maps" / "flat.lmap").read_bytes())
     b = matcher.load_map(tmp_path)
     assert [s.name for s in b.mapped] == ["Ground", "Upper"]
+
+
+def test_a_storey_without_a_map_key_is_shown_as_having_no_map(tmp_path, capsys):
+    """The manifest's shape check reads an absent 'map' as null (a storey
+    built without a map); 'mapkit info' must say so, not fail on the key."""
+    import json
+
+    from mapkit.cli import main
+    from mapkit_harness.fuzz.cases import ROOT
+
+    doc = base_manifest()
+    del doc["storeys"][1]["map"]
+    (tmp_path / "building.json").write_text(json.dumps(doc))
+    (tmp_path / doc["storeys"][0]["map"]).write_bytes((ROOT / "maps" / "flat.lmap").read_bytes())
+    assert main(["info", str(tmp_path / "building.json")]) == 0
+    out = capsys.readouterr().out
+    [upper] = [line for line in out.splitlines() if "Upper" in line and "floor" in line]
+    assert upper.endswith("no map")

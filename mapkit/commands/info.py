@@ -109,7 +109,7 @@ def _building_info(args) -> int:
     for s in doc["storeys"]:
         walls = "?" if s.get("wall_height_m") is None else f"{s['wall_height_m']:g}"
         what = (f"{s['map']}: {s.get('segments', '?')} segments, {s.get('regions', '?')} regions, walls {walls} m"
-                if s["map"] else f"no map ({s.get('why')})")
+                if s.get("map") else f"no map ({s['why']})" if s.get("why") else "no map")
         lines.append(f"  {s['name']:<16} floor {s['elevation_m']:>7.3f} m, height {s['height_m']:.3f} m  {what}")
     for c in doc.get("connections", []):
         lines.append(f"  {c['kind']:<6} {c['name'] or c['guid']}: {' <-> '.join(c['storeys'])}")
