@@ -100,7 +100,7 @@ def region_cost(segments: np.ndarray, occluders, *, max_range: float, min_visibl
     near = [int(np.count_nonzero((occ.hi[:, 0] >= p[0] - box) & (occ.lo[:, 0] <= p[0] + box)
                                  & (occ.hi[:, 1] >= p[1] - box) & (occ.lo[:, 1] <= p[1] + box))) for p in probes]
     swept = probes[:: max(1, -(-len(probes) // REGION_COST_POLYGON_PROBES))]
-    vertices = _polygon_vertices(swept, occ, box)
+    vertices = _polygon_vertices(swept, occ, max_range)
     n = len(xy)
     tests, verts = n * float(np.mean(near)), n * float(np.mean(vertices))
     seconds = (REGION_SECONDS_PER_SIGHT_TEST * tests + REGION_SECONDS_PER_VISIBLE_VERTEX * verts
@@ -108,18 +108,13 @@ def region_cost(segments: np.ndarray, occluders, *, max_range: float, min_visibl
     return RegionCost(n, tests, verts, seconds)
 
 
-def _polygon_vertices(xy: np.ndarray, occ: Occluders, box: float) -> np.ndarray:
+def _polygon_vertices(xy: np.ndarray, occ: Occluders, max_range: float) -> np.ndarray:
     """(P,) the vertices of the visibility polygon of each point of ``xy``
-    (P, 2) as the region stage makes it (swept within the square of
-    half-side ``box``, collinear vertices dropped; 0 for a point buried in
-    a wall, whose polygon is emptied)."""
-    from mapkit.visibility import _simplified
-    from mapkit.visibility_batch import polygons_of, visibility_polygons
+    (P, 2) as the region stage makes it (0 for a point buried in a wall,
+    whose polygon is emptied)."""
+    from mapkit.visibility import _sample_polygons
 
-    polygons = _simplified(polygons_of(*visibility_polygons(xy, occ, box), len(xy)))
-    counts = shapely.get_num_coordinates(polygons)
-    counts[shapely.contains_xy(occ.geometry, xy[:, 0], xy[:, 1])] = 0
-    return counts
+    return shapely.get_num_coordinates(_sample_polygons(xy, occ, max_range, progress=False, workers=1))
 
 
 __all__ = ["RegionCost", "region_cost"]
