@@ -47,10 +47,9 @@ def find_door_swings(entities, metres_per_unit: float) -> list[tuple[object, obj
     used: set[int] = set()
     pairs = []
     for arc in arcs:
-        radius = float(arc.dxf.radius) * metres_per_unit
-        sweep = (float(arc.dxf.end_angle) - float(arc.dxf.start_angle)) % 360.0
-        if not (DOOR_SWING_RADIUS[0] <= radius <= DOOR_SWING_RADIUS[1]) or not 0 < sweep <= DOOR_SWING_MAX_SWEEP_DEG:
+        if not is_door_sized_arc(arc, metres_per_unit):
             continue
+        radius = float(arc.dxf.radius) * metres_per_unit
         leaf = _leaf_of(arc, radius, starts, ends, metres_per_unit, used)
         if leaf is None:
             leaf = _loose_leaf_of(arc, radius, starts, ends, metres_per_unit, used)
@@ -58,6 +57,15 @@ def find_door_swings(entities, metres_per_unit: float) -> list[tuple[object, obj
             used.add(leaf)
             pairs.append((arc, lines[leaf]))
     return pairs
+
+
+def is_door_sized_arc(arc, metres_per_unit: float) -> bool:
+    """Whether the ARC entity ``arc`` could be a door's swing: its radius a
+    door's width (``DOOR_SWING_RADIUS``, metres) and its sweep at most
+    ``DOOR_SWING_MAX_SWEEP_DEG``; ``metres_per_unit`` converts its units."""
+    radius = float(arc.dxf.radius) * metres_per_unit
+    sweep = (float(arc.dxf.end_angle) - float(arc.dxf.start_angle)) % 360.0
+    return DOOR_SWING_RADIUS[0] <= radius <= DOOR_SWING_RADIUS[1] and 0 < sweep <= DOOR_SWING_MAX_SWEEP_DEG
 
 
 def _leaf_of(arc, radius: float, starts: np.ndarray, ends: np.ndarray, metres_per_unit: float,

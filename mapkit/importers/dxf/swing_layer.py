@@ -38,15 +38,14 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString, Point
 
-from mapkit.importers.dxf.door_swings import find_door_swings
+from mapkit.importers.dxf.door_swings import find_door_swings, is_door_sized_arc
 from mapkit.importers.dxf.entities import SILENT, flatten_entities
 from mapkit.importers.dxf.layer_roles import assign_roles
 from mapkit.importers.dxf.read import model_space
 from mapkit.importers.dxf.units import INSUNITS
 from mapkit.options import BuildOptions
-from mapkit.tolerances import (CURVE_SAGITTA, DOOR_SWING_MAX_SWEEP_DEG, DOOR_SWING_RADIUS, SWING_LAYER_ARC_SHARE,
-                               SWING_LAYER_HINGE_GAP, SWING_LAYER_HINGED_SHARE, SWING_LAYER_LINES_PER_SWING,
-                               SWING_LAYER_MIN_SWINGS)
+from mapkit.tolerances import (CURVE_SAGITTA, SWING_LAYER_ARC_SHARE, SWING_LAYER_HINGE_GAP, SWING_LAYER_HINGED_SHARE,
+                               SWING_LAYER_LINES_PER_SWING, SWING_LAYER_MIN_SWINGS)
 from mapkit.units import UNIT_METRES
 
 #: Units a floor plan is drawn in, tried in turn to read the arcs as door swings.
@@ -142,9 +141,7 @@ def draws_doors_in_walls(entities, metres_per_unit: float) -> bool:
     layer of doors alone (their frames, double-line leaves) or of doors and
     furniture beside walls drawn on another layer is not the walls."""
     swings = find_door_swings([e for e in entities if e.dxftype() in ("ARC", "LINE")], metres_per_unit)
-    door_sized = [e for e in entities if e.dxftype() == "ARC"
-                  and DOOR_SWING_RADIUS[0] <= float(e.dxf.radius) * metres_per_unit <= DOOR_SWING_RADIUS[1]
-                  and 0 < (float(e.dxf.end_angle) - float(e.dxf.start_angle)) % 360.0 <= DOOR_SWING_MAX_SWEEP_DEG]
+    door_sized = [e for e in entities if e.dxftype() == "ARC" and is_door_sized_arc(e, metres_per_unit)]
     if not swings or len(swings) < SWING_LAYER_ARC_SHARE * len(door_sized):
         return False
     in_swings = {id(e) for pair in swings for e in pair}
