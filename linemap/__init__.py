@@ -16,11 +16,16 @@
 nothing here imports either of them.
 """
 
-from linemap.camera import Camera, CameraError
-from linemap.errors import InputError
+#: The project's version: one number for the three packages and the
+#: distribution (pyproject.toml reads it from here).
+__version__ = "0.1.0"
+
+from linemap.camera import Camera, CameraError  # noqa: E402
+from linemap.errors import InputError  # noqa: E402
 from linemap.lmap import FORMAT_MAJOR, FORMAT_MINOR, KIND_NAMES, LineMap, LmapError, SegmentKind, load_map, save_map
 
 __all__ = [
+    "__version__",
     "FORMAT_MAJOR",
     "FORMAT_MINOR",
     "KIND_NAMES",

@@ -5,10 +5,9 @@ needs numpy only. The authoring stack (DXF and mesh import, visibility,
 the inspector) is imported on demand by :mod:`mapkit.pipeline` and the CLI.
 """
 
+from linemap import __version__
 from linemap.errors import InputError
 from linemap.lmap import FORMAT_MAJOR, FORMAT_MINOR, LineMap, LmapError, SegmentKind, load_map, save_map
-
-__version__ = "0.1.0"
 
 __all__ = [
     "FORMAT_MAJOR",

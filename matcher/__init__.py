@@ -32,6 +32,7 @@ A 360-degree panorama is a rig of virtual pinhole cameras
 ``lines = matcher.panorama_lines(image, rig)``, then ``localize_rig``.
 """
 
+from linemap import __version__
 from linemap.building import Building, Storey
 from linemap.building import load_any as load_map
 from linemap.camera import Camera, CameraError
@@ -47,6 +48,7 @@ from matcher.tolerances import Tolerances, Tracking
 from matcher.tracking import TrackedFrame, Tracker
 
 __all__ = [
+    "__version__",
     "Building",
     "Camera",
     "CameraError",

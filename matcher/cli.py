@@ -52,7 +52,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from linemap import __version__
+
     parser = _Parser(prog="matcher", description="Localise a camera in a line map (.lmap): one image (localize) or a run (track).")
+    parser.add_argument("--version", action="version", version=f"matcher {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
     p = sub.add_parser("localize", help="pose from image lines and a prior",

@@ -99,8 +99,9 @@ class _Source:
             if self.rig is None and not (args.camera or args.camera_k):
                 raise UsageError("give the camera: --camera CAM.json (or --camera-k with --image-size), "
                                  "or a --rig RIG")
-            from matcher.tracking.frames import count_frames
+            from matcher.tracking.frames import check_run_file, count_frames
 
+            check_run_file(self.path)
             self.total = count_frames(self.path)
         if self.rig is not None:
             self.camera = self.rig
@@ -247,7 +248,8 @@ def _follow(tracker, source: _Source, args) -> tuple[list[dict], list]:
 
 
 def _human(d: dict) -> str:
-    head = f"t={d['t']:.3f} {d['state']:<12}" + (f" storey {d['storey']!r}" if d.get("storey") else "")
+    # a skipped frame says so in the state's column (the tracker's state is unchanged by it)
+    head = f"t={d['t']:.3f} {'skipped' if d.get('skipped') else d['state']:<12}" + (f" storey {d['storey']!r}" if d.get("storey") else "")
     e = d.get("estimate")
     where = "" if not e else (f" x={e['x']:.3f} y={e['y']:.3f} yaw={e['yaw_deg']:.1f}"
                               f" (bounds {e['dt']:.2f} m, {e['dyaw_deg']:.1f} deg)")

@@ -287,3 +287,15 @@ def test_human_output_says_when_the_budget_cut_the_search():
     assert _human(res, 4).endswith("time ms: total 50.2 (search stopped at the time budget)")
     res = replace(res, stage1=SearchStats(out_of_time=False))
     assert _human(res, 4).endswith("time ms: total 50.2")
+
+
+@pytest.mark.parametrize("prog", ["matcher", "mapkit"])
+def test_version_of_both_commands_is_the_projects(prog, capsys):
+    """``--version`` on either command prints the one version (linemap's) and exits 0."""
+    import linemap
+    from mapkit.cli import main as mapkit_main
+
+    with pytest.raises(SystemExit) as stop:
+        (main if prog == "matcher" else mapkit_main)(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"{prog} {linemap.__version__}"

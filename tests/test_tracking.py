@@ -190,6 +190,31 @@ def test_track_human_output_and_usage_errors(tmp_path, capsys, run, camera):
     assert code == 2 and "--camera" in err
 
 
+def test_a_file_with_no_frame_of_a_run_is_a_usage_error(tmp_path, capsys, camera):
+    """A lines file, a camera file or a pretty-printed JSON given as --frames
+    is the wrong file (exit 2, one line naming what it is), not a run whose
+    every frame is skipped (exit 1)."""
+    cam = tmp_path / "cam.json"
+    cam.write_text(json.dumps(camera.to_dict()))
+    lines = tmp_path / "lines.json"
+    lines.write_text(json.dumps({"lines": [[1, 2, 3, 4]] * 3}, indent=1))
+    lmap = ROOT / "maps" / "flat.lmap"
+    for frames, why in ((lines, "lines file"), (cam, 'without "t"'), (tmp_path / "empty.jsonl", "empty")):
+        if not frames.exists():
+            frames.write_text("\n")
+        code, out, err = _cli(capsys, "track", "--map", lmap, "--camera", cam, "--frames", frames, "--lost")
+        assert code == 2 and out == "" and why in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_skipped_frame_says_skipped_in_the_state_column():
+    from matcher.cli_track import _human
+
+    row = {"t": 1.0, "state": "relocalising", "skipped": True, "ok": False, "estimate": None,
+           "reason": "frame skipped (run.jsonl line 3): not valid JSON"}
+    assert _human(row).split()[1] == "skipped"
+    assert _human({**row, "skipped": False}).split()[1] == "relocalising"
+
+
 # ---- the command line: ROS bags -------------------------------------------------
 @pytest.fixture(scope="module")
 def bag_run():

@@ -450,6 +450,21 @@ def test_cli_errors_are_one_line(tmp_path, flat_path):
     assert r.returncode == 2 and "names segment 99999" in r.stderr
 
 
+def test_a_named_port_that_is_busy_is_refused_not_replaced(flat_path):
+    """--port P with P taken: exit 2 naming the port and what to do (a user
+    who names a port expects that port); without --port a free one is taken."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        port = s.getsockname()[1]
+        r = _mapkit("view", str(flat_path), "--port", str(port))
+    assert r.returncode == 2 and r.stdout == "" and "Traceback" not in r.stderr
+    assert f"port {port} on 127.0.0.1 is in use" in r.stderr and "--port" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
 @pytest.mark.slow
 def test_cli_html_snapshot_is_standalone(tmp_path, flat_path):
     out = tmp_path / "flat.html"

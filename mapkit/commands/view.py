@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+#: The port tried first when none is named (then the next free ones, as viser does).
+DEFAULT_PORT = 8080
+
 HELP = "inspect a .lmap map in the browser (segments, walls, regions, pose tool, matcher results)"
 
 
@@ -12,8 +15,9 @@ def add_arguments(p) -> None:
     p.add_argument("--lines", metavar="LINES.json", help="image lines of the result, if the result holds none")
     p.add_argument("--camera", metavar="CAM.json", help="camera to use instead of the one recorded in the map")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1; 0.0.0.0 for all)")
-    p.add_argument("--port", type=int, default=8080,
-                   help="port (default 8080; if it is busy the next free one is used; 0 takes any free port)")
+    p.add_argument("--port", type=int, default=None,
+                   help=f"port to serve on; a port named here is used or refused when busy (0 takes any free port); "
+                        f"without --port, {DEFAULT_PORT} or the next free one after it")
     p.add_argument("--html", metavar="OUT.html",
                    help="write a standalone HTML snapshot of the 3D scene (opens from file://, no server) and exit")
 
@@ -30,6 +34,30 @@ def _loopback(host: str) -> bool:
         return False
 
 
+def _busy(host: str, port: int) -> str:
+    return (f"port {port} on {host} is in use; name another with --port, or leave --port out to take "
+            f"{DEFAULT_PORT} or the next free port")
+
+
+def _check_port_free(host: str, port: int) -> None:
+    """MapkitError when ``port`` is taken on ``host``: a port the user named
+    is served on or refused, never silently replaced by another."""
+    import errno
+    import socket
+
+    from mapkit.errors import MapkitError
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as servers bind: a closing port is free
+        try:
+            s.bind((host.strip("[]"), port))
+        except OSError as exc:
+            if exc.errno == errno.EADDRINUSE:
+                raise MapkitError(_busy(host, port)) from None
+            raise MapkitError(f"cannot listen on {host}:{port} ({exc.strerror or exc}); try --port 0") from None
+
+
 def run(args) -> int:
     import sys
     import time
@@ -39,8 +67,10 @@ def run(args) -> int:
 
     if args.lines and not args.result:
         raise MapkitError("--lines needs --result (the lines are drawn at the result's pose)")
-    if not 0 <= args.port <= 65535:
+    if args.port is not None and not 0 <= args.port <= 65535:
         raise MapkitError(f"--port must be in [0, 65535], got {args.port}")
+    if args.port and not args.html:
+        _check_port_free(args.host, args.port)
     if not _loopback(args.host) and not args.html:
         print(f"mapkit view: warning: listening on {args.host}: anyone who can reach this machine can see the "
               "plan and use the inspector (there is no password); use the default 127.0.0.1 to keep it local",
@@ -78,10 +108,13 @@ def run(args) -> int:
     from mapkit.view.server import Inspector
 
     try:
-        inspector = Inspector(m, host=args.host, port=args.port, map_path=args.map, plan=plan, result=result,
-                              camera=camera)
+        inspector = Inspector(m, host=args.host, port=DEFAULT_PORT if args.port is None else args.port,
+                              map_path=args.map, plan=plan, result=result, camera=camera)
     except OSError as exc:
         raise MapkitError(f"cannot listen on {args.host}:{args.port} ({exc.strerror or exc}); try --port 0") from None
+    if args.port and inspector.port != args.port:  # taken between the check and the server's start
+        inspector.stop()
+        raise MapkitError(_busy(args.host, args.port))
     try:
         # Inside the try: a Ctrl-C right after the address is shown must stop
         # the server too (its threads would keep the process alive).

@@ -50,6 +50,51 @@ def count_frames(path: str | Path) -> int:
         return sum(1 for line in f if line.strip())
 
 
+def check_run_file(path: str | Path) -> None:
+    """InputError unless ``path`` holds at least one frame of a run (a JSON
+    object with ``"t"`` and ``"odom"`` on one line): a log with damaged lines
+    is still followed, but a file with no frame at all (a lines file, a
+    camera file, a pretty-printed JSON) is the wrong file, not a run whose
+    every frame is skipped."""
+    path = Path(path)
+    first_problem = ""
+    with open(path, "rb") as f:
+        for number, raw in enumerate(f, 1):
+            if not raw.strip():
+                continue
+            try:
+                d = json.loads(raw)
+            except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
+                d = None
+            if isinstance(d, dict) and "t" in d and "odom" in d:
+                return
+            first_problem = first_problem or f"line {number} is {_what_json_is(d)}"
+    whole = _whole_json(path)
+    what = ("it is a lines file, for 'matcher localize --lines'" if isinstance(whole, dict) and "lines" in whole
+            else first_problem or "empty")
+    raise InputError(f'{path} holds no frame of a run: {what}; --frames takes JSON Lines, one frame a line: '
+                     '{"t": SECONDS, "odom": [x, y, yaw_deg], "lines": [[u1, v1, u2, v2], ...]}, or a ROS bag')
+
+
+def _what_json_is(d) -> str:
+    if d is None:
+        return "not JSON"
+    if isinstance(d, dict):
+        return f"an object without \"t\" and \"odom\" (keys {', '.join(sorted(map(str, d))[:4]) or 'none'})"
+    return f"a JSON {type(d).__name__}, not an object"
+
+
+def _whole_json(path: Path):
+    """The file read as one JSON document, or None (a file too large to be a
+    lines file is not read whole)."""
+    if path.stat().st_size > 64 << 20:
+        return None
+    try:
+        return json.loads(path.read_bytes())
+    except (json.JSONDecodeError, UnicodeDecodeError, RecursionError):
+        return None
+
+
 def read_jsonl(path: str | Path, detect=None, rig=None) -> Iterator[FrameInput]:
     """The frames of a JSON Lines file. ``detect(image_path) -> lines``
     turns an ``image`` entry into lines (it may raise InputError, which
