@@ -27,6 +27,7 @@ from matcher.candidates import select_candidates
 from matcher.input_validation import check_lines, check_prior
 from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
+from matcher.stage2.calibration_check import Where
 from matcher.stage2.calibration_check import doubt as calibration_doubt
 from matcher.stage2.covariance import pose_std_of
 from matcher.stage2.fit import coverage as coverage_of
@@ -126,10 +127,14 @@ class Scope:
     """What one search covers: the strategy's hypothesis ``sources``
     (:data:`matcher.strategy.SOURCES`) and ``candidate_ids``, the segments
     to consider instead of those of the regions the prior disk meets (lost
-    mode: a region's list; None: those)."""
+    mode: a region's list; None: those). ``whole_map``: the prior is one
+    piece of lost mode's search of the whole map, not a bound on where the
+    robot is: the calibration check may find the pose anywhere the robot
+    can stand (a wrong focal length moves the pose metres, out of the piece)."""
 
     sources: tuple = SOURCES
     candidate_ids: np.ndarray | None = None
+    whole_map: bool = False
 
 
 def localize_prepared(linemap, camera: Camera, image_lines: ImageLines, px, tol: Tolerances, t0: float,
@@ -154,14 +159,16 @@ def localize_prepared(linemap, camera: Camera, image_lines: ImageLines, px, tol:
     problem = Problem(camera, image_lines, cands, px, tol, deadlines)
     answer = run_strategy(problem, scope.sources)
     times.update(answer.times)
-    return _result(answer, problem, t0, times)
+    return _result(answer, problem, t0, times, linemap if scope.whole_map else None)
 
 
-def _result(answer: Answer, problem: Problem, t0: float, times: dict) -> LocalizeResult:
+def _result(answer: Answer, problem: Problem, t0: float, times: dict, whole_map=None) -> LocalizeResult:
     """The :class:`LocalizeResult` of the strategy's answer as
     :func:`matcher.verdict.decide` judges it: the best ranked pose if
     accepted, else a falsy result with the reason (and the poses it cannot
-    tell apart); the ranking, stage 1's counters and the times either way."""
+    tell apart); the ranking, stage 1's counters and the times either way.
+    ``whole_map``: the map, when the prior is a piece of lost mode's search
+    (:class:`Scope`)."""
     hyps, ranked_h, tol = answer.hyps, answer.ranked, problem.tol
     cut = BY_TIME if (answer.spent or hyps.counts.get("out_of_time")) else BY_SEARCH_BUDGET if hyps.truncated else UNCUT
     stage1 = SearchStats(**dict(hyps.counts, out_of_time=bool(hyps.counts.get("out_of_time") or answer.spent)))
@@ -185,22 +192,36 @@ def _result(answer: Answer, problem: Problem, t0: float, times: dict) -> Localiz
     # that only wants the pose does not spend).
     pose_std = Deferred(lambda: pose_std_of(problem.camera, problem.lines, problem.cands.segments, ranked_h, best,
                                             tol))
-    verdict = decide(_evidence(ranked_h, ranked, problem, cut, pose_std), tol)
+    verdict = decide(_evidence(ranked_h, ranked, problem, cut, pose_std, whole_map), tol)
     times["total"] = (time.perf_counter() - t0) * 1e3
     common = dict(hypotheses=n_h, runner_up_score=runner, time_ms=Timings(**times), ranked=ranked,
                   sets_found=int(hyps.counts.get("sets_found", n_h)), stage1=stage1)
     if not verdict:
         return LocalizeResult(False, verdict.reason, score=verdict.score, candidates=list(verdict.candidates),
-                              **common)
+                              miscalibrated=verdict.miscalibrated, **common)
     return LocalizeResult(True, "", pose=ranked[0][2], score=verdict.score, matches=ranked[0][1], _pose_std=pose_std,
                           **common)
 
 
-def _evidence(ranked_h, ranked: list, problem: Problem, cut: str, pose_std: Deferred) -> Evidence:
+def sees_all(linemap, ids: np.ndarray):
+    """``(x, y, r) -> bool``: do the map's regions within ``r`` of ``(x, y)``
+    (metres) list every segment of ``ids`` as visible?"""
+    def sees(x: float, y: float, r: float) -> bool:
+        regions = linemap.regions_near(x, y, r)
+        if len(regions) == 0:
+            return False
+        return bool(np.isin(ids, linemap.segments_for_regions(regions)).all())
+
+    return sees
+
+
+def _evidence(ranked_h, ranked: list, problem: Problem, cut: str, pose_std: Deferred,
+              whole_map=None) -> Evidence:
     """The :class:`~matcher.verdict.Evidence` of stage 2's ranking
     ``ranked_h`` (``ranked``: its hypotheses' E, matches and poses in
     degrees, best first) on its best hypothesis; ``cut``, how the search
-    was cut short; ``pose_std``, the best pose's standard deviations."""
+    was cut short; ``pose_std``, the best pose's standard deviations;
+    ``whole_map``: the map, when the prior is a piece of lost mode's search (:class:`Scope`)."""
     camera, image_lines, cands, tol = problem.camera, problem.lines, problem.cands, problem.tol
     best = int(ranked_h.order[0])
     mine = ranked_h.matches.of_one(best)
@@ -212,8 +233,13 @@ def _evidence(ranked_h, ranked: list, problem: Problem, cut: str, pose_std: Defe
     n_fin = np.bincount(ranked_h.matches.hyp, minlength=len(ranked_h.order))
     answers = tuple((pose, int(n_fin[h]), E, float(ranked_h.cost[h])) for (E, _, pose), h in zip(ranked, ranked_h.order)
                     if math.isfinite(E))
+    # Where the pose with a calibration freed may lie: within a prior's
+    # bounds, or in lost mode anywhere the robot can stand and see the
+    # matched segments.
+    where = Where(problem.prior) if whole_map is None else Where(None, cands.free,
+                                                                   sees_all(whole_map, cands.ids[mine.local]))
     calibration = Deferred(lambda: calibration_doubt(camera, image_lines.lines[mine.line], cands.segments[mine.local],
-                                                     ranked_h.poses[best], tol, problem.prior))
+                                                     ranked_h.poses[best], tol, where))
     return Evidence(score=float(ranked_h.score[best]), unscored=ranked_h.why, coverage=coverage, explained=explained,
                     searched=int(image_lines.searched.sum()), needed=lines_needed(image_lines, tol), answers=answers,
                     spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut, calibration=calibration)

@@ -156,6 +156,9 @@ class _RegionSearch:
         self.deadlines, self.progress = deadlines, progress
         self.centres, self.radii = linemap.region_centres(), linemap.region_radii()
         self.tried: set[int] = set()
+        #: Answers refused because their lines say the camera file is wrong
+        #: (:attr:`~matcher.result.LocalizeResult.miscalibrated`).
+        self.miscalibrated: list[LocalizeResult] = []
         self.out_of_time = False
         self.places = None  # the voted places (n, 4), once worked out
         self.voted: set[int] = set()  # the voted places searched
@@ -180,11 +183,14 @@ class _RegionSearch:
                 self.out_of_time = True
                 break
             res = from_prior.localize_prepared(self.linemap, self.camera, self.image_lines, (x, y, yaw, dt, dyaw), tol,
-                                               time.perf_counter(), self.deadlines, from_prior.Scope(sources))
+                                               time.perf_counter(), self.deadlines,
+                                               from_prior.Scope(sources, whole_map=True))
             self.voted.add(k)
             self.out_of_time |= bool(res.stage1.out_of_time)
             if res or res.candidates:
                 found[("vote", k)] = res
+            elif res.miscalibrated:
+                self.miscalibrated.append(res)
         return found
 
     def run(self, regions: list[int], sources, tol: Tolerances, first_accepted: bool = False, best: int = 0) -> dict:
@@ -207,8 +213,11 @@ class _RegionSearch:
             tol_r = replace(tol, min_matches=max(tol.min_matches, best - 1)) if best else tol
             res = from_prior.localize_prepared(self.linemap, self.camera, self.image_lines,
                                                (cx, cy, 0.0, min(dt, 100.0), math.pi), tol_r, time.perf_counter(),
-                                               self.deadlines, from_prior.Scope(sources, self.linemap.region_list(r)))
+                                               self.deadlines,
+                                               from_prior.Scope(sources, self.linemap.region_list(r), whole_map=True))
             self.out_of_time |= bool(res.stage1.out_of_time)
+            if res.miscalibrated:
+                self.miscalibrated.append(res)
             if res or res.candidates:  # accepted, or poses the region cannot tell apart
                 found[r] = res
                 best = max(best, max([len(res.matches)] + [c["matches"] for c in res.candidates]))
@@ -229,6 +238,9 @@ def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float
     tried, places = len(search.tried), len(search.voted)
     times = dict(total=total_ms, regions_tried=tried, places_tried=places)
     cut = BY_TIME if search.out_of_time else UNCUT
+    blamed = _calibration_blamed(found, search.miscalibrated)
+    if blamed is not None:
+        return replace(blamed, time_ms=replace(blamed.time_ms, **times))
     sweep = Sweep(places, tried, search.linemap.n_regions)
     if not found:
         return LocalizeResult(False, decide(Evidence(sweep=sweep, cut=cut), tol).reason, time_ms=Timings(**times))
@@ -242,6 +254,32 @@ def _decide(found: dict, search: _RegionSearch, tol: Tolerances, total_ms: float
     # The best of the regions searched, not of all: the result says so.
     return replace(best, ok=bool(verdict), reason=verdict.reason, candidates=list(verdict.candidates),
                    time_ms=replace(best.time_ms, **times), stage1=replace(best.stage1, out_of_time=search.out_of_time))
+
+
+def _calibration_blamed(found: dict, miscalibrated: list) -> LocalizeResult | None:
+    """Lost mode's refusal when an answer refused for the camera file's
+    calibration explains at least as many lines as every answer found: lost
+    mode has no prior, so the place whose lines say the calibration is
+    wrong is not one piece of the map to pass over for a place that
+    explains fewer (a wrong focal length fits a few lines somewhere else
+    too). Explaining more, its reason stands; as many, the two cannot be
+    told apart and the candidates name both. None when an answer explains
+    more, or none was refused for it."""
+    if not miscalibrated:
+        return None
+    doubt = max(miscalibrated, key=lambda res: len(res.ranked[0][1]) if res.ranked else 0)
+    explained = len(doubt.ranked[0][1]) if doubt.ranked else 0
+    answers = sorted((a for res in found.values() for a in answers_of(res)), key=lambda a: (-a[1], a[2]))
+    if explained == 0 or (answers and answers[0][1] > explained):
+        return None
+    if not answers or answers[0][1] < explained:
+        return doubt
+    E, pose = doubt.ranked[0][0], doubt.ranked[0][2]
+    rivals = [answers[0], (pose, explained, E)]
+    return replace(doubt, candidates=list(ambiguity.candidates_of(rivals)),
+                   reason=f"a pose explains {explained} lines as well as the pose {pose[0]:.2f}, {pose[1]:.2f}, "
+                          f"{pose[2]:.1f} deg whose lines say the calibration is wrong ({doubt.reason}); the "
+                          "candidates name both")
 
 
 def _contenders(found: dict) -> list:

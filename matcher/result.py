@@ -131,6 +131,10 @@ class LocalizeResult:
     #: when the map searched was a building's (:mod:`matcher.building`); else None.
     storey: str | None = None
 
+    #: Refused because the best pose's matched lines say the camera file's
+    #: calibration is wrong (the reason says which parameter); not in the JSON.
+    miscalibrated: bool = field(default=False, repr=False)
+
     #: :attr:`pose_std`, or the :class:`Deferred` that works it out.
     _pose_std: Deferred | tuple | None = field(default=None, repr=False, compare=False)
 

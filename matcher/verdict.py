@@ -54,12 +54,15 @@ class Verdict:
     the failure's ``reason`` ("" when accepted), the ``candidates`` it names
     (dicts of x, y, yaw_deg, matches, score) and the ``score`` the result
     reports (the best pose's E when it is accepted or refused for it; else
-    None)."""
+    None); ``miscalibrated``: refused because the best pose's lines say the
+    camera file is wrong (lost mode then refuses the whole map, not just
+    that piece of it)."""
 
     status: str
     reason: str = ""
     candidates: tuple = ()
     score: float | None = None
+    miscalibrated: bool = False
 
     def __bool__(self) -> bool:
         return self.status == ACCEPTED
@@ -180,7 +183,7 @@ def decide(ev: Evidence, tol: Tolerances) -> Verdict:
                        tuple(ambiguity.candidates_of([ev.answers[0]])))
     miscalibrated = "" if ev.calibration is None else ev.calibration.get()
     if miscalibrated:
-        return Verdict(NOT_LOCALISED, miscalibrated, score=ev.score)
+        return Verdict(NOT_LOCALISED, miscalibrated, score=ev.score, miscalibrated=True)
     return Verdict(ACCEPTED, score=ev.score)
 
 

@@ -23,7 +23,8 @@ residuals far more than one more free parameter lowers them by chance
 is left, so that a misfit it does not explain is not blamed on it), whose
 estimate is off by more than a calibration usually is, and whose pose lies
 within the prior bounds (wrong matches, a jamb's near face for its far
-one, are made up for by a focal length too, at a pose far away), names the
+one, are made up for by a focal length too, at a pose far away; in lost
+mode, which has no bounds, anywhere the robot can stand), names the
 calibration as the likely fault. :func:`matcher.verdict.decide` then
 refuses the pose.
 
@@ -47,6 +48,30 @@ from matcher.stage2.covariance import pose_spread
 #: (fx and fy alike, 1 = the file's), the camera height's offset (metres),
 #: the principal point's offsets (pixels; column, row).
 PARAMETERS = ("focal", "height", "cx", "cy")
+
+
+@dataclass(frozen=True)
+class Where:
+    """Where the pose refitted with a calibration parameter free may lie for
+    that parameter to be blamed: within the ``prior`` bounds ``(xe, ye,
+    yaw_e, dt, dyaw)`` (radians; None: no bounds) and, with ``free`` (a
+    :class:`~matcher.map_geometry.freespace.FreeSpace`), where the robot can
+    stand, and with ``sees`` (``(x, y, r) -> bool``, metres: within ``r`` of
+    the point) where the matched
+    segments are in sight. A prior's search gives its bounds; lost mode,
+    which searches the whole map piece by piece, the free space and the
+    sight of the matched segments (a wrong focal length moves the pose
+    metres, out of the piece searched; wrong matches made up for by a focal
+    length put it where those segments are not in view)."""
+
+    prior: tuple | None = None
+    free: object | None = None
+    sees: object | None = None
+
+
+def _where(prior) -> Where:
+    """``prior`` as a :class:`Where`: a Where, bounds (a tuple) or None (anywhere)."""
+    return prior if isinstance(prior, Where) else Where(prior, None)
 
 
 def _file_calibration() -> np.ndarray:
@@ -252,8 +277,9 @@ def miscalibration(camera, lines: np.ndarray, segments: np.ndarray, pose, tol, p
     ``calibration_min_ratio`` times the variance left, and whose estimate
     is plausible (:func:`plausible`) and off by more than the parameter's
     least offset (:class:`~matcher.tolerances.VerdictConstants`), and
-    whose pose there lies within the ``prior`` bounds ``(xe, ye, yaw_e, dt,
-    dyaw)`` (radians; None: anywhere; with the slack of
+    whose pose there lies where ``prior`` allows (a :class:`Where`: lost
+    mode's free space; or the prior's bounds ``(xe, ye, yaw_e, dt,
+    dyaw)``, radians; None: anywhere; with the slack of
     :func:`matcher.prior.within_prior`, three of that pose's standard
     deviations where more, as stage 2 allows its poses): the true pose does, and a parameter
     that fits the lines only at a pose the prior excludes is making up for
@@ -292,16 +318,26 @@ def blamed_parameters(data, camera, pose, tol, prior=None) -> list:
 
 
 def _inside(f: CalibrationFit, prior, tol) -> bool:
-    """Is the pose of fit ``f`` within the ``prior`` bounds (None: no bounds)?"""
-    if prior is None:
-        return True
+    """Is the pose of fit ``f`` where ``prior`` (a :class:`Where`, bounds
+    or None: anywhere) allows it?"""
+    where = _where(prior)
     pose = np.array([[f.pose[0], f.pose[1], math.radians(f.pose[2])]])
-    return bool(within_prior(pose, prior, None, tol, f.spread[None])[0])
+    if where.prior is not None and not within_prior(pose, where.prior, None, tol, f.spread[None])[0]:
+        return False
+    if where.free is None:
+        return True
+    # As stage 2 allows its poses: the free space's margin, or three of the
+    # pose's standard deviations where more (the fit with a calibration free
+    # fixes the pose less well).
+    slack = max(tol.free_space_m, tol.shared.prior_slack_sigmas * float(f.spread[0]))
+    if not where.free.distance(pose[:, :2])[0] <= slack:
+        return False
+    return where.sees is None or where.sees(f.pose[0], f.pose[1], slack)
 
 
 def doubt(camera, lines: np.ndarray, segments: np.ndarray, pose, tol, prior=None) -> str:
     """The failure's reason when the matched lines say the camera file is
-    wrong (:func:`miscalibration`, within the ``prior`` bounds), naming each
+    wrong (:func:`miscalibration`, where ``prior`` allows), naming each
     parameter that would fit them and the pose there; "" when they do not."""
     blamed = miscalibration(camera, lines, segments, pose, tol, prior)
     if not blamed:
