@@ -31,11 +31,13 @@ camera's on each camera (:mod:`matcher.rig.calibration`).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 import matcher
 from linemap.rig import Rig
@@ -131,21 +133,29 @@ def run(args) -> int:
     table = Table("map", "camera file", "seeds", "frames", "accepted before", "wrong before", "accepted after",
                   "wrong after", "on 4 lines", "refused for it")
     t0, calls = time.perf_counter(), 0
+    # Minutes pass between the table's rows: a bar on stderr shows the run is
+    # alive and how far it is (stdout keeps the table alone, for --report).
+    seeds_all = args.tuning + args.held_out
+    progress = tqdm(total=2 * len(set(args.maps)) * len(args.wrong) * len(seeds_all) * args.poses,
+                    unit="localisation", file=sys.stderr, leave=False)
     for map_name, linemap in load_maps(args.maps).items():
         make = make_frame if args.cameras == 1 else make_rig_frame
         frames = {seed: [make(linemap, truth, rng, args.peq) for rng in [np.random.default_rng([seed, args.peq])]
-                         for _ in range(args.poses)] for seed in args.tuning + args.held_out}
+                         for _ in range(args.poses)] for seed in seeds_all}
         for name in args.wrong:
             camera = wrong_camera(truth, name)
             for label, seeds in (("tuning", args.tuning), ("held out", args.held_out)):
                 before = [outcome(linemap, camera, fr, unchecked) for s in seeds for fr in frames[s]]
+                progress.update(len(before))
                 after = [outcome(linemap, camera, fr, DEFAULT) for s in seeds for fr in frames[s]]
+                progress.update(len(after))
                 calls += 2 * len(before)
                 wrong = ("wrong", "wrong on 4")
                 table.row(map_name, name, f"{label} ({', '.join(map(str, seeds))})", len(before),
                           sum(o in ("right", *wrong) for o in before), sum(o in wrong for o in before),
                           sum(o in ("right", *wrong) for o in after), sum(o in wrong for o in after),
                           after.count("wrong on 4"), after.count("calibration"))
+    progress.close()
     rig = "one camera" if args.cameras == 1 else f"a ring rig of {args.cameras} cameras"
     print(f"\n{calls} localisations in {time.perf_counter() - t0:.0f} s; {rig}; PEQ {args.peq}; wrong: accepted more than "
           f"{WRONG_M * 100:.0f} cm or {WRONG_DEG:g} deg from the truth")
