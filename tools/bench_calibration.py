@@ -42,7 +42,7 @@ from tqdm import tqdm
 import matcher
 from linemap.rig import Rig
 from mapkit_harness.rigs import ring_rig
-from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera, pose_error
+from mapkit_harness.simulate import PEQ, PEQ_HELP, make_frame, make_rig_frame, paper_camera, pose_error
 from mapkit_harness.tables import Table, add_report_option, reported
 from matcher.rig import localize_rig
 from matcher.tolerances import DEFAULT
@@ -113,7 +113,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Frames localised with a wrong camera file: accepted, accepted and "
                                              "wrong, refused; without and with the check of the calibration.")
     ap.add_argument("--maps", nargs="+", default=["flat", "synthetic"], choices=["flat", "synthetic"])
-    ap.add_argument("--peq", type=int, default=2, choices=sorted(PEQ))
+    ap.add_argument("--peq", type=int, default=2, choices=sorted(PEQ),
+                    help="the frames' PEQ level (default 2). " + PEQ_HELP)
     ap.add_argument("--cameras", type=int, default=1,
                     help="cameras of a ring rig per frame (default 1: the paper's single camera)")
     ap.add_argument("--poses", type=int, default=6, help="frames per seed (default 6)")
