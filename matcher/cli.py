@@ -275,6 +275,7 @@ def _camera(args, Camera):
 
 
 def _camera_of_flags(args, Camera):
+    """:func:`_camera`'s work: a camera file with its overrides, or --camera-k's camera."""
     if args.camera:
         if args.image_size:
             raise UsageError("--image-size goes with --camera-k (a camera file holds its size)")
