@@ -31,6 +31,20 @@ MANIFEST_VERSION = 1
 _REBUILD = "rebuild it with 'mapkit build model.ifc -o DIR'"
 
 
+class StoreyNeeded(LmapError):
+    """A building of several mapped storeys where one storey is needed and
+    none was named. Its message names the Python parameter (``storey=NAME``);
+    :meth:`naming` gives the same error naming the command line's flag."""
+
+    def __init__(self, before: str, after: str = "", named_by: str = "storey=NAME"):
+        self.before, self.after = before, after
+        super().__init__(before + named_by + after)
+
+    def naming(self, flag: str) -> "StoreyNeeded":
+        """This error naming ``flag`` (``"--storey NAME"``) where the storey goes."""
+        return StoreyNeeded(self.before, self.after, flag)
+
+
 @dataclass(frozen=True)
 class Storey:
     """One storey: its ``name`` (the model's), the ``elevation_m`` of its
@@ -67,8 +81,8 @@ class Building:
         if name is None:
             if len(self.mapped) == 1:
                 return self.mapped[0]
-            raise LmapError(f"{self.path} is a building of {len(self.mapped)} mapped storeys ({names}): "
-                            "give the storey (storey=NAME, --storey NAME)")
+            raise StoreyNeeded(f"{self.path} is a building of {len(self.mapped)} mapped storeys ({names}): "
+                               "give the storey (", ")")
         found = [s for s in self.storeys if s.name == name] or [
             s for s in self.storeys if s.name.casefold() == str(name).casefold()]
         if not found:

@@ -15,6 +15,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
+from collections.abc import Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -33,6 +36,25 @@ ATTITUDE_FIELDS = ("roll_deg", "pitch_std_deg", "roll_std_deg")
 
 class CameraError(InputError):
     """A camera description is missing a field or holds an impossible value."""
+
+
+@contextmanager
+def naming_flags(flags: Mapping[str, str | bool | None]):
+    """Within it, a CameraError about a camera field that a command-line flag
+    set names the flag the user typed instead of the field
+    (``{"height_m": "--camera-height"}``: "camera height_m must be above the
+    floor ..." becomes "--camera-height must be above the floor ...").
+    Fields whose flag is None or False (not given) keep their name."""
+    try:
+        yield
+    except CameraError as exc:
+        text = str(exc)
+        for name, flag in flags.items():
+            if flag:
+                text = re.sub(rf"\bcamera {re.escape(name)}\b", flag, text)
+        if text == str(exc):
+            raise
+        raise CameraError(text) from None
 
 
 @dataclass(frozen=True)
@@ -99,7 +121,7 @@ class Camera:
     def from_fov(cls, hfov_deg: float, width: int, height: int, height_m: float, pitch_deg: float) -> "Camera":
         """An ideal pinhole with square pixels and the given horizontal field of view."""
         if not 1.0 <= hfov_deg < 179.0:
-            raise CameraError(f"horizontal field of view must be in [1, 179) degrees, got {hfov_deg}")
+            raise CameraError(f"camera hfov_deg (horizontal field of view) must be in [1, 179) degrees, got {hfov_deg}")
         f = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
         return cls(width, height, f, f, width / 2.0, height / 2.0, height_m, pitch_deg)
 

@@ -38,8 +38,9 @@ pitch and roll (``world2cam_rotation``); a camera looking more than 89
 degrees up or down has no heading to split out, and is refused.
 
 Every bad input is a one-line :class:`~linemap.camera.CameraError` saying
-what to fix. Standard library and numpy; the YAML is read by
-:mod:`linemap.small_yaml` (OpenCV's parser refuses the files Kalibr writes).
+what to fix. Standard library and numpy; the YAML is read by PyYAML
+(:mod:`linemap.safe_yaml`, imported when a YAML file is read: OpenCV's
+parser refuses the files Kalibr writes).
 """
 
 from __future__ import annotations
@@ -57,8 +58,6 @@ import numpy as np
 from linemap.camera import ATTITUDE_FIELDS, Camera, CameraError, world2cam_rotation
 from linemap.camera_files import load_camera, read_text
 from linemap.rig import Mount, Rig, RigCamera
-from linemap.small_yaml import SmallYamlError
-from linemap.small_yaml import load as load_yaml
 
 #: Fields of a rig file's camera entry that override its camera's.
 OVERRIDE_FIELDS = ("height_m", "pitch_deg", *ATTITUDE_FIELDS)
@@ -177,9 +176,11 @@ def _parse(text: str, path: Path):
             raise CameraError(f"rig file {path} is not valid JSON ({exc})") from None
         except RecursionError:
             raise CameraError(f"rig file {path} is not valid JSON (nested too deeply)") from None
+    from linemap.safe_yaml import YamlError, load  # PyYAML, loaded only for a YAML file
+
     try:
-        return load_yaml(text, f"rig file {path}")
-    except SmallYamlError as exc:
+        return load(text, f"rig file {path}")
+    except YamlError as exc:
         raise CameraError(str(exc)) from None
 
 

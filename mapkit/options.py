@@ -255,29 +255,42 @@ def flags_of(f) -> tuple[str, ...]:
     return (flag,) if isinstance(flag, str) else tuple(flag)
 
 
+class OptionError(MapkitError):
+    """A :class:`BuildOptions` field of the wrong type or out of range. Its
+    message names the flag and the field (from Python one sets the field);
+    :meth:`as_typed` is the command line's, naming the flag alone."""
+
+    def __init__(self, f, problem: str):
+        self.flag = "/".join(flags_of(f)) or f.name
+        self.problem = problem  # "must be > 0 metres, got 0.0"
+        super().__init__(f"{self.flag} {problem} (BuildOptions.{f.name})")
+
+    def as_typed(self) -> MapkitError:
+        """The error as the command line reports it: ``--max-range must be ...``."""
+        return MapkitError(f"{self.flag} {self.problem}")
+
+
 def _check_field(f, value) -> None:
-    """MapkitError unless ``value`` has field ``f``'s type and allowed value."""
-    flag = "/".join(flags_of(f)) or f.name
-    where = f"{flag} (BuildOptions.{f.name})"
+    """OptionError unless ``value`` has field ``f``'s type and allowed value."""
     kind, allowed = f.type, f.metadata["allowed"]
     if kind in ("float", "int"):
         wanted = int if kind == "int" else (int, float)
         if isinstance(value, bool) or not isinstance(value, wanted):
-            raise MapkitError(f"{where} must be a{'n integer' if kind == 'int' else ' number'}, got {value!r}")
+            raise OptionError(f, f"must be a{'n integer' if kind == 'int' else ' number'}, got {value!r}")
     elif kind == "bool" and not isinstance(value, bool):
-        raise MapkitError(f"{where} must be True or False, got {value!r}")
+        raise OptionError(f, f"must be True or False, got {value!r}")
     elif kind == "dict" and not isinstance(value, dict):
-        raise MapkitError(f"{where} must be a camera.json object, got {value!r}")
+        raise OptionError(f, f"must be a camera.json object, got {value!r}")
     elif kind == "list[str]" and not (isinstance(value, list) and all(isinstance(v, str) for v in value)):
-        raise MapkitError(f"{where} must be a list of layer names or globs, got {value!r}")
+        raise OptionError(f, f"must be a list of layer names or globs, got {value!r}")
     elif kind == "int | None" and not (value is None or (isinstance(value, int) and not isinstance(value, bool))):
-        raise MapkitError(f"{where} must be an integer, got {value!r}")
+        raise OptionError(f, f"must be an integer, got {value!r}")
     elif kind in ("str", "str | None") and not (isinstance(value, str) or (value is None and kind != "str")):
-        raise MapkitError(f"{where} must be text, got {value!r}")
+        raise OptionError(f, f"must be text, got {value!r}")
     if isinstance(allowed, Range) and value is not None and not allowed.holds(value):
-        raise MapkitError(f"{flag} must be {allowed}, got {value!r} (BuildOptions.{f.name})")
+        raise OptionError(f, f"must be {allowed}, got {value!r}")
     if isinstance(allowed, tuple) and value not in allowed:
-        raise MapkitError(f"{flag} must be one of {', '.join(allowed)}, got {value!r} (BuildOptions.{f.name})")
+        raise OptionError(f, f"must be one of {', '.join(allowed)}, got {value!r}")
 
 
 def _check_camera(camera: dict) -> None:

@@ -26,7 +26,15 @@ from matcher.stage1.constraints import wrap
 
 from mapkit_harness.visibility_oracle import sight_blocked
 
+#: The paper's pose estimation quality (PEQ) levels: level -> the prior's
+#: bounds ``(dt, dyaw)`` (metres, degrees); a frame's prior is drawn within
+#: them of the true pose (docs/method.md section 9).
 PEQ = {1: (0.2, 10.0), 2: (0.4, 20.0), 3: (0.6, 30.0), 4: (0.8, 40.0), 5: (1.0, 50.0)}
+
+#: What a PEQ is, for the tools' ``--peq`` help.
+PEQ_HELP = ("PEQ: the paper's pose estimation quality level, how far the prior may be from the true pose "
+            "(dt, dyaw): " + "; ".join(f"{k}: {dt:g} m / {dyaw:g} deg" for k, (dt, dyaw) in PEQ.items())
+            + " (docs/method.md)")
 
 #: The paper's camera; height and pitch are ours (the paper gives none).
 PAPER_CAMERA = dict(width=640, height=480, fx=900.0, fy=900.0, cx=320.0, cy=240.0, height_m=1.2, pitch_deg=0.0)

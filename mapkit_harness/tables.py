@@ -33,13 +33,27 @@ def markdown_row(cells: Iterable[object]) -> str:
 
 
 def markdown_table(columns: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
-    """A whole markdown table: header, ``|---|`` separator, one line a row."""
-    return "\n".join([markdown_row(columns), "|" + "---|" * len(columns), *(markdown_row(r) for r in rows)])
+    """A whole markdown table (GitHub's), its columns aligned: the cells as
+    given, ``str()`` of each (format numbers before; tabulate would reformat
+    a number-like text, so it is told not to parse numbers)."""
+    from tabulate import tabulate
+
+    return tabulate([[str(c) for c in r] for r in rows], headers=[str(c) for c in columns], tablefmt="github",
+                    disable_numparse=True)
+
+
+def markdown_cells(line: str) -> list[str]:
+    """The cells of one table line, stripped: ``"| 1   | 2.5 |"`` -> ``["1", "2.5"]``."""
+    return [c.strip() for c in line.strip().strip("|").split("|")]
 
 
 class Table:
     """A markdown table printed row by row (a benchmark's rows show up as
-    they are measured, and a run stopped half-way keeps the rows it had)."""
+    they are measured, and a run stopped half-way keeps the rows it had).
+
+    Its own row printer, not tabulate's: tabulate lays a table out whole
+    (each column as wide as its widest cell), so it cannot print a row
+    before the rows below it are known."""
 
     def __init__(self, *columns: str, file=None):
         self.columns = columns

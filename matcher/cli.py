@@ -35,6 +35,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from linemap.argv import join_negative_values
+from linemap.building import StoreyNeeded
 from linemap.errors import OUT_OF_MEMORY, InputError, add_debug_option, report_bug
 
 #: Exit codes: localised, not localised (a valid answer), user error; a bug
@@ -262,7 +263,19 @@ def _human(res, n_lines: int) -> str:
 
 def _camera(args, Camera):
     """The camera of --camera or of --camera-k and --image-size, with
-    --height-m, --pitch-deg and --roll-deg; UsageError for a missing part."""
+    --height-m, --pitch-deg and --roll-deg; UsageError for a missing part;
+    a value of those flags out of range is a CameraError naming the flag."""
+    from linemap.camera import naming_flags
+
+    flags = {"height_m": args.height_m is not None and "--height-m",
+             "pitch_deg": args.pitch_deg is not None and "--pitch-deg",
+             "roll_deg": getattr(args, "roll_deg", None) is not None and "--roll-deg"}
+    with naming_flags(flags):
+        return _camera_of_flags(args, Camera)
+
+
+def _camera_of_flags(args, Camera):
+    """:func:`_camera`'s work: a camera file with its overrides, or --camera-k's camera."""
     if args.camera:
         if args.image_size:
             raise UsageError("--image-size goes with --camera-k (a camera file holds its size)")
@@ -333,6 +346,8 @@ def main(argv: list[str] | None = None) -> int:
 
             return run_track(args)
         return run_localize(args)
+    except StoreyNeeded as exc:  # the library's message names storey=NAME: here the flag is typed
+        return _fail(str(exc.naming("--storey NAME")))
     except InputError as exc:  # UsageError, CameraError, LmapError, BagError and the input checks
         return _fail(str(exc))
     except BrokenPipeError:  # the reader went away (`matcher localize ... | head -1`); before OSError

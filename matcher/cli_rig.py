@@ -83,12 +83,15 @@ def _panorama_frame(args):
     """The panorama's rig of views and each view's lines."""
     import cv2
 
+    from linemap.camera import naming_flags
+
     from matcher.panorama import panorama_lines, panorama_rig
 
     image = cv2.imread(args.pano, cv2.IMREAD_GRAYSCALE)
     if image is None:
         raise RigUsageError(f"panorama {args.pano} could not be read (PNG, JPEG, ... expected)")
-    rig = panorama_rig(image.shape[1], args.height_m, args.pano_yaw_offset)
+    with naming_flags({"height_m": "--camera-height"}):
+        rig = panorama_rig(image.shape[1], args.height_m, args.pano_yaw_offset)
     return rig, panorama_lines(image, rig)
 
 

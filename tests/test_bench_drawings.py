@@ -12,6 +12,7 @@ import fetch_drawings
 import pytest
 
 from mapkit_harness.plans import office_grid
+from mapkit_harness.tables import markdown_cells
 
 ROOT = Path(__file__).resolve().parent.parent
 FLAT = ROOT / "maps" / "flat.dxf"
@@ -37,7 +38,7 @@ def test_a_folder_of_drawings_is_built_and_judged(tmp_path, capsys):
         "office_miscounted\t20\t\t\t000000000000\n")
     assert bench_drawings.main([str(folder)]) == 0
     out, err = capsys.readouterr()
-    rows = {line.split(" | ")[0].strip("| "): line.split(" | ") for line in out.splitlines() if line.startswith("| ")}
+    rows = {cells[0]: cells for cells in (markdown_cells(line) for line in out.splitlines() if line.startswith("| "))}
     assert rows["flat"][1] == "right", rows["flat"]
     assert rows["flat"][6] == "7 / 7"
     assert rows["office_miscounted"][1] == "built wrong", rows["office_miscounted"]

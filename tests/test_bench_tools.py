@@ -12,6 +12,7 @@ import pytest
 import bench_budget
 import bench_images
 import bench_paper
+from mapkit_harness.tables import markdown_cells, markdown_table
 
 
 @pytest.mark.slow
@@ -22,7 +23,8 @@ def test_bench_paper_writes_table_rows_and_figures(tmp_path, capsys):
                              "--baseline-limit", "0.2", "--out", str(out), "--json", str(js)])
     assert code == 0
     table = capsys.readouterr().out
-    assert "| 1 |" in table and "| 5 |" in table
+    firsts = [markdown_cells(line)[0] for line in table.splitlines() if line.startswith("|")]
+    assert "1" in firsts and "5" in firsts
     data = json.loads(js.read_text())
     for peq in ("1", "5"):
         rows = data["rows"][peq]
@@ -63,11 +65,12 @@ def test_bench_paper_rig_table_scores_every_count_by_the_pose(tmp_path, capsys):
     assert code == 0
     out = capsys.readouterr().out.splitlines()
     # The one camera's table as without --cameras, then the rig table.
-    assert out[2].startswith("| PEQ | sets found med / max |") and out[4].startswith("| 1 |")
+    assert markdown_cells(out[2])[:2] == ["PEQ", "sets found med / max"] and markdown_cells(out[4])[0] == "1"
     assert out[6].startswith("rigs of 2 such cameras, 0.15 m from the robot's centre") and "time budget none" in out[6]
-    assert out[7] == ("| cameras | PEQ | frames | lines (med) | correct first | accepted | wrong (> 10 cm or 1 deg) "
-                      "| of which > 20 cm or 5 deg | pose err (med) | cut by budget | ms med / p95 |")
-    one, two = ([c.strip() for c in line.strip("|").split("|")] for line in out[9:11])
+    assert markdown_cells(out[7]) == ["cameras", "PEQ", "frames", "lines (med)", "correct first", "accepted",
+                                      "wrong (> 10 cm or 1 deg)", "of which > 20 cm or 5 deg", "pose err (med)",
+                                      "cut by budget", "ms med / p95"]
+    one, two = (markdown_cells(line) for line in out[9:11])
     assert one[:3] == ["1", "1", "2"] and two[:3] == ["2", "1", "2"]
     assert two[4] == "100%" and two[6] == two[7] == "0%" and two[9] == "0"  # both rig frames right, none cut
     assert out[11].startswith("Correct first: the first ranked pose within 10 cm and 1 deg")
@@ -77,7 +80,7 @@ def test_bench_paper_rig_table_scores_every_count_by_the_pose(tmp_path, capsys):
     # A rig alone prints the map and camera above its table; bad counts are one line.
     assert bench_paper.main(["--cameras", "2", "--poses", "1", "--peq", "1"]) == 0
     alone = capsys.readouterr().out.splitlines()
-    assert alone[0].startswith("map ") and alone[1].startswith("camera ") and alone[4].startswith("| cameras |")
+    assert alone[0].startswith("map ") and alone[1].startswith("camera ") and markdown_cells(alone[4])[0] == "cameras"
     assert "timing best of 1 (rigs) passes" in alone[3]
     assert bench_paper.main(["--cameras", "0"]) == 2
     assert capsys.readouterr().err.startswith("error: --cameras takes distinct counts of at least 1")
@@ -138,3 +141,11 @@ def test_report_to_a_missing_folder_is_one_line_before_the_run(tmp_path, capsys)
     assert bench_budget.main(["--poses", "1", "--report", str(tmp_path / "no" / "t.md")]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1 and err.startswith("error: --report ")
+
+
+def test_markdown_table_keeps_the_cells_as_given_in_aligned_columns():
+    text = markdown_table(["PEQ", "ms"], [[1, "1.10"], [5, None], ["007", "12.3"]])
+    lines = text.splitlines()
+    assert [markdown_cells(line) for line in lines[:1] + lines[2:]] == [
+        ["PEQ", "ms"], ["1", "1.10"], ["5", "None"], ["007", "12.3"]]  # no number reformatted
+    assert set(lines[1]) <= set("|-: ") and len({len(line) for line in lines}) == 1  # one width a column

@@ -24,6 +24,7 @@ from linemap.camera import Camera, CameraError
 from linemap.errors import EXIT_BUG, InputError
 from linemap.lmap import LmapError, load_map
 from mapkit.errors import MapkitError, NoFreeSpaceError, NoWallsError
+from mapkit.options import BuildOptions
 from mapkit_harness.fuzz.cases import Case
 from mapkit_harness.fuzz.classify import BUG, ERROR, VALID, classify_cli
 from mapkit_harness.fuzz.matcher_inputs import base_camera, base_frame, base_run
@@ -136,6 +137,83 @@ def test_bad_input_still_exits_2_in_one_line(tmp_path, capsys):
                  "--robot-radius", "-1"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("mapkit: error: ") and len(err.strip().splitlines()) == 1
+
+
+# ---- messages name what the user typed, not the code's names behind it ---------
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--max-range", "0"], "--max-range must be > 0 metres, got 0.0"),
+    (["-j", "0"], "-j/--jobs must be >= 1, got 0"),
+    (["--camera-height", "-1"], "--camera-height must be above the floor (> 0 m), got -1.0"),
+    (["--camera-height", "nan"], "--camera-height must be finite, got nan"),
+    (["--pitch", "100"], "--pitch must be in [-89, 89] (positive looks down), got 100.0"),
+    (["--hfov", "0"], "--hfov (horizontal field of view) must be in [1, 179) degrees, got 0.0"),
+])
+def test_mapkit_build_names_the_flag_typed(tmp_path, capsys, flags, message):
+    from mapkit.cli import main
+
+    assert main(["build", str(ROOT / "maps" / "flat.dxf"), "-o", str(tmp_path / "out.lmap"), *flags]) == 2
+    assert capsys.readouterr().err == f"mapkit: error: {message}\n"
+    assert not (tmp_path / "out.lmap").exists()
+
+
+def test_build_options_from_python_name_the_field_too():
+    with pytest.raises(MapkitError) as e:
+        BuildOptions(max_range=0.0)
+    assert str(e.value) == "--max-range must be > 0 metres, got 0.0 (BuildOptions.max_range)"
+
+
+def test_a_camera_file_s_own_value_keeps_the_field_s_name():
+    from linemap.camera import naming_flags
+
+    with pytest.raises(CameraError, match=r"^camera height_m must be above the floor"):
+        with naming_flags({"height_m": None, "pitch_deg": "--pitch-deg"}):
+            Camera.from_dict({**base_camera(), "height_m": -1.0})
+    with pytest.raises(CameraError, match=r"^--pitch-deg must be in \[-89, 89\]"):
+        with naming_flags({"height_m": None, "pitch_deg": "--pitch-deg"}):
+            Camera.from_dict({**base_camera(), "pitch_deg": 95.0})
+
+
+@pytest.mark.parametrize("camera, message", [
+    (["--camera", "CAMERA", "--height-m", "-1"], "--height-m must be above the floor (> 0 m), got -1.0"),
+    (["--camera", "CAMERA", "--pitch-deg", "95"], "--pitch-deg must be in [-89, 89] (positive looks down), got 95.0"),
+    (["--camera-k", "457,457,320,240", "--image-size", "640x480", "--height-m", "-1"],
+     "--height-m must be above the floor (> 0 m), got -1.0"),
+])
+def test_matcher_names_the_camera_flag_typed(localize_files, capsys, camera, message):
+    from matcher.cli import main
+
+    d, args = localize_files
+    at = args.index("--camera")
+    args = args[:at] + [str(d / "camera.json") if a == "CAMERA" else a for a in camera] + args[at + 2:]
+    assert main(args) == 2
+    assert capsys.readouterr().err == f"matcher: error: {message}\n"
+
+
+def test_a_panorama_s_height_names_camera_height(tmp_path, capsys):
+    import cv2
+
+    from matcher.cli import main
+
+    cv2.imwrite(str(tmp_path / "pano.png"), np.zeros((64, 128), np.uint8))
+    assert main(["localize", "--map", str(ROOT / "maps" / "flat.lmap"), "--pano", str(tmp_path / "pano.png"),
+                 "--camera-height", "-1", "--lost"]) == 2
+    assert capsys.readouterr().err == "matcher: error: --camera-height must be above the floor (> 0 m), got -1.0\n"
+
+
+@pytest.mark.parametrize("command", [["build", "-o", "OUT"], ["layers"]])
+def test_an_empty_ifc_file_is_called_empty(tmp_path, capsys, command):
+    from mapkit.cli import main
+
+    (tmp_path / "model.ifc").write_bytes(b"")
+    args = [command[0], str(tmp_path / "model.ifc"), *[str(tmp_path / "out") if a == "OUT" else a
+                                                        for a in command[1:]]]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err == ("mapkit: error: model.ifc: the file is empty, not an IFC model; export the model again "
+                   "(an IFC file, ISO-10303-21 text)\n")
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.fixture(scope="module")

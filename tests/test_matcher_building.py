@@ -210,7 +210,7 @@ def test_matcher_localize_on_a_manifest(built, building, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra, needle", [
-    ([], "give the storey"),
+    ([], "give the storey (--storey NAME)"),
     (["--storey", "Cellar"], "no storey named 'Cellar'"),
 ])
 def test_matcher_localize_storey_errors_are_one_line(built, building, tmp_path, capsys, extra, needle):
@@ -219,6 +219,16 @@ def test_matcher_localize_storey_errors_are_one_line(built, building, tmp_path, 
     assert matcher_main(["localize", "--map", str(built / "building.json"), *files, *prior, *extra]) == 2
     out, err = capsys.readouterr()
     assert out == "" and len(err.strip().splitlines()) == 1 and err.startswith("matcher: error: ") and needle in err
+    assert "storey=" not in err  # the command line's flag, not the Python parameter
+
+
+def test_a_building_without_a_storey_named_says_storey_from_python(building):
+    from linemap.building import StoreyNeeded
+
+    with pytest.raises(StoreyNeeded) as e:
+        matcher.localize(building, paper_camera(), _frame(building), (1.6, 1.1, 65.0), 0.3, 10)
+    assert str(e.value).endswith("give the storey (storey=NAME)") and "--storey" not in str(e.value)
+    assert str(e.value.naming("--storey NAME")).endswith("give the storey (--storey NAME)")
 
 
 def test_storey_with_a_plain_map_is_a_one_line_error(built, building, tmp_path, capsys):

@@ -1,9 +1,12 @@
-"""The README's examples run as written from a fresh clone and leave it clean.
+"""The README's and the docs' examples run as written from a fresh clone and leave it clean.
 
-Every line of README.md inside an indented block that starts with ``$ `` is
-a runnable example; the indented lines under it, up to the next ``$ `` line
-or the end of the block, are the output it shows. Command lines without
-``$ `` (the test command, a server, data one downloads) are shown, not run.
+Every line of README.md and of docs/*.md (:data:`DOCUMENTS`) inside an
+indented block that starts with ``$ `` is a runnable example; the indented
+lines under it, up to the next ``$ `` line or the end of the block, are the
+output it shows. Command lines without ``$ `` (the test command, a server,
+data one downloads, a build of minutes, a file not in the repository) are
+shown, not run. The benchmark pages (docs/benchmarks/) are records of a run
+at a commit, not examples.
 
 The examples run in the README's order, as a newcomer would type them, in a
 copy of the repository's tracked files (a fresh clone: a git repository of
@@ -14,6 +17,8 @@ README's first command makes it), and the chains run in parallel. ``.venv/bin/X`
 environment running this test (in CI that *is* ``.venv``); in the first
 command, the steps that make the environment (``python3 -m venv .venv``,
 ``.venv/bin/pip install ...``) are left out, since CI's set-up has made it.
+The docs' pages assume the environment is active (``mapkit``, ``matcher``,
+``python``): its bin directory comes first on PATH.
 
 Each example must exit 0 and print what the README shows: the shown lines in
 order, ``...`` standing for lines left out, with the figures that depend on
@@ -36,6 +41,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
+#: The pages whose ``$ `` examples run: the README, then the docs' pages.
+DOCUMENTS = [README, *sorted((ROOT / "docs").glob("*.md"))]
 PROMPT = "$ "
 INDENT = "    "
 SKIPPED_OUTPUT = "..."
@@ -191,11 +198,35 @@ def chain_name(chain: list[Example]) -> str:
     example's first step past the set-up ("mapkit-build", "simulate.py")."""
     steps = [s.split() for s in without_environment_steps(chain[0].command).split(" && ")]
     words = next(w for w in steps if w[0] != "mkdir")
-    program = Path(words[0] if words[0] != ".venv/bin/python" else words[1]).name
+    program = Path(words[0] if Path(words[0]).name != "python" else words[1]).name
     return program if program.endswith(".py") else f"{program}-{words[1]}"
 
 
-CHAINS = example_chains(readme_examples(README.read_text()))
+#: ``(page, chain)``: each page's examples in chains of their own (a page's
+#: examples never read another page's files).
+CHAINS = [(doc, chain) for doc in DOCUMENTS for chain in example_chains(readme_examples(doc.read_text()))]
+
+
+def chain_id(doc: Path, chain: list[Example]) -> str:
+    """``README:mapkit-build``, ``docs/cli:simulate.py``; a second chain of the same name gets ``-2``."""
+    return f"{doc.relative_to(ROOT).with_suffix('')}:{chain_name(chain)}"
+
+
+def _unique(ids: list[str]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for i in ids:
+        seen[i] = seen.get(i, 0) + 1
+        out.append(i if seen[i] == 1 else f"{i}-{seen[i]}")
+    return out
+
+
+def test_the_docs_have_runnable_examples():
+    """docs/cli.md's examples run (the batch build, an error's exit status,
+    a simulated frame localised) and docs/inputs.md's (a plan, a mesh)."""
+    pages = {doc.name: sum(len(c) for d, c in CHAINS if d == doc) for doc in DOCUMENTS}
+    assert pages["cli.md"] >= 8 and pages["inputs.md"] >= 2
+    assert any("tests/data/dxf/truncated.dxf" in e.command for d, c in CHAINS for e in c if d.name == "cli.md")
 
 
 def test_example_chains_follow_the_files_under_out():
@@ -212,24 +243,27 @@ def clean_clone(tmp_path_factory):
     return fresh_clone(tmp_path_factory.mktemp("readme-clone"))
 
 
-@pytest.mark.slow  # the README's examples, one chain each: builds maps, simulates frames, tracks a run
-@pytest.mark.parametrize("chain", CHAINS, ids=[chain_name(c) for c in CHAINS])
-def test_readme_examples_run_as_written(chain, clean_clone, tmp_path):
+@pytest.mark.slow  # the examples, one chain each: builds maps, simulates frames, tracks a run
+@pytest.mark.parametrize("doc, chain", CHAINS, ids=_unique([chain_id(d, c) for d, c in CHAINS]))
+def test_examples_run_as_written(doc, chain, clean_clone, tmp_path):
     repo = shutil.copytree(clean_clone, tmp_path / "clone", symlinks=True)
     (repo / "out").mkdir()
-    env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=str(repo), MPLBACKEND="Agg")
+    bin_dir = str(Path(sys.executable).parent)  # the docs' bare mapkit, matcher, python
+    env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=str(repo), MPLBACKEND="Agg",
+               PATH=os.pathsep.join([bin_dir, os.environ.get("PATH", "")]))
     env.pop("PYTHONSTARTUP", None)
+    page = doc.relative_to(ROOT)
     for example in chain:
         command = with_this_environment(without_environment_steps(example.command))
         done = subprocess.run(["bash", "-c", command], cwd=repo, env=env, capture_output=True, text=True,
                               timeout=600)
-        assert done.returncode == 0, f"$ {example.command}\nexit {done.returncode}\n{done.stdout}{done.stderr}"
+        assert done.returncode == 0, f"{page}: $ {example.command}\nexit {done.returncode}\n{done.stdout}{done.stderr}"
         # stderr first: the CLIs' warnings come before their summary line (stdout is unbuffered).
         printed = (done.stderr + done.stdout).splitlines()
         differs = shown_in(example.shown, printed)
-        assert differs is None, f"$ {example.command}\n{differs}"
+        assert differs is None, f"{page}: $ {example.command}\n{differs}"
     status = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all"], cwd=repo,
                             capture_output=True, text=True, check=True).stdout
-    assert status == "", f"the README's examples left files outside out/:\n{status}"
+    assert status == "", f"the examples of {page} left files outside out/:\n{status}"
     if (repo / "out" / "flat.lmap").exists():
         assert (repo / "out" / "flat.lmap").read_bytes() == (repo / "maps" / "flat.lmap").read_bytes()

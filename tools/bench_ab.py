@@ -16,6 +16,7 @@ frame) and the median of the per-frame ratios.
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 import tempfile
@@ -23,24 +24,24 @@ from pathlib import Path
 
 import numpy as np
 
+from mapkit_harness.simulate import PEQ, PEQ_HELP
 from mapkit_harness.tables import Table, add_report_option, reported
 
 ROOT = Path(__file__).resolve().parent.parent
 
 #: The worker: reads "peq index" lines, prints the best-of-N milliseconds.
+#: It runs as ``python -c`` in the revision's folder with that folder on
+#: PYTHONPATH (:func:`worker_env`): both come before the installed project on
+#: the import path, so it imports the revision's ``matcher`` and harness by name.
 _WORKER = r"""
-import os, sys, time
-root, poses, repeat = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-# The one path edit the harness keeps: this worker must load the matcher of
-# ROOT (an archived revision or the working tree), not the installed one.
-sys.path[:0] = [root]
+import sys, time
+poses, repeat = int(sys.argv[1]), int(sys.argv[2])
 import numpy as np, matcher
-if os.path.isdir(os.path.join(root, "mapkit_harness")):
+try:
     from mapkit_harness.simulate import make_frame, paper_camera
-else:  # a revision from before the harness was a package: its simulator sat in tools/
-    sys.path.insert(1, os.path.join(root, "tools"))
+except ImportError:  # a revision from before the harness was a package: its simulator sat in tools/
     from simulate import make_frame, paper_camera
-linemap = matcher.load_map(root + "/maps/flat.lmap")
+linemap = matcher.load_map("maps/flat.lmap")
 camera = paper_camera(1.2, 0.0)
 frames = {}
 for line in sys.stdin:
@@ -59,10 +60,18 @@ for line in sys.stdin:
 """
 
 
+def worker_env(root: str) -> dict[str, str]:
+    """The environment of a worker running the revision in ``root``: its
+    folder (and its tools/, where old revisions kept the simulator) first on
+    the import path."""
+    return dict(os.environ, PYTHONPATH=os.pathsep.join([root, os.path.join(root, "tools")]))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="A/B latency of matcher.localize: REF against the working tree.")
     ap.add_argument("ref", help="git revision to compare against (e.g. HEAD)")
-    ap.add_argument("--peq", type=int, nargs="+", default=[3, 4, 5], choices=[1, 2, 3, 4, 5])
+    ap.add_argument("--peq", type=int, nargs="+", default=[3, 4, 5], choices=sorted(PEQ),
+                    help="PEQ levels to time (default 3 4 5). " + PEQ_HELP)
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ (seed 0, as tools/bench_paper.py)")
     ap.add_argument("--repeat", type=int, default=3, help="runs per frame; the best counts")
     add_report_option(ap)
@@ -78,9 +87,8 @@ def run(args) -> int:
             print(f"error: git archive {args.ref} failed: {archive.stderr.decode().strip()}", file=sys.stderr)
             return 2
         subprocess.run(["tar", "-x", "-C", tmp], input=archive.stdout, check=True)
-        worker = Path(tmp) / "_ab_worker.py"
-        worker.write_text(_WORKER)
-        procs = {name: subprocess.Popen([sys.executable, str(worker), root, str(args.poses), str(args.repeat)],
+        procs = {name: subprocess.Popen([sys.executable, "-c", _WORKER, str(args.poses), str(args.repeat)],
+                                        cwd=root, env=worker_env(root),
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
                  for name, root in (("ref", tmp), ("tree", str(ROOT)))}
         table = Table("PEQ", f"{args.ref} ms (median)", "working tree ms (median)", "per-frame ratio (median)")

@@ -29,7 +29,7 @@ import numpy as np
 import matcher
 
 from mapkit_harness.scoring import indistinguishable, is_correct
-from mapkit_harness.simulate import make_frame, paper_camera
+from mapkit_harness.simulate import PEQ, PEQ_HELP, make_frame, paper_camera
 from mapkit_harness.tables import Table, add_report_option, reported
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -38,7 +38,8 @@ ROOT = Path(__file__).resolve().parent.parent
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Latency and answers of matcher.localize under time budgets.")
     ap.add_argument("--map", default=str(ROOT / "maps" / "flat.lmap"), help=".lmap map")
-    ap.add_argument("--peq", type=int, nargs="+", default=[3, 4, 5], choices=[1, 2, 3, 4, 5])
+    ap.add_argument("--peq", type=int, nargs="+", default=[3, 4, 5], choices=sorted(PEQ),
+                    help="PEQ levels to run (default 3 4 5). " + PEQ_HELP)
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ (seed 0, as tools/bench_paper.py)")
     ap.add_argument("--budgets", type=float, nargs="+", default=[0, 200, 100, 50],
                     help="budgets in milliseconds; 0 for none")

@@ -31,16 +31,18 @@ camera's on each camera (:mod:`matcher.rig.calibration`).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 import matcher
 from linemap.rig import Rig
 from mapkit_harness.rigs import ring_rig
-from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera, pose_error
+from mapkit_harness.simulate import PEQ, PEQ_HELP, make_frame, make_rig_frame, paper_camera, pose_error
 from mapkit_harness.tables import Table, add_report_option, reported
 from matcher.rig import localize_rig
 from matcher.tolerances import DEFAULT
@@ -111,7 +113,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Frames localised with a wrong camera file: accepted, accepted and "
                                              "wrong, refused; without and with the check of the calibration.")
     ap.add_argument("--maps", nargs="+", default=["flat", "synthetic"], choices=["flat", "synthetic"])
-    ap.add_argument("--peq", type=int, default=2, choices=sorted(PEQ))
+    ap.add_argument("--peq", type=int, default=2, choices=sorted(PEQ),
+                    help="the frames' PEQ level (default 2). " + PEQ_HELP)
     ap.add_argument("--cameras", type=int, default=1,
                     help="cameras of a ring rig per frame (default 1: the paper's single camera)")
     ap.add_argument("--poses", type=int, default=6, help="frames per seed (default 6)")
@@ -131,21 +134,29 @@ def run(args) -> int:
     table = Table("map", "camera file", "seeds", "frames", "accepted before", "wrong before", "accepted after",
                   "wrong after", "on 4 lines", "refused for it")
     t0, calls = time.perf_counter(), 0
+    # Minutes pass between the table's rows: a bar on stderr shows the run is
+    # alive and how far it is (stdout keeps the table alone, for --report).
+    seeds_all = args.tuning + args.held_out
+    progress = tqdm(total=2 * len(set(args.maps)) * len(args.wrong) * len(seeds_all) * args.poses,
+                    unit="localisation", file=sys.stderr, leave=False)
     for map_name, linemap in load_maps(args.maps).items():
         make = make_frame if args.cameras == 1 else make_rig_frame
         frames = {seed: [make(linemap, truth, rng, args.peq) for rng in [np.random.default_rng([seed, args.peq])]
-                         for _ in range(args.poses)] for seed in args.tuning + args.held_out}
+                         for _ in range(args.poses)] for seed in seeds_all}
         for name in args.wrong:
             camera = wrong_camera(truth, name)
             for label, seeds in (("tuning", args.tuning), ("held out", args.held_out)):
                 before = [outcome(linemap, camera, fr, unchecked) for s in seeds for fr in frames[s]]
+                progress.update(len(before))
                 after = [outcome(linemap, camera, fr, DEFAULT) for s in seeds for fr in frames[s]]
+                progress.update(len(after))
                 calls += 2 * len(before)
                 wrong = ("wrong", "wrong on 4")
                 table.row(map_name, name, f"{label} ({', '.join(map(str, seeds))})", len(before),
                           sum(o in ("right", *wrong) for o in before), sum(o in wrong for o in before),
                           sum(o in ("right", *wrong) for o in after), sum(o in wrong for o in after),
                           after.count("wrong on 4"), after.count("calibration"))
+    progress.close()
     rig = "one camera" if args.cameras == 1 else f"a ring rig of {args.cameras} cameras"
     print(f"\n{calls} localisations in {time.perf_counter() - t0:.0f} s; {rig}; PEQ {args.peq}; wrong: accepted more than "
           f"{WRONG_M * 100:.0f} cm or {WRONG_DEG:g} deg from the truth")

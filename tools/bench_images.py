@@ -28,7 +28,7 @@ import numpy as np
 import matcher
 
 from mapkit_harness.render import render_view
-from mapkit_harness.simulate import PEQ, make_frame, paper_camera, pose_error
+from mapkit_harness.simulate import PEQ, PEQ_HELP, make_frame, paper_camera, pose_error
 from mapkit_harness.tables import Table, add_report_option, reported
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,7 +65,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description="Localise from rendered images (LSD, then matcher.localize).")
     ap.add_argument("--map", default=str(ROOT / "maps" / "flat.lmap"), help=".lmap map")
     ap.add_argument("--frames", type=int, default=20, help="frames per PEQ")
-    ap.add_argument("--peq", type=int, nargs="+", default=sorted(PEQ), choices=sorted(PEQ))
+    ap.add_argument("--peq", type=int, nargs="+", default=sorted(PEQ), choices=sorted(PEQ),
+                    help="PEQ levels to run (default 1 to 5). " + PEQ_HELP)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--supersample", type=int, default=2, help="rays per pixel along each axis when rendering")
     ap.add_argument("--repeat", type=int, default=3, help="timing: best of this many runs per frame")

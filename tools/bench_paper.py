@@ -62,7 +62,7 @@ import matcher
 from mapkit_harness.baseline import baseline_localize
 from mapkit_harness.rigs import ring_rig
 from mapkit_harness.scoring import indistinguishable, is_correct, level_view
-from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera, pose_error
+from mapkit_harness.simulate import PEQ, PEQ_HELP, make_frame, make_rig_frame, paper_camera, pose_error
 from mapkit_harness.tables import add_report_option, markdown_table, reported
 
 #: A pose this far (metres, degrees) or farther from the truth is a wrong
@@ -381,7 +381,8 @@ def main(argv=None) -> int:
     ap.add_argument("--map", help=".lmap map (default: maps/flat.lmap if present, else the synthetic flat)")
     ap.add_argument("--synthetic", action="store_true", help="use the synthetic flat of mapkit_harness.plans")
     ap.add_argument("--poses", type=int, default=100, help="frames per PEQ")
-    ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ))
+    ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ),
+                    help="PEQ levels to run (default 1 to 5). " + PEQ_HELP)
     ap.add_argument("--seed", type=int, nargs="+", default=[0],
                     help="one seed, or several whose frames are pooled per PEQ (--poses frames each)")
     ap.add_argument("--noise-px", type=float, default=1.0, help="uniform noise bound on line offset and end points")

@@ -48,7 +48,7 @@ import numpy as np
 import matcher
 
 from mapkit_harness.panorama import cut_view, view_pose
-from mapkit_harness.simulate import PEQ, pose_error, visible_lines
+from mapkit_harness.simulate import PEQ, PEQ_HELP, pose_error, visible_lines
 from mapkit_harness.tables import add_report_option, markdown_table, reported
 
 
@@ -76,7 +76,8 @@ def main(argv=None) -> int:
     ap.add_argument("--pano", action="store_true",
                     help="panorama mode: each whole panorama cut by matcher.panorama (its default views) and "
                          "localised as one robot (matcher.localize_rig); one frame per panorama")
-    ap.add_argument("--peq", type=int, nargs="*", default=sorted(PEQ), help="PEQs to run (default 1 to 5)")
+    ap.add_argument("--peq", type=int, nargs="*", default=sorted(PEQ), choices=sorted(PEQ),
+                    help="PEQ levels to run (default 1 to 5). " + PEQ_HELP)
     ap.add_argument("--lost-every", type=int, default=4, help="lost mode on every N-th view (0: none; default 4)")
     ap.add_argument("--budget-ms", type=float, default=1000.0,
                     help="time budget per call, ms (default 1000, which keeps a run of the sample tour near 15 min; "

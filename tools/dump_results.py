@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 import matcher
-from mapkit_harness.simulate import clutter_lines, make_frame, paper_camera
+from mapkit_harness.simulate import PEQ, PEQ_HELP, clutter_lines, make_frame, paper_camera
 
 MAP = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
 
@@ -110,7 +110,8 @@ def main(argv=None) -> int:
     ap.add_argument("out", nargs="?", help="JSON file to write")
     ap.add_argument("--compare", nargs=2, metavar=("OLD", "NEW"), help="compare two dumps instead")
     ap.add_argument("--seed", type=int, nargs="+", default=[0, 1])
-    ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5])
+    ap.add_argument("--peq", type=int, nargs="+", default=[1, 2, 3, 4, 5], choices=sorted(PEQ),
+                    help="PEQ levels to run (default 1 to 5). " + PEQ_HELP)
     ap.add_argument("--poses", type=int, default=40, help="level frames per seed and PEQ")
     ap.add_argument("--attitude-poses", type=int, default=8, help="rolled and pitched frames per seed and PEQ")
     ap.add_argument("--roll-deg", type=float, default=3.0)

@@ -25,7 +25,7 @@ import numpy as np
 
 from linemap.errors import InputError
 from linemap.rig import Rig
-from mapkit_harness.simulate import PEQ, make_frame, make_rig_frame, paper_camera
+from mapkit_harness.simulate import PEQ, PEQ_HELP, make_frame, make_rig_frame, paper_camera
 
 
 def main(argv=None) -> int:
@@ -33,7 +33,8 @@ def main(argv=None) -> int:
         description="Synthetic frames for the paper's protocol (docs/method.md section 9): print or write one.")
     ap.add_argument("--map", default=str(Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"),
                     help=".lmap map (default: maps/flat.lmap)")
-    ap.add_argument("--peq", type=int, default=3, choices=sorted(PEQ))
+    ap.add_argument("--peq", type=int, default=3, choices=sorted(PEQ),
+                    help="the prior's PEQ level (default 3). " + PEQ_HELP)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--noise-px", type=float, default=1.0)
     ap.add_argument("--noise-deg", type=float, default=1.0)

@@ -14,7 +14,7 @@ from dataclasses import fields
 from pathlib import Path
 
 from mapkit.errors import MapkitError
-from mapkit.options import IMPORT_GROUPS, RETIRED_FLAGS, BuildOptions, flags_of
+from mapkit.options import IMPORT_GROUPS, RETIRED_FLAGS, BuildOptions, OptionError, flags_of
 
 #: argparse ``type`` of each field type that takes a value.
 _PARSERS = {"float": float, "int": int, "int | None": int, "str": str, "str | None": str}
@@ -86,7 +86,10 @@ def options_from_args(args, groups=IMPORT_GROUPS, **others) -> BuildOptions:
         if f.metadata["group"] in groups:
             v = getattr(args, f.name)
             values[f.name] = list(v or []) if f.type == "list[str]" else v
-    return BuildOptions(**values, **others)
+    try:
+        return BuildOptions(**values, **others)
+    except OptionError as exc:
+        raise exc.as_typed() from None  # the flag the user typed, not the field behind it
 
 
 def add_import_arguments(p) -> None:

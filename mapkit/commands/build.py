@@ -60,7 +60,7 @@ def _camera_from_args(args) -> dict:
     """The camera.json shape the camera flags ask for: a camera file, or
     the default camera with the height, pitch, field of view and image size
     given."""
-    from linemap.camera import Camera
+    from linemap.camera import Camera, naming_flags
 
     from mapkit.options import DEFAULT_HFOV_DEG, default_camera
 
@@ -68,16 +68,19 @@ def _camera_from_args(args) -> dict:
         if any(v is not None for v in (args.camera_height, args.pitch, args.hfov, args.image_size)):
             raise MapkitError("--camera already sets the camera; drop --camera-height/--pitch/--hfov/--image-size")
         return Camera.load(args.camera).to_dict()
-    cam = default_camera()
-    if args.camera_height is not None:
-        cam["height_m"] = args.camera_height
-    if args.pitch is not None:
-        cam["pitch_deg"] = args.pitch
-    if args.hfov is not None or args.image_size is not None:
-        w, h = _image_size(args.image_size or f"{cam['width']}x{cam['height']}")
-        hfov = args.hfov if args.hfov is not None else DEFAULT_HFOV_DEG
-        cam = Camera.from_fov(hfov, w, h, cam["height_m"], cam["pitch_deg"]).to_dict()
-    return Camera.from_dict(cam).to_dict()  # validates
+    flags = {"height_m": args.camera_height is not None and "--camera-height",
+             "pitch_deg": args.pitch is not None and "--pitch", "hfov_deg": args.hfov is not None and "--hfov"}
+    with naming_flags(flags):  # "--camera-height must be ...", not the camera field it sets
+        cam = default_camera()
+        if args.camera_height is not None:
+            cam["height_m"] = args.camera_height
+        if args.pitch is not None:
+            cam["pitch_deg"] = args.pitch
+        if args.hfov is not None or args.image_size is not None:
+            w, h = _image_size(args.image_size or f"{cam['width']}x{cam['height']}")
+            hfov = args.hfov if args.hfov is not None else DEFAULT_HFOV_DEG
+            cam = Camera.from_fov(hfov, w, h, cam["height_m"], cam["pitch_deg"]).to_dict()
+        return Camera.from_dict(cam).to_dict()  # validates
 
 
 def _image_size(text: str) -> tuple[int, int]:

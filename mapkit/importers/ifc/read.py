@@ -96,6 +96,9 @@ def open_model(path: Path) -> Model:
     """Open ``path`` and sort its elements; MapkitError if it is not an IFC
     model or has no building storey."""
     ifcopenshell = import_ifcopenshell()
+    if path.stat().st_size == 0:  # ifcopenshell says "Unable to open file for reading", which it could
+        raise MapkitError(f"{path.name}: the file is empty, not an IFC model; export the model again (an IFC file, "
+                          "ISO-10303-21 text)")
     try:
         f = ifcopenshell.open(str(path))
     except Exception as exc:  # noqa: BLE001 - ifcopenshell raises its own and RuntimeErrors for any bad file
