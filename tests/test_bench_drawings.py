@@ -38,11 +38,11 @@ def test_a_folder_of_drawings_is_built_and_judged(tmp_path, capsys):
     assert bench_drawings.main([str(folder)]) == 0
     out, err = capsys.readouterr()
     rows = {line.split(" | ")[0].strip("| "): line.split(" | ") for line in out.splitlines() if line.startswith("| ")}
-    assert rows["flat"][1] == "right", rows["flat"]
-    assert rows["flat"][6] == "7 / 7"
-    assert rows["office_miscounted"][1] == "built wrong", rows["office_miscounted"]
+    assert rows["flat"][2] == "right", rows["flat"]  # [1]: the half (none here)
+    assert rows["flat"][7] == "7 / 7"
+    assert rows["office_miscounted"][2] == "built wrong", rows["office_miscounted"]
     assert f"{office.doors} of 20 doors found" in rows["office_miscounted"][-1]
-    assert rows["no_walls"][1] == "refused" and "--walls" in rows["no_walls"][-1]
+    assert rows["no_walls"][2] == "refused" and "--walls" in rows["no_walls"][-1]
     assert "3 drawings (all): 1 right (33 %), 0 built, 1 built wrong, 1 refused, 0 bug" in out
     assert "office_miscounted.dxf: SHA-256" in err and "another version" in err
 
