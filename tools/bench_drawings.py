@@ -5,6 +5,7 @@ judge what came out.
     python tools/bench_drawings.py DIR                      # every plan in DIR
     python tools/bench_drawings.py DIR hal9k daoshi_f1      # drawings whose name holds one of these
     python tools/bench_drawings.py DIR --previews out/previews --report out/drawings.md
+    python tools/bench_drawings.py DIR --manifest docs/benchmarks/drawings.tsv --half tuning   # one half only
 
 Each drawing is built by ``mapkit build DRAWING -o OUT.lmap`` with no option
 at all, in a child process of its own (its seconds and peak memory, the
@@ -15,25 +16,34 @@ windows found, the free space's area and how many separate parts it has.
 A manifest beside the drawings (``DIR/manifest.tsv`` or ``--manifest``) may
 say what a person sees in each drawing; a column left empty is not judged:
 
-    id  doors_drawn  rooms  outline_m2  sha256_12   (tab-separated; '#' lines are comments;
-                                                 the drawing is DIR/<id>.dxf, or a "file" column)
+    id  repo  split  expect  doors_drawn  rooms  outline_m2  sha256_12
+    (tab-separated; '#' lines are comments; the drawing is DIR/<id>.dxf, or a "file" column)
 
 The outcome of a drawing:
 
 - **right**: built, and each judged fact holds: at most 10 % of the doors
   drawn are missing; the rooms connect (the free space is one part, or no
   more parts than the manifest's ``rooms`` when its doors are not drawn);
-  the free space lies inside the building (no more than ``outline_m2``);
-  no fallback to the walls' convex hull.
-- **built wrong**: built, and a judged fact fails (named in the notes).
+  the free space lies inside the building (no more than ``outline_m2``)
+  and fills a fair share of it (at least 40 %: rooms are not lost);
+  no fallback to the walls' convex hull. Also right: a drawing that cannot
+  honestly be right with defaults (unknown scale, traced in pixels, a
+  framing plan), declared in the manifest's ``expect`` column as
+  ``refuse:--OPTION``, refused with a message that names that option.
+- **built wrong**: built, and a judged fact fails (named in the notes), or
+  built though the manifest expects a refusal.
 - **built**: built, nothing to judge it by.
 - **refused**: the one-line error (exit 2); it should name what fixes it.
 - **bug**: anything else: a traceback, an internal error (exit 3), a crash
   or the time limit.
 
-The summary line counts each outcome. A manifest's ``sha256_12`` column
-(the first 12 hex digits of a file's SHA-256) warns when a drawing is
-another version than the one measured.
+The manifest's ``split`` column puts each drawing in the ``tuning`` or the
+``held_out`` half by a fixed rule (``split_of``: the parity of a hash of
+its repository's name, so that drawings of one repository, or of its
+forks, stay in one half); rules are chosen on the tuning half and both
+halves are reported. The summary counts each outcome per half and in all.
+A manifest's ``sha256_12`` column (the first 12 hex digits of a file's
+SHA-256) warns when a drawing is another version than the one measured.
 """
 
 from __future__ import annotations
@@ -58,6 +68,13 @@ MISSING_DOORS_SHARE = 0.10
 #: The free space may exceed the building's outline by this share (the
 #: outline in a manifest is a person's estimate).
 OUTLINE_SLACK = 0.05
+#: A right build's free space fills at least this share of the outline:
+#: walls take 10 to 20 % of a floor and the robot's clearance from them
+#: (0.2 m each side) a further 15 to 30 % of rooms 3 to 4 m wide, and
+#: furniture drawn as walls some more; below 40 % whole rooms are lost.
+MIN_FREE_SHARE = 0.40
+#: The halves of the corpus (the manifest's ``split`` column).
+HALVES = ("tuning", "held_out")
 
 
 @dataclass
@@ -67,6 +84,29 @@ class Expected:
     doors_drawn: int | None = None
     rooms: int | None = None
     outline_m2: float | None = None
+    #: ``refuse:--OPTION`` (or ``refuse:--A|--B``): the drawing cannot
+    #: honestly be right with defaults; a refusal naming the option (one
+    #: of them) is its right outcome. A bare ``refuse``: no option makes it
+    #: a floor plan (a framing plan), any one-line refusal is right.
+    expect: str | None = None
+    #: ``tuning`` or ``held_out`` (None: not in the corpus's split).
+    split: str | None = None
+
+    def refusal_options(self) -> list[str] | None:
+        """The options one of which a right refusal names (``["--scale"]``;
+        ``[]``: any refusal), or None when a refusal is not expected."""
+        if not self.expect or not self.expect.startswith("refuse"):
+            return None
+        return [o.strip() for o in self.expect.removeprefix("refuse").lstrip(":").split("|") if o.strip()]
+
+
+def split_of(repo: str) -> str:
+    """The half a drawing of ``repo`` ("owner/name") belongs to: the parity
+    of the first byte of the SHA-256 of the repository's name (lower case,
+    without its owner, so a fork falls in the same half as its source).
+    Fixed before any drawing was judged: it cannot be chosen per drawing."""
+    name = repo.strip().split("/")[-1].lower()
+    return HALVES[hashlib.sha256(name.encode()).digest()[0] % 2]
 
 
 @dataclass
@@ -148,6 +188,8 @@ def run_child(args: list[str], timeout: float) -> dict:
 def judge(o: Outcome, exp: Expected) -> None:
     """Set ``o.outcome`` for a built drawing from the facts a person gave."""
     wrong = []
+    if exp.refusal_options() is not None:
+        wrong.append(f"built, though it cannot be right with defaults (the manifest expects {exp.expect})")
     if exp.doors_drawn:
         missing = exp.doors_drawn - (o.doors or 0)
         if missing > MISSING_DOORS_SHARE * exp.doors_drawn:
@@ -159,11 +201,26 @@ def judge(o: Outcome, exp: Expected) -> None:
             wrong.append(f"free space in {o.free_parts} parts: rooms not connected")
     if exp.outline_m2 and o.free_m2 is not None and o.free_m2 > exp.outline_m2 * (1 + OUTLINE_SLACK):
         wrong.append(f"free space {o.free_m2:.0f} m2 beyond the outline's {exp.outline_m2:.0f} m2")
+    if exp.outline_m2 and o.free_m2 is not None and o.free_m2 < exp.outline_m2 * MIN_FREE_SHARE:
+        wrong.append(f"free space {o.free_m2:.0f} m2, under {100 * MIN_FREE_SHARE:.0f} % of the outline's "
+                     f"{exp.outline_m2:.0f} m2: rooms lost")
     if any("convex hull" in w for w in o.warnings):
         wrong.append("free space from the walls' convex hull")
     judged = any(v is not None for v in (exp.doors_drawn, exp.rooms, exp.outline_m2))
     o.notes += wrong
     o.outcome = "built wrong" if wrong else ("right" if judged else "built")
+
+
+def judge_refusal(o: Outcome, exp: Expected, message: str) -> None:
+    """A refusal is right when the manifest expects one and the message
+    names the option it expects; otherwise it is "refused"."""
+    options = exp.refusal_options()
+    named = [opt for opt in options or () if opt in message]
+    if options is not None and (named or not options):
+        why = f"naming {named[0]}" if named else "(no option makes it a floor plan)"
+        o.outcome, o.notes = "right", [f"refused {why}, as the manifest expects: {message}"]
+    else:
+        o.outcome, o.notes = "refused", [message]
 
 
 def bench_one(plan: Path, exp: Expected, timeout: float, previews: Path | None) -> Outcome:
@@ -181,7 +238,7 @@ def bench_one(plan: Path, exp: Expected, timeout: float, previews: Path | None) 
         errors = [ln for ln in err if ln.startswith("mapkit: error:")]
         traceback = any(ln.startswith("Traceback") for ln in err)
         if b["rc"] == 2 and errors and not traceback:
-            o.outcome, o.notes = "refused", [errors[-1].removeprefix("mapkit: error: ")]
+            judge_refusal(o, exp, errors[-1].removeprefix("mapkit: error: "))
             return o
         if b["rc"] != 0 or traceback or not out.exists():
             o.outcome, o.notes = "bug", [f"exit {b['rc']}: {err[-1] if err else 'no message'}"]
@@ -223,17 +280,29 @@ def read_manifest(path: Path) -> tuple[dict[str, Expected], dict[str, str]]:
     for row in rows:
         name = Path(row.get("file") or row.get("id") or "").stem
         if name:
-            exps[name] = Expected(num(row, "doors_drawn", int), num(row, "rooms", int), num(row, "outline_m2", float))
+            exps[name] = Expected(num(row, "doors_drawn", int), num(row, "rooms", int), num(row, "outline_m2", float),
+                                  row.get("expect") or None, row.get("split") or None)
+            check_split(name, row)
             if row.get("sha256_12"):
                 sums[name] = row["sha256_12"]
     return exps, sums
+
+
+def check_split(name: str, row: dict) -> None:
+    """A row's ``split`` must be the one its repository's rule gives (a
+    drawing is not moved between halves by hand)."""
+    split, repo = row.get("split"), row.get("repo")
+    if split and split not in HALVES:
+        raise ValueError(f"{name}: split {split!r} is neither of {', '.join(HALVES)}")
+    if split and repo and split != split_of(repo):
+        raise ValueError(f"{name}: split {split!r}, but the rule (split_of) puts {repo} in {split_of(repo)!r}")
 
 
 def sha256_12(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()[:12]
 
 
-COLUMNS = ("drawing", "outcome", "s", "peak MB", "segments", "regions", "doors found / drawn", "windows",
+COLUMNS = ("drawing", "half", "outcome", "s", "peak MB", "segments", "regions", "doors found / drawn", "windows",
            "free m2 (parts) / outline m2", "warnings", "notes")
 OUTCOMES = ("right", "built", "built wrong", "refused", "bug")
 
@@ -246,16 +315,25 @@ def table(rows: list[Outcome], exps: dict[str, Expected]) -> str:
     cells = []
     for o in rows:
         e = exps.get(o.name, Expected())
-        cells.append((o.name, o.outcome, f(o.seconds, ".1f"), f(o.peak_mb, ".0f"), f(o.segments, "d"),
+        cells.append((o.name, e.split or "-", o.outcome, f(o.seconds, ".1f"), f(o.peak_mb, ".0f"), f(o.segments, "d"),
                       f(o.regions, "d"), f"{f(o.doors, 'd')} / {f(e.doors_drawn, 'd')}", f(o.windows, "d"),
                       f"{f(o.free_m2, '.0f')} ({f(o.free_parts, 'd')}) / {f(e.outline_m2, '.0f')}",
                       len(o.warnings), "; ".join(n.replace("|", "/") for n in o.notes)))
-    counts = {k: sum(o.outcome == k for o in rows) for k in OUTCOMES}
     seconds = [o.seconds for o in rows if o.seconds == o.seconds]
     peaks = [o.peak_mb for o in rows if o.peak_mb == o.peak_mb]
-    summary = (f"{len(rows)} drawings: " + ", ".join(f"{counts[k]} {k}" for k in OUTCOMES)
-               + f"; slowest {max(seconds, default=0):.1f} s, largest {max(peaks, default=0):.0f} MB")
-    return markdown_table(COLUMNS, cells) + "\n\n" + summary
+    summary = (summary_line(rows) + f"; slowest {max(seconds, default=0):.1f} s, largest {max(peaks, default=0):.0f} MB")
+    halves = [summary_line([o for o in rows if exps.get(o.name, Expected()).split == h], h) for h in HALVES]
+    halves = [ln for ln in halves if not ln.startswith("0 ")]
+    return markdown_table(COLUMNS, cells) + "\n\n" + "\n\n".join([*halves, summary])
+
+
+def summary_line(rows: list[Outcome], half: str | None = None) -> str:
+    """``N drawings (half): a right (p %), b built, ...``: each outcome counted."""
+    counts = {k: sum(o.outcome == k for o in rows) for k in OUTCOMES}
+    share = f" ({100 * counts['right'] / len(rows):.0f} %)" if rows else ""
+    where = f" ({half})" if half else " (all)"
+    return (f"{len(rows)} drawings{where}: " + ", ".join(
+        f"{counts[k]} {k}" + (share if k == "right" else "") for k in OUTCOMES))
 
 
 def check_files(plans: list[Path], sums: dict[str, str]) -> None:
@@ -270,9 +348,15 @@ def check_files(plans: list[Path], sums: dict[str, str]) -> None:
 
 def run(args) -> int:
     manifest = args.manifest or args.folder / "manifest.tsv"
-    exps, sums = read_manifest(manifest) if manifest.exists() else ({}, {})
+    try:
+        exps, sums = read_manifest(manifest) if manifest.exists() else ({}, {})
+    except ValueError as exc:
+        print(f"bench_drawings: error: {manifest}: {exc}", file=sys.stderr)
+        return 2
     plans = sorted(p for p in args.folder.iterdir() if p.suffix.lower() in PLAN_SUFFIXES)
     plans = [p for p in plans if not args.only or any(o in p.stem for o in args.only)]
+    if args.half:
+        plans = [p for p in plans if exps.get(p.stem, Expected()).split == args.half]
     check_files(plans, sums)
     rows = []
     for i, plan in enumerate(plans, 1):
@@ -288,6 +372,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("only", nargs="*", help="only drawings whose name holds one of these")
     ap.add_argument("--manifest", type=Path, help="what a person sees in each drawing (default DIR/manifest.tsv)")
     ap.add_argument("--previews", type=Path, metavar="DIR", help="write a preview PNG per drawing here")
+    ap.add_argument("--half", choices=HALVES, help="only the drawings of this half of the manifest's split")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds a drawing may take (default 600)")
     add_report_option(ap)
     ap.add_argument("--child-build", nargs=2, help=argparse.SUPPRESS)

@@ -3,6 +3,7 @@
 
     python tools/fetch_drawings.py out/drawings            # every drawing of docs/benchmarks/drawings.tsv
     python tools/fetch_drawings.py out/drawings hal9k      # those whose id holds one of these
+    python tools/fetch_drawings.py out/drawings --half tuning   # one half of the manifest's split
     python tools/bench_drawings.py out/drawings --manifest docs/benchmarks/drawings.tsv
 
 Each drawing is a file of a public repository at a fixed commit (the
@@ -29,7 +30,10 @@ RAW_BASE = "https://raw.githubusercontent.com"
 
 
 def corpus(manifest: Path) -> list[dict]:
-    """The manifest's rows (``#`` lines are comments)."""
+    """The manifest's rows (``#`` lines are comments), each a dict by column
+    name: ``id``, ``repo``, ``commit``, ``path``, ``sha256_12``, ``split``
+    (``tuning`` or ``held_out``) and the judged columns that
+    ``tools/bench_drawings.py`` reads."""
     lines = [ln for ln in manifest.read_text(encoding="utf-8").splitlines() if ln.strip() and not ln.startswith("#")]
     return list(csv.DictReader(lines, delimiter="\t"))
 
@@ -61,12 +65,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("folder", type=Path, help="folder to save the drawings in (created)")
     ap.add_argument("only", nargs="*", help="only drawings whose id holds one of these")
     ap.add_argument("--manifest", type=Path, default=MANIFEST, help="the corpus (default docs/benchmarks/drawings.tsv)")
+    ap.add_argument("--half", choices=("tuning", "held_out"), help="only the drawings of this half of the split")
     ap.add_argument("--base-url", default=RAW_BASE, help=f"where raw files are served (default {RAW_BASE})")
     args = ap.parse_intermixed_args(argv)
     args.folder.mkdir(parents=True, exist_ok=True)
     failed = 0
     for row in corpus(args.manifest):
         if args.only and not any(o in row["id"] for o in args.only):
+            continue
+        if args.half and row.get("split") != args.half:
             continue
         try:
             print(f"{row['id']}: {fetch(row, args.folder, args.base_url)}")
