@@ -169,6 +169,11 @@ def test_readme_marks_its_examples():
             assert program in ("python3", "mkdir") or program.startswith(".venv/bin/"), c
 
 
+def test_the_readme_is_an_overview():
+    """The README stays an overview (under 350 lines); detail goes in docs/."""
+    assert len(README.read_text().splitlines()) < 350
+
+
 def test_shown_in_reads_the_readme_conventions():
     assert shown_in(["a", "...", "c"], ["a", "b", "c"]) is None
     assert shown_in(["a", "c"], ["a", "b", "c"]) is not None
