@@ -417,6 +417,39 @@ WALL_CAP_ANGLE_DEG = 15.0
 DXF_FAR_FACTOR = 100.0
 DXF_FAR_MIN_ENTITIES = 10
 
+#: The self-check (mapkit/importers/dxf/self_check.py): the map is refused
+#: when it contradicts its own drawing. Each bound is what real buildings
+#: allow, checked on the corpus's tuning half (docs/benchmarks/drawings.md):
+#:
+#: - the free space (grown back by the robot's radius: the rooms' floor)
+#:   covers at least ``SELF_CHECK_MIN_FREE_SHARE`` of the building the
+#:   drawing's linework outlines (walls take 5 to 33 % of a floor, stairs,
+#:   shafts, balconies and recesses closed across their mouths the rest):
+#:   right builds 0.46 to 0.88; rooms left out, a room outline on layer 0
+#:   beside one partition, a sheet's other views built as walls 0.03 to
+#:   0.31;
+#: - walls take ``SELF_CHECK_WALL_SHARE`` of the floor (walls plus free
+#:   space): a pavilion's freestanding walls 4 %, a stone house 33 %; a
+#:   whole floor read as windows with a stray line as walls 0.04 %,
+#:   elevations' hatches built as walls 80 %;
+#: - their mean thickness (twice the area over the outline's length) is
+#:   ``SELF_CHECK_WALL_THICKNESS`` metres, the span of real walls from a
+#:   stud partition to a thick masonry wall (the corpus 0.09 to 0.40);
+#: - at least ``SELF_CHECK_MIN_DOORS_USED`` of the door drawings are
+#:   doors (a double door is two drawings, one door), judged from
+#:   ``DOOR_UNITS_MIN_DOORS`` drawings;
+#: - where the plan's doors were found, no part of the free space of
+#:   ``SELF_CHECK_MIN_ROOM_M2`` or more (a WC) is cut off from the rest: a
+#:   door joins the rooms it opens.
+SELF_CHECK_MIN_FREE_SHARE = 0.4
+SELF_CHECK_WALL_SHARE = (0.01, 0.5)
+SELF_CHECK_WALL_THICKNESS = (0.05, 0.6)
+SELF_CHECK_MIN_DOORS_USED = 0.5
+SELF_CHECK_MIN_ROOM_M2 = 2.0
+#: The drawn building is judged on a grid of cells this wide, metres (a
+#: door's width is several cells; a 100 m floor 160 000 cells).
+SELF_CHECK_CELL_M = 0.25
+
 #: Block nesting deeper than this is a reference cycle in a broken file.
 DXF_MAX_BLOCK_DEPTH = 32
 
@@ -767,6 +800,10 @@ VIR_PAIR_CHUNK = 500_000
 #: first, then batches twice as large (most sight rays end on the nearest
 #: walls, a room's own few; see ``mapkit.visibility._nearest_hits``).
 VIS_FIRST_EDGES = 8
+
+#: Most grid cells of the self-check's drawn building (a larger plan gets
+#: larger cells): 4 MB of booleans.
+SELF_CHECK_MAX_CELLS = 4_000_000
 
 #: Sample points whose edges in range are counted to predict the region
 #: stage's time (the mean over them stands for all), and how many of them
