@@ -439,15 +439,16 @@ DXF_FAR_MIN_ENTITIES = 10
 #:   doors (a double door is two drawings, one door), judged from
 #:   ``DOOR_UNITS_MIN_DOORS`` drawings;
 #: - where the plan's doors were found, no part of the free space of
-#:   ``SELF_CHECK_MIN_ROOM_M2`` or more (a WC) is cut off from the rest: a
-#:   door joins the rooms it opens.
+#:   ``ROOM_PART_MIN_AREA`` or more (smaller ones are slivers) is cut off
+#:   from the rest: a door joins the rooms it opens (right builds with
+#:   doors: one part; rooms whose doors were missed 3 to 120 m2).
 SELF_CHECK_MIN_FREE_SHARE = 0.4
 SELF_CHECK_WALL_SHARE = (0.01, 0.5)
 SELF_CHECK_WALL_THICKNESS = (0.05, 0.6)
 SELF_CHECK_MIN_DOORS_USED = 0.5
-SELF_CHECK_MIN_ROOM_M2 = 2.0
 #: The drawn building is judged on a grid of cells this wide, metres (a
-#: door's width is several cells; a 100 m floor 160 000 cells).
+#: door's width is several cells; a 100 m floor 160 000 cells; a sheet
+#: larger than ``MAX_FLOOR_AREA_M2`` gets larger cells, 4 MB at most).
 SELF_CHECK_CELL_M = 0.25
 
 #: Block nesting deeper than this is a reference cycle in a broken file.
@@ -800,10 +801,6 @@ VIR_PAIR_CHUNK = 500_000
 #: first, then batches twice as large (most sight rays end on the nearest
 #: walls, a room's own few; see ``mapkit.visibility._nearest_hits``).
 VIS_FIRST_EDGES = 8
-
-#: Most grid cells of the self-check's drawn building (a larger plan gets
-#: larger cells): 4 MB of booleans.
-SELF_CHECK_MAX_CELLS = 4_000_000
 
 #: Sample points whose edges in range are counted to predict the region
 #: stage's time (the mean over them stands for all), and how many of them

@@ -40,8 +40,8 @@ from mapkit.importers.dxf.layer_roles import guess_role
 from mapkit.importers.dxf.openings import drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
-from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, OUTLINE_MAX_GAP, SELF_CHECK_CELL_M, SELF_CHECK_MAX_CELLS,
-                               SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE, SELF_CHECK_MIN_ROOM_M2,
+from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, OUTLINE_MAX_GAP, MAX_FLOOR_AREA_M2, ROOM_PART_MIN_AREA, SELF_CHECK_CELL_M,
+                               SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
                                SELF_CHECK_WALL_SHARE, SELF_CHECK_WALL_THICKNESS, ZERO)
 
 #: Roles whose layers are building geometry (the rest is annotation).
@@ -101,7 +101,9 @@ def drawn_building_area(drawing: PlanDrawing) -> float:
     # and what is drawn within an opening's width of them (a room outline on
     # another layer): a site plan, a sheet's other views farther out are not.
     lo, hi = points.min(axis=0) - OUTLINE_MAX_GAP, points.max(axis=0) + OUTLINE_MAX_GAP
-    cell = max(SELF_CHECK_CELL_M, float(np.sqrt(np.prod(hi - lo) / SELF_CHECK_MAX_CELLS)))
+    # A sheet larger than the largest floor a map is built for gets larger
+    # cells: the grid never holds more than that floor at SELF_CHECK_CELL_M.
+    cell = SELF_CHECK_CELL_M * max(1.0, float(np.sqrt(np.prod(hi - lo) / MAX_FLOOR_AREA_M2)))
     shape = tuple(int(v) + 1 for v in np.ceil((hi - lo) / cell))
     grid = np.zeros(shape, dtype=bool)
     for s in plan + others:
@@ -180,7 +182,7 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
     cut_off = _rooms_cut_off(scene) if ev.doors_used else []
     if cut_off:
         found.append(Inconsistency(
-            f"{len(cut_off)} room(s) of {SELF_CHECK_MIN_ROOM_M2:g} m2 or more ({', '.join(f'{a:.0f}' for a in cut_off[:4])}"
+            f"{len(cut_off)} room(s) of {ROOM_PART_MIN_AREA:g} m2 or more ({', '.join(f'{a:.0f}' for a in cut_off[:4])}"
             f"{' ...' if len(cut_off) > 4 else ''} m2) are cut off from the rest though the plan's doors were found: "
             "their doors were not", ("--doors LAYER",)))
     return found
@@ -188,9 +190,9 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
 
 def _rooms_cut_off(scene: Scene) -> list[float]:
     """Areas (m2, largest first) of the free space's parts beyond its
-    largest that are at least a room (``SELF_CHECK_MIN_ROOM_M2``)."""
+    largest that are at least a room (``ROOM_PART_MIN_AREA``)."""
     areas = sorted((float(p.area) for p in getattr(scene.free_space, "geoms", [scene.free_space])), reverse=True)
-    return [a for a in areas[1:] if a >= SELF_CHECK_MIN_ROOM_M2]
+    return [a for a in areas[1:] if a >= ROOM_PART_MIN_AREA]
 
 
 def enforce(scene: Scene, drawing: PlanDrawing, robot_radius: float, accept: bool, warn) -> None:
