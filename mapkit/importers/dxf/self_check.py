@@ -5,21 +5,27 @@ free space from layer names and the shapes on the wall layers. The same
 drawing holds evidence that does not go through those decisions, and a
 result that contradicts it is built wrong:
 
-- **the drawn building**: everything architectural drawn around the plan
-  (every layer that is not annotation, title block, hatch or furniture by
-  its name, :func:`.layer_roles.guess_role`), its linework closed across
-  openings and its holes filled, is the building a person sees; the free
-  space must cover a fair share of it (``SELF_CHECK_MIN_FREE_SHARE``). A
-  room outline on layer 0 beside one partition on the wall layer, rooms
-  left out, other views of a sheet built as walls: each leaves most of the
-  drawn building outside the free space.
+- **the drawn building**: the linework of every layer that is not
+  annotation, title block, hatch or furniture by its name
+  (:func:`.layer_roles.guess_role`), within an opening's width of the
+  plan's walls, doors, windows and floors, closed across openings and its
+  holes filled, is the building a person sees; the free space (grown back
+  by the robot's radius) covers a fair share of it
+  (``SELF_CHECK_MIN_FREE_SHARE``). A room outline on layer 0 beside one
+  partition on the wall layer, rooms left out, other views of a sheet
+  built as walls: each leaves most of the drawn building outside the free
+  space.
 - **the walls**: a building's walls take a share of its floor
-  (``SELF_CHECK_MIN_WALL_SHARE``): a whole floor read as windows or glass
-  with a stray line as walls has none, and the robot would see through
-  every wall.
-- **the doors**: the door drawings on door layers are used as doors
+  (``SELF_CHECK_WALL_SHARE``): a whole floor read as windows or glass with
+  a stray line as walls has none (the robot would see through every
+  wall), elevations and hatches built as walls far too much; and they are
+  as thick as real walls (``SELF_CHECK_WALL_THICKNESS``).
+- **the doors**: the door drawings are used as doors
   (``SELF_CHECK_MIN_DOORS_USED``): where most are not, the rooms behind
   them are lost or sealed.
+- **the rooms are reachable**: where the plan's doors were found, no part
+  of the free space larger than a sliver (``ROOM_PART_MIN_AREA``) is cut
+  off from the rest: a door joins the rooms it opens.
 
 :func:`check_against_drawing` returns what contradicts the drawing, each
 with the option that would fix it; :func:`enforce` refuses the map
@@ -37,11 +43,11 @@ from scipy import ndimage
 
 from mapkit.errors import InconsistentDrawingError
 from mapkit.importers.dxf.layer_roles import guess_role
-from mapkit.importers.dxf.openings import drawing_items
+from mapkit.importers.dxf.openings import door_strokes, drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
-from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, OUTLINE_MAX_GAP, MAX_FLOOR_AREA_M2, ROOM_PART_MIN_AREA, SELF_CHECK_CELL_M,
-                               SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
+from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
+                               SELF_CHECK_CELL_M, SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
                                SELF_CHECK_WALL_SHARE, SELF_CHECK_WALL_THICKNESS, ZERO)
 
 #: Roles whose layers are building geometry (the rest is annotation).
@@ -72,7 +78,8 @@ def gather_evidence(scene: Scene, drawing: PlanDrawing, robot_radius: float = 0.
     """The drawing's own evidence about ``scene`` (see the module docstring).
     ``free_m2`` is the free space grown back by ``robot_radius`` (the
     floor the rooms take, not where the robot's centre may be)."""
-    doors_drawn = len(drawing_items(drawing.role("doors"))) if drawing.role("doors") else 0
+    doors, _ = door_strokes(drawing.role("doors"))  # less dimension chains and outlines on the door layers
+    doors_drawn = len(drawing_items(doors)) if doors else 0
     return Evidence(
         drawn_m2=drawn_building_area(drawing),
         free_m2=float(scene.free_space.buffer(robot_radius, join_style="mitre").area if robot_radius > ZERO.distance
