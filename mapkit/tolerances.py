@@ -440,8 +440,9 @@ DXF_FAR_MIN_ENTITIES = 10
 #:   ``DOOR_UNITS_MIN_DOORS`` drawings;
 #: - where the plan's doors were found, no part of the free space of
 #:   ``ROOM_PART_MIN_AREA`` or more (smaller ones are slivers) is cut off
-#:   from the rest: a door joins the rooms it opens (right builds with
-#:   doors: one part; rooms whose doors were missed 3 to 120 m2).
+#:   from the rest with no door at it: a door joins the rooms it opens
+#:   (right builds with doors: one part; rooms whose doors were missed 3
+#:   to 120 m2).
 SELF_CHECK_MIN_FREE_SHARE = 0.4
 SELF_CHECK_WALL_SHARE = (0.01, 0.5)
 SELF_CHECK_WALL_THICKNESS = (0.05, 0.6)

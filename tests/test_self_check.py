@@ -62,6 +62,13 @@ def test_door_drawings_ignored(tmp_path):
         load_scene(path)
 
 
+def test_rooms_whose_doors_were_missed_are_cut_off(tmp_path):
+    # Six doors found, two drawn off the wall: their rooms are parts of their own no door reaches.
+    path = row_of_rooms(tmp_path / "two.dxf", n=8, door_offset=0.6, lost_doors=2)
+    with pytest.raises(InconsistentDrawingError, match=r"2 room\(s\) of 0\.5 m2 or more \(1\d, 1\d m2\) are cut off .*--doors"):
+        load_scene(path)
+
+
 def test_accept_inconsistent_writes_with_a_warning(tmp_path):
     path = row_of_rooms(tmp_path / "doors.dxf", n=8, door_offset=0.6)
     scene = load_scene(path, BuildOptions(accept_inconsistent=True))

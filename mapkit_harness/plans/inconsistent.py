@@ -19,15 +19,16 @@ import ezdxf
 
 def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_layer: str = "A-DOOR",
                  insunits: int = 6, unit_per_m: float = 1.0, door_offset: float = 0.0,
-                 stray_wall_layer: str | None = None) -> Path:
+                 stray_wall_layer: str | None = None, lost_doors: int = 0) -> Path:
     """``n`` rooms of 4 x 4 m in a row off a corridor 2 m wide (the plan
     ``4 n`` x 6 m), single-line walls on ``wall_layer``, each room's 0.9 m
     door a leaf and its swing on ``door_layer`` in a gap of the corridor
     wall; drawn ``unit_per_m`` drawing units to the metre under the header
     code ``insunits``. ``door_offset`` (m) > 0 draws the doors that far
     into the rooms, off an unbroken corridor wall (door drawings no wall
-    gap holds); ``stray_wall_layer`` adds one short line on that layer
-    (a wall layer holding almost nothing)."""
+    gap holds), for every room or, with ``lost_doors`` > 0, for that many
+    rooms at the east end; ``stray_wall_layer`` adds one short line on
+    that layer (a wall layer holding almost nothing)."""
     k = unit_per_m
     doc = ezdxf.new("R2013")
     doc.header["$INSUNITS"] = insunits
@@ -40,12 +41,13 @@ def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_
     for i in range(n):
         x0, x1 = i * w * k, (i + 1) * w * k
         hinge = x0 + 1.0 * k
-        if door_offset > 0:
+        offset = door_offset if not lost_doors or i >= n - lost_doors else 0.0
+        if offset > 0:
             msp.add_line((x0, 4 * k), (x1, 4 * k), dxfattribs=wall)
         else:
             msp.add_line((x0, 4 * k), (hinge, 4 * k), dxfattribs=wall)
             msp.add_line((hinge + 0.9 * k, 4 * k), (x1, 4 * k), dxfattribs=wall)
-        y = (4.0 - door_offset) * k
+        y = (4.0 - offset) * k
         msp.add_line((hinge, y), (hinge, y - 0.9 * k), dxfattribs=door)  # the leaf, open into the room
         msp.add_arc((hinge, y), 0.9 * k, 270, 360, dxfattribs=door)
     if stray_wall_layer is not None:

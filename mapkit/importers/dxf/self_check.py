@@ -46,7 +46,8 @@ from mapkit.importers.dxf.layer_roles import guess_role
 from mapkit.importers.dxf.openings import door_strokes, drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
-from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
+from mapkit.shapes import polygon_parts
+from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
                                SELF_CHECK_CELL_M, SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
                                SELF_CHECK_WALL_SHARE, SELF_CHECK_WALL_THICKNESS, ZERO)
 
@@ -186,20 +187,26 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
         found.append(Inconsistency(
             f"{ev.doors_used} of the {ev.doors_drawn} door drawings are used as doors (each door is one or two "
             "drawings): the rooms behind the others are lost", ("--doors LAYER", "--walls LAYER", "--units")))
-    cut_off = _rooms_cut_off(scene) if ev.doors_used else []
+    cut_off = _rooms_cut_off(scene, robot_radius) if ev.doors_used else []
     if cut_off:
         found.append(Inconsistency(
             f"{len(cut_off)} room(s) of {ROOM_PART_MIN_AREA:g} m2 or more ({', '.join(f'{a:.0f}' for a in cut_off[:4])}"
-            f"{' ...' if len(cut_off) > 4 else ''} m2) are cut off from the rest though the plan's doors were found: "
-            "their doors were not", ("--doors LAYER",)))
+            f"{' ...' if len(cut_off) > 4 else ''} m2) are cut off from the rest with no door found at them, though "
+            "the plan's other doors were found", ("--doors LAYER",)))
     return found
 
 
-def _rooms_cut_off(scene: Scene) -> list[float]:
+def _rooms_cut_off(scene: Scene, robot_radius: float) -> list[float]:
     """Areas (m2, largest first) of the free space's parts beyond its
-    largest that are at least a room (``ROOM_PART_MIN_AREA``)."""
-    areas = sorted((float(p.area) for p in getattr(scene.free_space, "geoms", [scene.free_space])), reverse=True)
-    return [a for a in areas[1:] if a >= ROOM_PART_MIN_AREA]
+    largest that are more than a sliver (``ROOM_PART_MIN_AREA``) and that
+    no door opening touches (within ``robot_radius`` plus
+    ``DOOR_REACH_SLACK``): rooms whose doors were not found. A part a door
+    touches is a room behind a door too narrow for the robot, not a lost one."""
+    parts = sorted(polygon_parts(scene.free_space), key=lambda p: -p.area)[1:]
+    doors = [o.footprint for o in scene.openings if o.kind == "door"]
+    reach = robot_radius + DOOR_REACH_SLACK
+    return [float(p.area) for p in parts
+            if p.area >= ROOM_PART_MIN_AREA and not any(p.distance(d) <= reach for d in doors)]
 
 
 def enforce(scene: Scene, drawing: PlanDrawing, robot_radius: float, accept: bool, warn) -> None:
