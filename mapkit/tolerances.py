@@ -432,20 +432,16 @@ DXF_FAR_MIN_ENTITIES = 10
 #:   space): a pavilion's freestanding walls 4 %, a stone house 33 %; a
 #:   whole floor read as windows with a stray line as walls 0.04 %,
 #:   elevations' hatches built as walls 80 %;
-#: - their mean thickness (twice the area over the outline's length) is
-#:   ``SELF_CHECK_WALL_THICKNESS`` metres, the span of real walls from a
-#:   stud partition to a thick masonry wall (the corpus 0.09 to 0.40);
 #: - at least ``SELF_CHECK_MIN_DOORS_USED`` of the door drawings are
 #:   doors (a double door is two drawings, one door), judged from
 #:   ``DOOR_UNITS_MIN_DOORS`` drawings;
 #: - where the plan's doors were found, no part of the free space of
 #:   ``ROOM_PART_MIN_AREA`` or more (smaller ones are slivers) is cut off
-#:   from the rest with no door at it: a door joins the rooms it opens
-#:   (right builds with doors: one part; rooms whose doors were missed 3
-#:   to 120 m2).
+#:   from the rest with no door at it, where the drawing says where its
+#:   rooms are: a door joins the rooms it opens (right builds with doors:
+#:   one part; rooms whose doors were missed 8 to 120 m2).
 SELF_CHECK_MIN_FREE_SHARE = 0.4
 SELF_CHECK_WALL_SHARE = (0.01, 0.5)
-SELF_CHECK_WALL_THICKNESS = (0.05, 0.6)
 SELF_CHECK_MIN_DOORS_USED = 0.5
 #: The drawn building is judged on a grid of cells this wide, metres (a
 #: door's width is several cells; a 100 m floor 160 000 cells; a sheet

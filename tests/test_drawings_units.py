@@ -63,7 +63,7 @@ def test_right_units_and_an_explicit_choice_are_kept(tmp_path):
     # then contradicts its drawing (9 m doors in no wall gap), so it is
     # written only with --accept-inconsistent, warned.
     path = _row_of_rooms(tmp_path / "dm.dxf", 6, 10.0)
-    with pytest.raises(InconsistentDrawingError, match="door drawings are used as doors"):
+    with pytest.raises(InconsistentDrawingError, match="contradicts its drawing"):
         load_scene(path, BuildOptions(units="m"))
     scene = load_scene(path, BuildOptions(units="m", accept_inconsistent=True))
     assert scene.info["units"] == "m"

@@ -7,7 +7,7 @@ room's corridor wall) with its walls on a layer named for windows, its
 door drawings off their walls, its header in the wrong units;
 :func:`room_outline_on_layer_0` (a room outlined on layer 0, one closet of
 partitions on the wall layer); :func:`plan_beside_elevation` (a plan with
-an elevation of its facade drawn below it on the same layer).
+an elevation of its facade and its framing plan beside it on the same layer).
 """
 
 from __future__ import annotations
@@ -85,8 +85,9 @@ def plan_beside_elevation(path: str | Path, n: int = 4, gap: float = 1.5) -> Pat
     """:func:`row_of_rooms` (``n`` rooms, walls on 'A-WALL') with, ``gap``
     metres below it on the same layer, an elevation of its long facade: the
     facade's outline 3 m high, a window in each room's bay, and
-    weatherboards drawn every 0.15 m (a sheet whose other views share the
-    plan's layers, as the Jw_cad sheets of the corpus do)."""
+    weatherboards drawn every 0.15 m, and ``gap`` metres east of it its
+    framing plan, beams 0.1 m wide on a 2 m grid (a sheet whose other views
+    share the plan's layers, as the Jw_cad sheets of the corpus do)."""
     row_of_rooms(path, n=n)
     doc = ezdxf.readfile(path)
     msp = doc.modelspace()
@@ -101,6 +102,14 @@ def plan_beside_elevation(path: str | Path, n: int = 4, gap: float = 1.5) -> Pat
     while y < base + 3.0 - 1e-9:
         msp.add_line((0, y), (width, y), dxfattribs=wall)
         y += 0.15
+    # The framing plan to the plan's east: beams 0.1 m wide (double lines) on a 2 m grid over its footprint.
+    x0 = width + gap
+    for k in range(int(width / 2.0) + 1):
+        x = x0 + 2.0 * k
+        msp.add_lwpolyline([(x, 0), (x + 0.1, 0), (x + 0.1, 6), (x, 6)], close=True, dxfattribs=wall)
+    for y in (0.0, 2.0, 4.0, 5.9):
+        msp.add_lwpolyline([(x0, y), (x0 + width + 0.1, y), (x0 + width + 0.1, y + 0.1), (x0, y + 0.1)], close=True,
+                           dxfattribs=wall)
     doc.saveas(path)
     return Path(path)
 

@@ -18,12 +18,13 @@ result that contradicts it is built wrong:
 - **the walls**: a building's walls take a share of its floor
   (``SELF_CHECK_WALL_SHARE``): a whole floor read as windows or glass with
   a stray line as walls has none (the robot would see through every
-  wall), elevations and hatches built as walls far too much; and they are
-  as thick as real walls (``SELF_CHECK_WALL_THICKNESS``).
+  wall), elevations and hatches built as walls far too much.
 - **the doors**: the door drawings are used as doors
   (``SELF_CHECK_MIN_DOORS_USED``): where most are not, the rooms behind
   them are lost or sealed.
-- **the rooms are reachable**: where the plan's doors were found, no part
+- **the rooms are reachable**: where the plan's doors were found and the
+  drawing says where its rooms are (walls enclosing them, room outlines,
+  room polygons), no part
   of the free space larger than a sliver (``ROOM_PART_MIN_AREA``) is cut
   off from the rest: a door joins the rooms it opens.
 
@@ -42,14 +43,14 @@ import numpy as np
 from scipy import ndimage
 
 from mapkit.errors import InconsistentDrawingError
-from mapkit.importers.dxf.layer_roles import guess_role
+from mapkit.importers.dxf.layer_roles import guess_role, is_zone_layer
 from mapkit.importers.dxf.openings import door_strokes, drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
                                SELF_CHECK_CELL_M, SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
-                               SELF_CHECK_WALL_SHARE, SELF_CHECK_WALL_THICKNESS, ZERO)
+                               SELF_CHECK_WALL_SHARE, ZERO)
 
 #: Roles whose layers are building geometry (the rest is annotation).
 _DRAWN_ROLES = ("walls", "doors", "windows", "floor", None)
@@ -178,16 +179,16 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
             f"{100 * ev.free_m2 / ev.drawn_m2:.0f} % of the "
             f"{ev.drawn_m2:.0f} m2 the drawing's building covers (rooms take {100 * SELF_CHECK_MIN_FREE_SHARE:.0f} % "
             "or more of it): rooms left out, or other views built as walls", plan_fix))
-    thick = 2.0 * ev.walls_m2 / max(float(scene.walls.length), ZERO.divisor)
-    tlo, thi = SELF_CHECK_WALL_THICKNESS
-    if not tlo <= thick <= thi:
-        found.append(Inconsistency(
-            f"the walls are {thick:.2f} m thick on average (real walls {tlo:g} to {thi:g} m)", ("--units", "--walls LAYER")))
     if ev.doors_drawn >= DOOR_UNITS_MIN_DOORS and ev.doors_used < SELF_CHECK_MIN_DOORS_USED * ev.doors_drawn:
         found.append(Inconsistency(
             f"{ev.doors_used} of the {ev.doors_drawn} door drawings are used as doors (each door is one or two "
             "drawings): the rooms behind the others are lost", ("--doors LAYER", "--walls LAYER", "--units")))
-    cut_off = _rooms_cut_off(scene, robot_radius) if ev.doors_used else []
+    # Where the drawing says where its rooms are (walls enclosing them, room
+    # outlines or room polygons): a floor outline of a pavilion's podium, cut
+    # by glass and freestanding walls, says nothing of rooms.
+    rooms_drawn = scene.info.get("interior") in ("enclosed", "room outlines") or any(
+        is_zone_layer(s.layer) for s in drawing.role("floor"))
+    cut_off = _rooms_cut_off(scene, robot_radius) if ev.doors_used and rooms_drawn else []
     if cut_off:
         found.append(Inconsistency(
             f"{len(cut_off)} room(s) of {ROOM_PART_MIN_AREA:g} m2 or more ({', '.join(f'{a:.0f}' for a in cut_off[:4])}"
