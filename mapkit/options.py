@@ -139,6 +139,12 @@ class BuildOptions:
         help="plan to build of a sheet with several side by side (DXF: numbered by wall length, largest first, "
              "as 'mapkit layers' lists them; default the largest, with a warning)")
 
+    accept_inconsistent: bool = option(
+        False, group="import",
+        help="write a DXF plan's map even when it contradicts its drawing (the self-check: free space far smaller "
+             "than the drawn building, walls no building has, door drawings or rooms lost), with a warning; "
+             "without it such a map is refused")
+
     # ---- reconstruction -----------------------------------------------
     wall_height: float = length_option(2.5, "reconstruction", "wall (ceiling) height")
     door_height: float = length_option(2.1, "reconstruction", "door head height")
@@ -226,7 +232,7 @@ class BuildOptions:
         for name in LIMITS:
             d.pop(name)
         for name in RECORDED_WHEN_SET:
-            if d[name] is None:
+            if d[name] is None or d[name] is False:
                 d.pop(name)
         return d
 
@@ -244,7 +250,7 @@ RETIRED_FLAGS = {
 }
 #: Fields added after format 1.0, recorded in a map only when set, so maps
 #: built without them keep their bytes.
-RECORDED_WHEN_SET = ("plan_number",)
+RECORDED_WHEN_SET = ("plan_number", "accept_inconsistent")
 
 
 def flags_of(f) -> tuple[str, ...]:

@@ -417,6 +417,37 @@ WALL_CAP_ANGLE_DEG = 15.0
 DXF_FAR_FACTOR = 100.0
 DXF_FAR_MIN_ENTITIES = 10
 
+#: The self-check (mapkit/importers/dxf/self_check.py): the map is refused
+#: when it contradicts its own drawing. Each bound is what real buildings
+#: allow, checked on the corpus's tuning half (docs/benchmarks/drawings.md):
+#:
+#: - the free space (grown back by the robot's radius: the rooms' floor)
+#:   covers at least ``SELF_CHECK_MIN_FREE_SHARE`` of the building the
+#:   drawing's linework outlines (walls take 5 to 33 % of a floor, stairs,
+#:   shafts, balconies and recesses closed across their mouths the rest):
+#:   right builds 0.46 to 0.88; rooms left out, a room outline on layer 0
+#:   beside one partition, a sheet's other views built as walls 0.03 to
+#:   0.31;
+#: - walls take ``SELF_CHECK_WALL_SHARE`` of the floor (walls plus free
+#:   space): a pavilion's freestanding walls 4 %, a stone house 33 %; a
+#:   whole floor read as windows with a stray line as walls 0.04 %,
+#:   elevations' hatches built as walls 80 %;
+#: - at least ``SELF_CHECK_MIN_DOORS_USED`` of the door drawings are
+#:   doors (a double door is two drawings, one door), judged from
+#:   ``DOOR_UNITS_MIN_DOORS`` drawings;
+#: - where the plan's doors were found, no part of the free space of
+#:   ``ROOM_PART_MIN_AREA`` or more (smaller ones are slivers) is cut off
+#:   from the rest with no door at it, where the drawing says where its
+#:   rooms are: a door joins the rooms it opens (right builds with doors:
+#:   one part; rooms whose doors were missed 8 to 120 m2).
+SELF_CHECK_MIN_FREE_SHARE = 0.4
+SELF_CHECK_WALL_SHARE = (0.01, 0.5)
+SELF_CHECK_MIN_DOORS_USED = 0.5
+#: The drawn building is judged on a grid of cells this wide, metres (a
+#: door's width is several cells; a 100 m floor 160 000 cells; a sheet
+#: larger than ``MAX_FLOOR_AREA_M2`` gets larger cells, 4 MB at most).
+SELF_CHECK_CELL_M = 0.25
+
 #: Block nesting deeper than this is a reference cycle in a broken file.
 DXF_MAX_BLOCK_DEPTH = 32
 

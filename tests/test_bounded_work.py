@@ -130,6 +130,10 @@ def test_a_room_2_km_across_is_refused_before_the_region_builder(tmp_path, capsy
     out of memory; it is now refused in seconds, naming the option."""
     _room(tmp_path / "huge.dxf", 1999.0)
     code, out, err = run(capsys, "build", tmp_path / "huge.dxf", "-o", tmp_path / "huge.lmap")
+    # Its walls are 0.02 % of its floor, which no building has: the self-check refuses it first.
+    _one_line_error(code, out, err, "contradicts its drawing", "--accept-inconsistent")
+    # Written anyway when asked, the floor bound still refuses it before the region builder.
+    code, out, err = run(capsys, "build", tmp_path / "huge.dxf", "-o", tmp_path / "huge.lmap", "--accept-inconsistent")
     _one_line_error(code, out, err, "1998 x 1998 m", "--max-floor-area")
     assert not (tmp_path / "huge.lmap").exists()
 

@@ -26,7 +26,7 @@ from mapkit.options import (
 
 #: A valid value other than the default, per field type (as typed on the
 #: command line, and as the field then holds it).
-ARGV_VALUE = {"float": ("0.35", 0.35), "int": ("3", 3), "int | None": ("2", 2), "str | None": ("cm", "cm"), "list[str]": ("A*", ["A*"])}
+ARGV_VALUE = {"bool": (None, True), "float": ("0.35", 0.35), "int": ("3", 3), "int | None": ("2", 2), "str | None": ("cm", "cm"), "list[str]": ("A*", ["A*"])}
 #: Fields whose sample value the generic one does not fit.
 SPECIAL = {"floor_name": ("floor_02", "floor_02"), "up": ("y", "y"), "max_entities": ("500", 500),
            "wall_height": ("3.5", 3.5), "window_sill": ("0.5", 0.5), "window_head": ("2.2", 2.2),
@@ -44,7 +44,7 @@ def _flagged():
 @pytest.mark.parametrize("f", _flagged(), ids=lambda f: f.name)
 def test_every_flag_parses_to_its_field(f):
     text, value = SPECIAL.get(f.name) or ARGV_VALUE[f.type]
-    args = _parse("build", flags_of(f)[-1], text)
+    args = _parse("build", flags_of(f)[-1], *([] if text is None else [text]))  # a switch takes no value
     options = build_command.options_from_args(args)
     assert getattr(options, f.name) == value
     assert getattr(options, f.name) != getattr(BuildOptions(), f.name)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import ezdxf
 import pytest
 
+from mapkit.errors import InconsistentDrawingError
 from mapkit.importers import load_scene
 from mapkit.importers.dxf.units import units_from_doors
 from mapkit.options import BuildOptions
@@ -58,9 +59,15 @@ def test_right_units_and_an_explicit_choice_are_kept(tmp_path):
     scene = load_scene(_row_of_rooms(tmp_path / "m.dxf", 6, 1.0))
     assert scene.info["units"] == "m"
     assert not any("doors are a median" in w for w in scene.info["warnings"])
-    # --units is the user's word: the doors do not overrule it.
-    scene = load_scene(_row_of_rooms(tmp_path / "dm.dxf", 6, 10.0), BuildOptions(units="m"))
+    # --units is the user's word: the doors do not overrule it; the map
+    # then contradicts its drawing (9 m doors in no wall gap), so it is
+    # written only with --accept-inconsistent, warned.
+    path = _row_of_rooms(tmp_path / "dm.dxf", 6, 10.0)
+    with pytest.raises(InconsistentDrawingError, match="contradicts its drawing"):
+        load_scene(path, BuildOptions(units="m"))
+    scene = load_scene(path, BuildOptions(units="m", accept_inconsistent=True))
     assert scene.info["units"] == "m"
+    assert any("contradicts its drawing" in w for w in scene.info["warnings"])
 
 
 @pytest.mark.parametrize("widths, unit, expected", [

@@ -58,7 +58,9 @@ def add_option_flags(p, groups) -> None:
             kw = {"dest": f.name, "help": _help_text(f, default)}
             if f.metadata["metavar"]:
                 kw["metavar"] = f.metadata["metavar"]
-            if f.type == "list[str]":
+            if f.type == "bool":
+                kw.update(action="store_true", default=default)
+            elif f.type == "list[str]":
                 kw.update(action="append", default=None)  # None: argparse would append to a shared default list
             elif isinstance(f.metadata["allowed"], tuple):
                 kw.update(choices=f.metadata["allowed"], default=default)

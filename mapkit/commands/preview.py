@@ -20,7 +20,7 @@ def run(args) -> int:
     from pathlib import Path
 
     from mapkit.commands._import_args import import_options_from_args, output_file
-    from mapkit.errors import MapkitError, NoFreeSpaceError
+    from mapkit.errors import InconsistentDrawingError, MapkitError, NoFreeSpaceError
     from mapkit.importers import load_scene
     from mapkit.preview import render_preview
 
@@ -32,7 +32,7 @@ def run(args) -> int:
         return _preview_storeys(Path(args.plan), out, options, args.dpi)
     try:
         scene = load_scene(args.plan, options)
-    except NoFreeSpaceError as exc:
+    except (NoFreeSpaceError, InconsistentDrawingError) as exc:
         if exc.scene is None:
             raise
         # The preview is where a user sees why: draw what was understood.

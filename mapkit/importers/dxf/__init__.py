@@ -20,14 +20,17 @@ from __future__ import annotations
 import logging
 from collections import Counter
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import shapely
 from ezdxf import bbox
 
-from mapkit.errors import MapkitError, NoWallsError
+from mapkit.errors import ImplausibleUnitsError, MapkitError, NoWallsError
+from mapkit.importers import warn_decision
 from mapkit.importers.dxf.door_swings import find_door_swings
+from mapkit.importers.dxf.self_check import enforce
 from mapkit.importers.dxf.entities import SILENT, check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
@@ -35,7 +38,8 @@ from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
 from mapkit.importers.dxf.openings import drawing_items
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.swing_layer import adopt_swing_layer
-from mapkit.importers.dxf.units import decide_units, units_from_doors, units_from_gaps
+from mapkit.importers.dxf.units import (INSUNITS, decide_units, units_from_doors, units_from_gaps,
+                                        units_from_size_and_doors)
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.room_layers import door_lines_apart
@@ -64,7 +68,11 @@ def load_scene(path: Path, options: BuildOptions) -> Scene:
                    "visibility lists assume walls hide what is behind them; check --camera-height and --wall-height")
         log.warning(message)
         info.setdefault("warnings", []).append(message)
-    return reconstruct_scene(drawing, options, info)
+    scene = reconstruct_scene(drawing, options, info)
+    # The map checks itself against its drawing before it is written (:mod:`.self_check`).
+    enforce(scene, drawing, options.robot_radius, options.accept_inconsistent,
+            partial(warn_decision, scene.info.setdefault("warnings", [])))
+    return scene
 
 
 def load_drawing(path: Path, options: BuildOptions, document: tuple | None = None) -> tuple[PlanDrawing, dict]:
@@ -104,8 +112,7 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
             and (roles.get(_layer(e)) in _USED_ROLES or (e.dxftype() == "INSERT" and _layer(e) == "0"))]
     extent, far = _extent(used)
     insunits = int(doc.header.get("$INSUNITS", 0) or 0)
-    imperial = doc.header.get("$MEASUREMENT", 1) == 0
-    unit, per_unit, unit_warning = decide_units(insunits, options.units, extent, imperial)
+    unit, per_unit, unit_warning = _units(msp, roles, far, extent, doc.header, options)
     if unit_warning:
         log.warning(unit_warning)
         warnings.append(unit_warning)
@@ -257,6 +264,35 @@ def _flatten_in_units(msp, roles: dict, far: list, unit: str, factor: float, ext
     note(message)
     factor = UNIT_METRES[unit]
     return (unit, factor, *_flatten(msp, roles, far, factor, options, note))
+
+
+def _units(msp, roles: dict, far: list, extent: float, header, options: BuildOptions) -> tuple[str, float, str | None]:
+    """The drawing's unit, metres per unit and a warning or None
+    (:func:`.units.decide_units`). When the header's unit makes the plan no
+    building, the one unit that makes it a building with doors a door's
+    width, if exactly one does (:func:`_unit_by_size_and_doors`); --units
+    and --scale are the user's word: never overruled."""
+    insunits = int(header.get("$INSUNITS", 0) or 0)
+    try:
+        return decide_units(insunits, options.units, extent, header.get("$MEASUREMENT", 1) == 0)
+    except ImplausibleUnitsError:
+        told = None
+        if float(options.scale) == 1.0:
+            told = _unit_by_size_and_doors(msp, roles, far, extent, INSUNITS.get(insunits, "m"))
+        if told is None:
+            raise
+        return told[0], UNIT_METRES[told[0]], told[1]
+
+
+def _unit_by_size_and_doors(msp, roles: dict, far: list, extent: float, stated: str) -> tuple[str, str] | None:
+    """:func:`.units.units_from_size_and_doors` of the drawing: its door
+    drawings' and doorway gaps' widths measured in drawing units (the
+    wall and door layers flattened as drawn)."""
+    far_ids = {id(e) for e in far}
+    entities = [e for e in msp if roles.get(_layer(e)) in ("walls", "doors") and id(e) not in far_ids]
+    strokes, _ = flatten_entities(entities, 1.0, CURVE_SAGITTA, lambda layer: True)
+    walls = [s for s in strokes if roles.get(s.layer) == "walls"]
+    return units_from_size_and_doors(extent, door_widths(strokes, roles), wall_doorway_gaps(walls), stated)
 
 
 def door_widths(strokes: list, roles: dict) -> list[float]:

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from mapkit.errors import MapkitError
+from mapkit.errors import ImplausibleUnitsError, MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
 from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, GAP_UNITS_AGREE_SHARE, GAP_UNITS_MIN_GAPS,
                                PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH, TYPICAL_EXTENT, ZERO)
@@ -56,7 +56,7 @@ def decide_units(
             lo, hi = PLAUSIBLE_EXTENT
             said = "--units says" if override else "the drawing says its units are"
             likely = _likely_units(extent, imperial)
-            raise MapkitError(
+            raise (MapkitError if override else ImplausibleUnitsError)(
                 f"{said} {name} but then the plan is {_fmt(extent * factor)} across, not a building "
                 f"({_fmt(lo)} to {_fmt(hi)}); pass the right --units (in {likely} it is "
                 f"{_fmt(extent * UNIT_METRES[likely])} across)"
@@ -101,6 +101,35 @@ def units_from_doors(door_widths_m, unit: str, extent_m: float) -> tuple[str, st
     return best, (f"read in {unit}, the drawing's {len(widths)} doors are a median {median:.2f} m wide, no "
                   f"door's width; read in {best} instead (doors {median * ratio(best):.2f} m, the plan "
                   f"{_fmt(extent_m * ratio(best))} across); pass --units to override")
+
+
+def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: str) -> tuple[str, str] | None:
+    """The one unit that makes a drawing both a building's size and its
+    doors a door's width, when its header's ``stated`` unit makes it no
+    building (:class:`~mapkit.errors.ImplausibleUnitsError`): ``extent``
+    its largest side, ``door_widths`` the widths of its door drawings and
+    ``gap_widths`` of its doorway gaps, all in drawing units. The doors
+    judge when any are drawn, else the gaps (``GAP_UNITS_MIN_GAPS`` or
+    more). Returns ``(unit, warning naming --units)``, or None when no unit
+    or several fit (a 2 m door is a door in metres and in feet)."""
+    widths = [float(w) for w in door_widths if w > 0]
+    what = f"{len(widths)} door drawing(s)"
+    if not widths:
+        widths = [float(w) for w in gap_widths if w > 0]
+        what = f"{len(widths)} doorways (gaps in its walls)"
+        if len(widths) < GAP_UNITS_MIN_GAPS:
+            return None
+    median = float(np.median(widths))
+    lo, hi = DOOR_WIDTH_PLAUSIBLE
+    fits = [u for u in _DRAWING_UNITS
+            if _plausible(extent * UNIT_METRES[u]) and lo <= median * UNIT_METRES[u] <= hi]
+    if len(fits) != 1:
+        return None
+    unit = fits[0]
+    return unit, (f"the drawing says its units are {stated} but then the plan is {_fmt(extent * UNIT_METRES[stated])} "
+                  f"across; only {unit} makes it a building ({_fmt(extent * UNIT_METRES[unit])} across) and its {what} "
+                  f"a door's width (a median {median * UNIT_METRES[unit]:.2f} m): read in {unit}; pass --units to "
+                  "override")
 
 
 #: Units of each system a plan's doorway gaps may tell apart: each a

@@ -1,0 +1,117 @@
+"""Small DXF drawings that a layer-name reading builds wrong, for the self-check's tests.
+
+Each reproduces a kind of failure seen on real drawings (issue 44), in a
+plan small enough to build in a second: :func:`row_of_rooms` (a row of
+4 x 4 m rooms off a 2 m corridor, single-line walls, a door swing in each
+room's corridor wall) with its walls on a layer named for windows, its
+door drawings off their walls, its header in the wrong units;
+:func:`room_outline_on_layer_0` (a room outlined on layer 0, one closet of
+partitions on the wall layer); :func:`plan_beside_elevation` (a plan with
+an elevation of its facade and its framing plan beside it on the same layer).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import ezdxf
+
+
+def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_layer: str = "A-DOOR",
+                 insunits: int = 6, unit_per_m: float = 1.0, door_offset: float = 0.0,
+                 stray_wall_layer: str | None = None, lost_doors: int = 0) -> Path:
+    """``n`` rooms of 4 x 4 m in a row off a corridor 2 m wide (the plan
+    ``4 n`` x 6 m), single-line walls on ``wall_layer``, each room's 0.9 m
+    door a leaf and its swing on ``door_layer`` in a gap of the corridor
+    wall; drawn ``unit_per_m`` drawing units to the metre under the header
+    code ``insunits``. ``door_offset`` (m) > 0 draws the doors that far
+    into the rooms, off an unbroken corridor wall (door drawings no wall
+    gap holds), for every room or, with ``lost_doors`` > 0, for that many
+    rooms at the east end; ``stray_wall_layer`` adds one short line on
+    that layer (a wall layer holding almost nothing)."""
+    k = unit_per_m
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = insunits
+    msp = doc.modelspace()
+    wall, door = {"layer": wall_layer}, {"layer": door_layer}
+    w = 4.0
+    msp.add_lwpolyline([(0, 0), (n * w * k, 0), (n * w * k, 6 * k), (0, 6 * k)], close=True, dxfattribs=wall)
+    for i in range(1, n):
+        msp.add_line((i * w * k, 0), (i * w * k, 4 * k), dxfattribs=wall)
+    for i in range(n):
+        x0, x1 = i * w * k, (i + 1) * w * k
+        hinge = x0 + 1.0 * k
+        offset = door_offset if not lost_doors or i >= n - lost_doors else 0.0
+        if offset > 0:
+            msp.add_line((x0, 4 * k), (x1, 4 * k), dxfattribs=wall)
+        else:
+            msp.add_line((x0, 4 * k), (hinge, 4 * k), dxfattribs=wall)
+            msp.add_line((hinge + 0.9 * k, 4 * k), (x1, 4 * k), dxfattribs=wall)
+        y = (4.0 - offset) * k
+        msp.add_line((hinge, y), (hinge, y - 0.9 * k), dxfattribs=door)  # the leaf, open into the room
+        msp.add_arc((hinge, y), 0.9 * k, 270, 360, dxfattribs=door)
+    if stray_wall_layer is not None:
+        msp.add_line((0.5 * k, 5.0 * k), (0.9 * k, 5.0 * k), dxfattribs={"layer": stray_wall_layer})
+    doc.saveas(path)
+    return Path(path)
+
+
+def room_outline_on_layer_0(path: str | Path) -> Path:
+    """A room of 8 x 5.5 m outlined on layer 0 (a wall's two faces, 0.2 m
+    apart), a 2.5 x 2 m closet in its corner walled by partitions on
+    'Wand (neu)' (new walls, the one layer named for walls) with a door
+    swing on 'Doors' in the closet's partition, a table on 'Table'
+    (olymp's room: only the partition is on a wall layer)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (8, 0), (8, 5.5), (0, 5.5)], close=True)
+    msp.add_lwpolyline([(0.2, 0.2), (7.8, 0.2), (7.8, 5.3), (0.2, 5.3)], close=True)
+    part = {"layer": "Wand (neu)"}
+    # the closet in the room's north-east corner: x 5.3..7.8, y 3.3..5.3, partitions 0.1 m
+    msp.add_lwpolyline([(5.2, 3.2), (5.3, 3.2), (5.3, 5.3), (5.2, 5.3)], close=True, dxfattribs=part)
+    msp.add_lwpolyline([(5.2, 3.2), (6.0, 3.2), (6.0, 3.3), (5.2, 3.3)], close=True, dxfattribs=part)
+    msp.add_lwpolyline([(6.8, 3.2), (7.8, 3.2), (7.8, 3.3), (6.8, 3.3)], close=True, dxfattribs=part)
+    msp.add_lwpolyline([(7.8, 3.2), (7.9, 3.2), (7.9, 5.3), (7.8, 5.3)], close=True, dxfattribs=part)
+    msp.add_lwpolyline([(5.2, 5.3), (7.9, 5.3), (7.9, 5.4), (5.2, 5.4)], close=True, dxfattribs=part)
+    msp.add_line((6.0, 3.25), (6.0, 2.45), dxfattribs={"layer": "Doors"})
+    msp.add_arc((6.0, 3.25), 0.8, 270, 360, dxfattribs={"layer": "Doors"})
+    msp.add_lwpolyline([(2, 2), (4, 2), (4, 3), (2, 3)], close=True, dxfattribs={"layer": "Table"})
+    doc.saveas(path)
+    return Path(path)
+
+
+def plan_beside_elevation(path: str | Path, n: int = 4, gap: float = 1.5) -> Path:
+    """:func:`row_of_rooms` (``n`` rooms, walls on 'A-WALL') with, ``gap``
+    metres below it on the same layer, an elevation of its long facade: the
+    facade's outline 3 m high, a window in each room's bay, and
+    weatherboards drawn every 0.15 m, and ``gap`` metres east of it its
+    framing plan, beams 0.1 m wide on a 2 m grid (a sheet whose other views
+    share the plan's layers, as the Jw_cad sheets of the corpus do)."""
+    row_of_rooms(path, n=n)
+    doc = ezdxf.readfile(path)
+    msp = doc.modelspace()
+    wall = {"layer": "A-WALL"}
+    width, base = 4.0 * n, -3.0 - gap
+    msp.add_lwpolyline([(0, base), (width, base), (width, base + 3), (0, base + 3)], close=True, dxfattribs=wall)
+    for i in range(n):
+        x = i * 4.0 + 1.4
+        msp.add_lwpolyline([(x, base + 0.9), (x + 1.2, base + 0.9), (x + 1.2, base + 2.1), (x, base + 2.1)],
+                           close=True, dxfattribs=wall)
+    y = base + 0.15
+    while y < base + 3.0 - 1e-9:
+        msp.add_line((0, y), (width, y), dxfattribs=wall)
+        y += 0.15
+    # The framing plan to the plan's east: beams 0.1 m wide (double lines) on a 2 m grid over its footprint.
+    x0 = width + gap
+    for k in range(int(width / 2.0) + 1):
+        x = x0 + 2.0 * k
+        msp.add_lwpolyline([(x, 0), (x + 0.1, 0), (x + 0.1, 6), (x, 6)], close=True, dxfattribs=wall)
+    for y in (0.0, 2.0, 4.0, 5.9):
+        msp.add_lwpolyline([(x0, y), (x0 + width + 0.1, y), (x0 + width + 0.1, y + 0.1), (x0, y + 0.1)], close=True,
+                           dxfattribs=wall)
+    doc.saveas(path)
+    return Path(path)
+
+
+__all__ = ["plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms"]

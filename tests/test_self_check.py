@@ -1,0 +1,116 @@
+"""The map checks itself against its drawing (mapkit/importers/dxf/self_check.py).
+
+Each kind of map built wrong without an error on real drawings (issue 44)
+is reproduced in a small drawing written here (mapkit_harness.plans.inconsistent):
+refused, one line naming what contradicts the drawing and the option that
+fixes it; built right with that option; written with a warning under
+--accept-inconsistent. Headers in the wrong units are read in the one unit
+that makes the plan a building with doors a door's width.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, MapkitError
+from mapkit.importers import load_scene
+from mapkit.options import BuildOptions
+from mapkit.shapes import polygon_parts
+from mapkit_harness.plans.inconsistent import plan_beside_elevation, room_outline_on_layer_0, row_of_rooms
+
+
+def test_a_consistent_plan_passes_without_a_word(tmp_path):
+    scene = load_scene(row_of_rooms(tmp_path / "rooms.dxf", n=8))
+    assert len(polygon_parts(scene.free_space)) == 1 and scene.info["counts"]["doors"] == 8
+    assert not any("contradicts" in w for w in scene.info["warnings"])
+
+
+def test_a_whole_floor_on_a_layer_named_for_windows(tmp_path):
+    # The walls on 'A-GLAZ' (read as glass), one stray line on 'A-WALL':
+    # the robot would see through every wall.
+    path = row_of_rooms(tmp_path / "glaz.dxf", n=8, wall_layer="A-GLAZ", stray_wall_layer="A-WALL")
+    with pytest.raises(InconsistentDrawingError, match=r"walls are 0\.0 m2 .* fix with --walls LAYER") as refused:
+        load_scene(path)
+    assert "\n" not in str(refused.value)
+    scene = load_scene(path, BuildOptions(walls=["A-GLAZ"]))
+    assert scene.info["counts"]["doors"] == 8 and len(polygon_parts(scene.free_space)) == 1
+
+
+def test_a_room_outline_on_layer_0_beside_a_partition_on_the_wall_layer(tmp_path):
+    # olymp's room: only the closet's partitions are on a wall layer.
+    path = room_outline_on_layer_0(tmp_path / "room.dxf")
+    with pytest.raises(InconsistentDrawingError, match=r"the free space is 5 m2 .* of the 3\d m2 .* --walls LAYER"):
+        load_scene(path)
+    scene = load_scene(path, BuildOptions(walls=["0", "Wand*"]))
+    assert 30.0 < scene.free_space.area < 36.0  # 7.6 x 5.1 m less the closet's walls and the robot's margin
+
+
+def test_a_plan_beside_an_elevation_and_a_framing_plan_on_the_same_layer(tmp_path):
+    # The other views are built as walls: most of the drawn sheet is no free space.
+    with pytest.raises(InconsistentDrawingError, match=r"the free space is 9\d m2 .*, 3\d % of the 2\d\d m2"):
+        load_scene(plan_beside_elevation(tmp_path / "sheet.dxf"))
+
+
+def test_door_drawings_ignored(tmp_path):
+    # Eight door swings drawn off an unbroken wall: none is a door, every room sealed.
+    path = row_of_rooms(tmp_path / "doors.dxf", n=8, door_offset=0.6)
+    with pytest.raises(InconsistentDrawingError, match=r"0 of the 8 door drawings are used as doors.*--doors LAYER"):
+        load_scene(path)
+
+
+def test_rooms_whose_doors_were_missed_are_cut_off(tmp_path):
+    # Six doors found, two drawn off the wall: their rooms are parts of their own no door reaches.
+    path = row_of_rooms(tmp_path / "two.dxf", n=8, door_offset=0.6, lost_doors=2)
+    with pytest.raises(InconsistentDrawingError, match=r"2 room\(s\) of 0\.5 m2 or more \(1\d, 1\d m2\) are cut off .*--doors"):
+        load_scene(path)
+
+
+def test_accept_inconsistent_writes_with_a_warning(tmp_path):
+    path = row_of_rooms(tmp_path / "doors.dxf", n=8, door_offset=0.6)
+    scene = load_scene(path, BuildOptions(accept_inconsistent=True))
+    assert any("contradicts its drawing" in w and "--accept-inconsistent" in w for w in scene.info["warnings"])
+    assert BuildOptions(accept_inconsistent=True).to_meta()["accept_inconsistent"] is True
+    assert "accept_inconsistent" not in BuildOptions().to_meta()  # maps built without it keep their bytes
+
+
+@pytest.mark.parametrize("insunits, unit_per_m, n, unit", [
+    (4, 1.0, 8, "m"),              # says mm, drawn in m (fast3d, rehman_test)
+    (4, 1.0 / 0.0254, 2, "in"),    # says mm, drawn in inches
+])
+def test_a_header_in_the_wrong_units_is_read_in_the_one_unit_that_makes_a_building(tmp_path, insunits, unit_per_m,
+                                                                                     n, unit):
+    scene = load_scene(row_of_rooms(tmp_path / "u.dxf", n=n, insunits=insunits, unit_per_m=unit_per_m))
+    assert scene.info["units"] == unit
+    assert any(f"only {unit} makes it a building" in w and "--units" in w for w in scene.info["warnings"])
+    assert scene.info["counts"]["doors"] == n
+
+
+def test_units_stay_refused_when_no_door_tells_them_apart(tmp_path):
+    # Without door drawings or doorway gaps the size alone fits m, dm, ft and in: refused, naming --units.
+    import ezdxf
+
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 4
+    doc.modelspace().add_lwpolyline([(0, 0), (12, 0), (12, 8), (0, 8)], close=True, dxfattribs={"layer": "A-WALL"})
+    doc.saveas(tmp_path / "box.dxf")
+    with pytest.raises(ImplausibleUnitsError, match="pass the right --units"):
+        load_scene(tmp_path / "box.dxf")
+    with pytest.raises(MapkitError, match="--units says mm"):  # --units is the user's word, never overruled
+        load_scene(row_of_rooms(tmp_path / "u.dxf", n=8, insunits=4), BuildOptions(units="mm"))
+
+
+def test_the_command_line_refuses_with_exit_2_one_line_and_no_output(tmp_path):
+    path = row_of_rooms(tmp_path / "doors.dxf", n=5, door_offset=0.6)
+    out = tmp_path / "doors.lmap"
+    run = subprocess.run([sys.executable, "-m", "mapkit", "build", str(path), "-o", str(out), "-q"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2
+    errors = [line for line in run.stderr.splitlines() if line.startswith("mapkit: error:")]
+    assert len(errors) == 1 and "--accept-inconsistent" in errors[0] and "Traceback" not in run.stderr
+    assert not out.exists()
+    run = subprocess.run([sys.executable, "-m", "mapkit", "build", str(path), "-o", str(out), "-q",
+                          "--accept-inconsistent"], capture_output=True, text=True)
+    assert run.returncode == 0 and out.exists() and "contradicts its drawing" in run.stderr
