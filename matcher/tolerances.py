@@ -120,6 +120,12 @@ class SharedConstants(_Constants):
     #: Share of the time budget the searches may use: the final tests of a
     #: few hundred sets found take up to about a third of the search's time.
     search_share: float = 0.7
+    #: The structure search (matcher/search/structure/yaw.py) scores the
+    #: yaws at which the frame's level lines lie along the map's walls: the
+    #: peaks of their directions' correlation within this share of the
+    #: best (a rectangular building's two peaks score alike; clutter's
+    #: lie well below).
+    yaw_peak_share: float = 0.5
     #: Above this many wall edges, sight lines are first tested against the
     #: edges' bounding boxes (below it the filter costs more than it saves).
     box_filter_edges: int = 512

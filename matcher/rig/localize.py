@@ -33,21 +33,31 @@ from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
 from matcher.rig.verify import RigRanked, merged, verify_seeds
+from matcher.search import default_search
+from matcher.search.structure.localize import localize_frame
 from matcher.stage2.fit import coverage_in_sight
 from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, decide, trusted
 
 
-def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
+def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None,
+                 search: str | None = None):
     """Localise the robot carrying ``rig`` (:class:`~linemap.rig.Rig`) from
     ``lines``, a list with one (M_c, 2, 2) or (M_c, 4) array of pixel lines
     per camera (ideal pinhole, in the rig's order), under the robot's
     ``prior`` ``(x, y, yaw_deg)`` within ``dt`` metres and ``dyaw``
     degrees. Returns a :class:`LocalizeResult` of the robot's pose; its
-    ``cameras`` name each camera's matches. Bad input raises InputError."""
+    ``cameras`` name each camera's matches. ``search``: ``"tree"`` (each
+    camera's interpretation tree seeds the verification) or
+    ``"structure"`` (:mod:`matcher.search.structure`); None: the default
+    (:func:`matcher.search.default_search`). Bad input raises InputError."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
+    if default_search(search, rig) == "structure":
+        tol = validated_types(linemap, rig[0].camera, tolerances)
+        px = check_prior(prior, dt, dyaw)
+        return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), px, tol, t0)
     if rig.is_single:
         return localize(linemap, rig[0].camera, _single_lines(rig, lines), prior, dt, dyaw, tolerances)
     tol = validated_types(linemap, rig[0].camera, tolerances)
@@ -144,16 +154,21 @@ def confirmed_by(ranked: RigRanked, proposed_by, tol: Tolerances) -> int:
     return len({int(proposed_by[h]) for h in near.nonzero()[0]})
 
 
-def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None):
+def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None, search: str | None = None):
     """Lost mode on a rig's frame: each camera's lost search
     (:func:`matcher.localize_global`, a share of the time budget each)
     gives seed poses; each seed, a narrow prior around it
     (``RigConstants.lost_seed_m``, ``lost_seed_deg``), is verified on every
     camera's lines, and the best verified pose is judged by the one verdict
     against all the others (a look-alike place that fits as well is named
-    as a candidate, the result then falsy)."""
+    as a candidate, the result then falsy). ``search`` as
+    :func:`localize_rig` takes it (structure: the whole floor ranked at
+    once)."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
+    if default_search(search, rig) == "structure":
+        tol = validated_types(linemap, rig[0].camera, tolerances)
+        return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), None, tol, t0)
     if rig.is_single:
         return localize_global(linemap, rig[0].camera, _single_lines(rig, lines), tolerances)
     tol = validated_types(linemap, rig[0].camera, tolerances)
