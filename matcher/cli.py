@@ -76,6 +76,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default 30000: Tolerances.time_budget_ms)")
     p.add_argument("--max-lines", type=int, metavar="N",
                    help="most image lines taken (default 2000: Tolerances.max_lines); more is an error")
+    p.add_argument("--search", choices=("tree", "structure"),
+                   help="how places are ranked before stage 2 verifies them: 'tree', the paper's interpretation "
+                        "tree, or 'structure', every pose of the prior scored from the scene's structure "
+                        "(docs/matcher.md; default per kind of frame, matcher.search.DEFAULTS)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     from matcher.cli_track import add_track_parser
 
@@ -309,10 +313,11 @@ def run_localize(args) -> int:
     if prior is None:
         one = isinstance(scope, matcher.Storey)  # lost mode on one storey of a building
         res = matcher.localize_global(scope.map if one else scope, camera, lines, tolerances=tol,
-                                      progress=_region_progress if sys.stderr.isatty() else None)
+                                      progress=_region_progress if sys.stderr.isatty() else None,
+                                      search=args.search)
         res = replace(res, storey=scope.name) if one else res
     else:
-        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol, storey=args.storey)
+        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol, storey=args.storey, search=args.search)
     if args.json:
         print(json.dumps(res.to_dict()))
     else:

@@ -197,16 +197,20 @@ class RunInfo:
 
 
 def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, run: RunInfo,
-               rivals: list | None = None) -> LocalizeResult:
+               rivals: list | None = None, runner_up: tuple | None = None) -> LocalizeResult:
     """The :class:`LocalizeResult` of the verified poses as the verdict
     judges them: the best robot pose if accepted (with each camera's
     matches), else a falsy result with the reason and candidates.
     ``rivals``: every answer of the other verifications (lost mode's other
-    seeds), ``(pose_deg, matches, E, cost)``, for the ambiguity test."""
+    seeds), ``(pose_deg, matches, E, cost)``, for the ambiguity test;
+    ``runner_up`` the ranking's best pose elsewhere
+    (:attr:`matcher.verdict.Evidence.runner_up`)."""
     E, order = ranked.score, ranked.order
     best = int(order[0]) if len(order) else None
     finite = [int(h) for h in order if np.isfinite(E[h])]
     ev, pose_std = _evidence(frame, cands, ranked, tol, run.cut, rivals, px=run.px)
+    if runner_up is not None:
+        ev = replace(ev, runner_up=runner_up)
     verdict = decide(ev, tol)
     times = dict(run.times, total=(time.perf_counter() - run.t0) * 1e3)
     listed = [(float(E[h]), _all_matches(frame, cands, ranked, h), _pose_deg(ranked.poses[h])) for h in finite]

@@ -55,11 +55,12 @@ def localize_frame(linemap, frame: RigFrame, px: tuple | None, tol: Tolerances, 
         return LocalizeResult(False, decide(Evidence(unsearched=why), tol).reason,
                               time_ms=Timings(total=(time.perf_counter() - t0) * 1e3, generate=ranking.ms))
     t_v = time.perf_counter()
-    verified = []
+    verified, of_peak = [], {}
     for i in range(len(peaks.poses)):
         around = (*peaks.poses[i], tol.rig.lost_seed_m, math.radians(tol.rig.lost_seed_deg))
         found = _verify(linemap, frame, peaks, i, around, tol)
         if found is not None:
+            of_peak[i] = len(verified)
             verified.append(found if px is None else _inside(found, px, tol))
         # The best peak and the runner-up elsewhere are always verified; the
         # others only while the verdict refuses the best so far.
@@ -72,7 +73,36 @@ def localize_frame(linemap, frame: RigFrame, px: tuple | None, tol: Tolerances, 
                                                                 "structure search's places"), tol).reason,
                               time_ms=Timings(total=(time.perf_counter() - t0) * 1e3, **times))
     cands, ranked, rivals = _best_of(verified)
-    return rig_result(frame, cands, ranked, tol, run, rivals=rivals or None)
+    runner = _runner_up(peaks, verified, of_peak, ranked, tol)
+    return rig_result(frame, cands, ranked, tol, run, rivals=rivals or None, runner_up=runner)
+
+
+def _runner_up(peaks: Peaks, verified: list, of_peak: dict, ranked: RigRanked, tol: Tolerances) -> tuple | None:
+    """The ranking's best pose elsewhere than the best verified pose (farther
+    than ``VerdictConstants.ambiguous_m`` or ``ambiguous_deg``) as an answer
+    ``(pose_deg, lines, E, cost)``: its peak's verified answer when that
+    stayed elsewhere, else the peak itself, no line verified there (0, inf,
+    inf); None when every peak is the best's place."""
+    if not len(ranked.order) or not np.isfinite(ranked.score[int(ranked.order[0])]):
+        return None
+    best = ranked.poses[int(ranked.order[0])]
+    for i, p in enumerate(peaks.poses):
+        if not _apart(p, best, tol):
+            continue
+        answers = _answers(verified[of_peak[i]][1]) if i in of_peak else []
+        far = [a for a in answers if _apart((a[0][0], a[0][1], math.radians(a[0][2])), best, tol)]
+        if far:
+            return far[0]
+        return ((float(p[0]), float(p[1]), math.degrees(math.remainder(float(p[2]), 2 * math.pi))), 0, math.inf,
+                math.inf)
+    return None
+
+
+def _apart(p, q, tol: Tolerances) -> bool:
+    """Are robot poses ``p`` and ``q`` (x, y, theta radians) different
+    answers to the verdict (``ambiguous_m`` or ``ambiguous_deg`` apart)?"""
+    turn = abs(math.remainder(float(p[2]) - float(q[2]), 2 * math.pi))
+    return math.hypot(p[0] - q[0], p[1] - q[1]) > tol.verdict.ambiguous_m or turn > math.radians(tol.verdict.ambiguous_deg)
 
 
 def _best_of(verified: list) -> tuple:
