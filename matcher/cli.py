@@ -299,6 +299,8 @@ def run_localize(args) -> int:
     cli_rig.check_sources(args)
     prior = _prior_options(args)
     tol = _tolerances(args)
+    if args.search is not None:
+        tol = replace(tol or matcher.Tolerances(), search=args.search)
     _map_input(args.map)
     if cli_rig.rig_requested(args):
         linemap = cli_rig.one_floor(matcher.load_map(args.map), args.storey)
@@ -313,11 +315,10 @@ def run_localize(args) -> int:
     if prior is None:
         one = isinstance(scope, matcher.Storey)  # lost mode on one storey of a building
         res = matcher.localize_global(scope.map if one else scope, camera, lines, tolerances=tol,
-                                      progress=_region_progress if sys.stderr.isatty() else None,
-                                      search=args.search)
+                                      progress=_region_progress if sys.stderr.isatty() else None)
         res = replace(res, storey=scope.name) if one else res
     else:
-        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol, storey=args.storey, search=args.search)
+        res = matcher.localize(linemap, camera, lines, *prior, tolerances=tol, storey=args.storey)
     if args.json:
         print(json.dumps(res.to_dict()))
     else:

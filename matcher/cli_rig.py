@@ -135,5 +135,5 @@ def localize_frame(args, linemap, rig, lines, prior, tol):
     import matcher
 
     if prior is None:
-        return matcher.localize_rig_global(linemap, rig, lines, tolerances=tol, search=args.search)
-    return matcher.localize_rig(linemap, rig, lines, *prior, tolerances=tol, search=args.search)
+        return matcher.localize_rig_global(linemap, rig, lines, tolerances=tol)
+    return matcher.localize_rig(linemap, rig, lines, *prior, tolerances=tol)

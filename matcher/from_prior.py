@@ -28,7 +28,7 @@ from matcher.candidates import select_candidates
 from matcher.input_validation import check_lines, check_prior
 from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
-from matcher.search import default_search
+from matcher.search import default_search, search_of
 from matcher.stage2.calibration_check import doubt as calibration_doubt
 from matcher.stage2.covariance import pose_std_of
 from matcher.stage2.fit import coverage as coverage_of
@@ -38,7 +38,7 @@ from matcher.verdict import BY_SEARCH_BUDGET, BY_TIME, UNCUT, Evidence, decide
 
 
 def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None,
-             storey: str | None = None, search: str | None = None):
+             storey: str | None = None):
     """Localise the camera from image ``lines`` (M, 2, 2) or (M, 4) pixels of
     the ideal pinhole (as :func:`matcher.detect_lines` gives them: undistorted
     when the camera has distortion).
@@ -48,15 +48,16 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     (:class:`linemap.building.Building`) with the prior's ``storey`` named
     (:func:`matcher.building.localize_on_storey`). Returns a
     :class:`LocalizeResult`, falsy with a ``reason`` when no hypothesis is
-    accepted. ``search``: ``"tree"`` (the paper's interpretation tree) or
-    ``"structure"`` (:mod:`matcher.search.structure`, as a one-camera rig);
-    None: the default (:func:`matcher.search.default_search`). Bad input
-    (shapes, NaN, ranges) raises ValueError."""
+    accepted. ``tolerances.search`` chooses how places are ranked
+    (``"tree"``, the paper's interpretation tree, or ``"structure"``,
+    :mod:`matcher.search.structure`, run as a one-camera rig; None: the
+    default, :func:`matcher.search.default_search`). Bad input (shapes,
+    NaN, ranges) raises ValueError."""
     t0 = time.perf_counter()
-    if default_search(search) == "structure" and not isinstance(linemap, Building):
+    if default_search(search_of(tolerances)) == "structure" and not isinstance(linemap, Building):
         from matcher.rig.localize import localize_rig
 
-        return localize_rig(linemap, Rig.single(camera), [lines], prior, dt, dyaw, tolerances, search="structure")
+        return localize_rig(linemap, Rig.single(camera), [lines], prior, dt, dyaw, tolerances)
     if isinstance(linemap, Building):
         from matcher.building import localize_on_storey
 

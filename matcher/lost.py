@@ -22,14 +22,14 @@ from matcher.budget import Deadlines
 from matcher.frame import prepare_lines, too_few_lines
 from matcher.lost_votes import vote_places
 from matcher.result import Deferred, LocalizeResult, Timings
-from matcher.search import default_search
+from matcher.search import default_search, search_of
 from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, Sweep, Verdict, decide, trusted
 
 
 def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | None = None,
-                    first_accepted: bool = False, progress=None, regions=None, search: str | None = None):
+                    first_accepted: bool = False, progress=None, regions=None):
     """Lost mode (method.md section 3): first the places the frame's lines
     vote for (:mod:`matcher.lost_votes`), each a narrow prior; then, unless
     one of them explains most of the image (``LostConstants.vote_trust_share``
@@ -63,14 +63,14 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     (:func:`matcher.building.search_storeys`; ``regions`` then maps a
     storey's name to its region ids).
 
-    ``search="structure"`` ranks the whole floor at once instead
-    (:mod:`matcher.search.structure`, as a one-camera rig); None: the
-    default (:func:`matcher.search.default_search`)."""
-    if default_search(search) == "structure" and not isinstance(linemap, Building):
+    ``tolerances.search == "structure"`` ranks the whole floor at once
+    instead (:mod:`matcher.search.structure`, as a one-camera rig; None:
+    the default, :func:`matcher.search.default_search`)."""
+    if default_search(search_of(tolerances)) == "structure" and not isinstance(linemap, Building):
         from linemap.rig import Rig
         from matcher.rig.localize import localize_rig_global
 
-        return localize_rig_global(linemap, Rig.single(camera), [lines], tolerances, search="structure")
+        return localize_rig_global(linemap, Rig.single(camera), [lines], tolerances)
     if isinstance(linemap, Building):
         from matcher.building import search_storeys
 

@@ -237,7 +237,7 @@ def run_pano(task):
     height_m = float(m.meta["camera"]["height_m"])
     panorama = cv2.imread(views[0]["image"], cv2.IMREAD_GRAYSCALE)
     # inf: no budget at all (the matcher's own default would be 30 s).
-    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
+    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms, search=args.search)
     rows = []
     for view in views:
         if "cameras" in view or "whole" in view:
@@ -250,9 +250,8 @@ def run_pano(task):
         shown, _ = visible_lines(m, camera, truth)
         row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": len(lines),
                "shown": len(shown), "results": {}}
-        run_modes(row, args, lambda prior, dt, dyaw: matcher.localize(m, camera, lines, prior, dt, dyaw, tolerances=tol,
-                                                                      search=args.search),
-                  lambda: matcher.localize_global(m, camera, lines, tolerances=tol, search=args.search))
+        run_modes(row, args, lambda prior, dt, dyaw: matcher.localize(m, camera, lines, prior, dt, dyaw, tolerances=tol),
+                  lambda: matcher.localize_global(m, camera, lines, tolerances=tol))
         if args.overlays:
             save_failures(row, view, image, lines, camera, m, args.overlays)
         rows.append(row)
@@ -298,9 +297,8 @@ def run_rig_frame(view, panorama, m, tol, args) -> dict:
         shown |= set(visible_lines(m, rc.camera, pose)[1].tolist())
     row = {"id": view["id"], "pano": view["pano"].name, "truth": truth, "lines": sum(len(x) for x in lines),
            "shown": len(shown), "results": {}}
-    run_modes(row, args, lambda prior, dt, dyaw: matcher.localize_rig(m, rig, lines, prior, dt, dyaw, tolerances=tol,
-                                                                      search=args.search),
-              lambda: matcher.localize_rig_global(m, rig, lines, tolerances=tol, search=args.search))
+    run_modes(row, args, lambda prior, dt, dyaw: matcher.localize_rig(m, rig, lines, prior, dt, dyaw, tolerances=tol),
+              lambda: matcher.localize_rig_global(m, rig, lines, tolerances=tol))
     return row
 
 

@@ -33,7 +33,7 @@ from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
 from matcher.rig.verify import RigRanked, merged, verify_seeds
-from matcher.search import default_search
+from matcher.search import default_search, search_of
 from matcher.search.structure.localize import localize_frame
 from matcher.stage2.fit import coverage_in_sight
 from matcher.strategy import SOURCES, TREE_ALONE
@@ -41,20 +41,19 @@ from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, decide, trusted
 
 
-def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None,
-                 search: str | None = None):
+def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances: Tolerances | None = None):
     """Localise the robot carrying ``rig`` (:class:`~linemap.rig.Rig`) from
     ``lines``, a list with one (M_c, 2, 2) or (M_c, 4) array of pixel lines
     per camera (ideal pinhole, in the rig's order), under the robot's
     ``prior`` ``(x, y, yaw_deg)`` within ``dt`` metres and ``dyaw``
     degrees. Returns a :class:`LocalizeResult` of the robot's pose; its
-    ``cameras`` name each camera's matches. ``search``: ``"tree"`` (each
-    camera's interpretation tree seeds the verification) or
-    ``"structure"`` (:mod:`matcher.search.structure`); None: the default
+    ``cameras`` name each camera's matches. ``tolerances.search``:
+    ``"tree"`` (each camera's interpretation tree seeds the verification)
+    or ``"structure"`` (:mod:`matcher.search.structure`); None: the default
     (:func:`matcher.search.default_search`). Bad input raises InputError."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
-    if default_search(search, rig) == "structure":
+    if default_search(search_of(tolerances), rig) == "structure":
         tol = validated_types(linemap, rig[0].camera, tolerances)
         px = check_prior(prior, dt, dyaw)
         return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), px, tol, t0)
@@ -154,19 +153,19 @@ def confirmed_by(ranked: RigRanked, proposed_by, tol: Tolerances) -> int:
     return len({int(proposed_by[h]) for h in near.nonzero()[0]})
 
 
-def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None, search: str | None = None):
+def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = None):
     """Lost mode on a rig's frame: each camera's lost search
     (:func:`matcher.localize_global`, a share of the time budget each)
     gives seed poses; each seed, a narrow prior around it
-    (``RigConstants.lost_seed_m``, ``lost_seed_deg``), is verified on every
+    (``SharedConstants.lost_seed_m``, ``lost_seed_deg``), is verified on every
     camera's lines, and the best verified pose is judged by the one verdict
     against all the others (a look-alike place that fits as well is named
-    as a candidate, the result then falsy). ``search`` as
-    :func:`localize_rig` takes it (structure: the whole floor ranked at
+    as a candidate, the result then falsy). ``tolerances.search`` as
+    :func:`localize_rig` reads it (structure: the whole floor ranked at
     once)."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
-    if default_search(search, rig) == "structure":
+    if default_search(search_of(tolerances), rig) == "structure":
         tol = validated_types(linemap, rig[0].camera, tolerances)
         return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), None, tol, t0)
     if rig.is_single:
@@ -424,7 +423,7 @@ def _seeds_of(res: LocalizeResult, view, tol: Tolerances, tried: list) -> np.nda
 def _verify_lost_seed(linemap, frame: RigFrame, seed: np.ndarray, tol: Tolerances, found: LostFound) -> None:
     """One seed verified on every camera under a narrow prior around it;
     ``found`` keeps the better verification and every answer."""
-    px = (float(seed[0]), float(seed[1]), float(seed[2]), tol.rig.lost_seed_m, math.radians(tol.rig.lost_seed_deg))
+    px = (float(seed[0]), float(seed[1]), float(seed[2]), tol.shared.lost_seed_m, math.radians(tol.shared.lost_seed_deg))
     cands = [_candidates(linemap, v, px, tol) for v in frame.views]
     ranked = verify_seeds(frame.views, cands, seed[None], px, tol)
     answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(ranked.score[h]), float(ranked.cost[h]))

@@ -35,6 +35,13 @@ def check_search(search) -> str:
 DEFAULTS = {"rig": "tree", "single": "tree"}
 
 
+def search_of(tolerances) -> str | None:
+    """``tolerances.search`` (None when no tolerances or not a
+    :class:`~matcher.tolerances.Tolerances`: the entry point's own check
+    says so)."""
+    return getattr(tolerances, "search", None)
+
+
 def default_search(search, rig=None) -> str:
     """``search`` checked (:func:`check_search`), or when None the default
     for ``rig`` (:data:`DEFAULTS`; None or a one-camera rig: a single

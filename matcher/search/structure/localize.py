@@ -11,7 +11,7 @@ every camera, then the one verdict.
                  ranking's runner-up among them)
 
 Each peak is verified as a narrow prior of its own
-(``RigConstants.lost_seed_m``, ``lost_seed_deg``, as lost mode's seeds are;
+(``SharedConstants.lost_seed_m``, ``lost_seed_deg``, as lost mode's seeds are;
 with a prior, its answer must lie inside the robot's prior too), best
 first: the best peak and the runner-up elsewhere always, the others while
 the verdict refuses the best so far; the best answer is judged against
@@ -57,7 +57,7 @@ def localize_frame(linemap, frame: RigFrame, px: tuple | None, tol: Tolerances, 
     t_v = time.perf_counter()
     verified, of_peak = [], {}
     for i in range(len(peaks.poses)):
-        around = (*peaks.poses[i], tol.rig.lost_seed_m, math.radians(tol.rig.lost_seed_deg))
+        around = (*peaks.poses[i], tol.shared.lost_seed_m, math.radians(tol.shared.lost_seed_deg))
         found = _verify(linemap, frame, peaks, i, around, tol)
         if found is not None:
             of_peak[i] = len(verified)
