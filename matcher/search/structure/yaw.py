@@ -7,7 +7,7 @@ world direction ``theta + psi``. The map's level segments have their own
 directions (four for a rectangular building, more where walls run more
 ways), as a length-weighted histogram modulo a half turn. The circular
 cross-correlation of the two histograms (the image's with each line spread
-over its noise) peaks at the headings that lay the frame's lines along the
+over its noise, :func:`image_directions`) peaks at the headings that lay the frame's lines along the
 map's walls; each peak is a heading modulo a half turn, so two yaws. The
 peaks kept are those within ``SharedConstants.yaw_peak_share`` of the
 best, each with its neighbouring bins (the peak is good to a bin).
@@ -37,19 +37,17 @@ def map_directions(linemap: LineMap, half_bins: int) -> np.ndarray:
 
 def image_directions(observed: Observed, half_bins: int) -> np.ndarray:
     """(half_bins,) the frame's level lines' lengths per direction bin modulo
-    a half turn, each line spread evenly over its direction's noise (a line
-    near the horizon, whose direction is unknown, over the whole turn)."""
+    a half turn, each line spread over its direction's noise: a normal
+    density of the standard deviation of an error uniform within the
+    noise bound (the bound over root 3), at least half a bin (a line near
+    the horizon, whose direction is unknown, spreads over the whole
+    turn)."""
     width = math.pi / half_bins
-    eps = np.minimum(observed.level_eps, math.pi / 2)
-    lo = np.floor((observed.level - eps) / width).astype(np.int64)
-    hi = np.floor((observed.level + eps) / width).astype(np.int64)
-    n = hi - lo + 1
-    w = observed.level_weight / n
-    diff = np.zeros(3 * half_bins + 2)
-    np.add.at(diff, lo + half_bins, w)
-    np.add.at(diff, hi + half_bins + 1, -w)
-    dens = np.cumsum(diff)[:3 * half_bins]
-    return dens[:half_bins] + dens[half_bins:2 * half_bins] + dens[2 * half_bins:]
+    middle = (np.arange(half_bins) + 0.5) * width
+    sigma = np.maximum(np.minimum(observed.level_eps, math.pi) / math.sqrt(3.0), width / 2)[:, None]
+    off = np.remainder(middle[None] - observed.level[:, None] + math.pi / 2, math.pi) - math.pi / 2
+    dens = np.exp(-0.5 * (off / sigma) ** 2) / sigma
+    return (observed.level_weight[:, None] * dens).sum(axis=0) * width / math.sqrt(2 * math.pi)
 
 
 def yaw_bins(observed: Observed, map_hist: np.ndarray, bins: int, px: tuple | None, share: float) -> np.ndarray:
