@@ -56,11 +56,13 @@ def best_peaks(scores: np.ndarray, points: np.ndarray, yaws: np.ndarray, count: 
 
 
 def refined(structure: MapStructure, grid: Profiles, observed: Observed, picks: list, yaws: np.ndarray,
-            grid_scores: np.ndarray, step: float, tol) -> Peaks:
+            scored: tuple, step: float, tol) -> Peaks:
     """The :class:`Peaks` of ``picks`` (:func:`best_peaks` over ``grid`` at
-    yaw bins ``yaws``): each moved to the best of the lattice a third of
+    yaw bins ``yaws``, ``scored`` the grid's scores and their weights,
+    :func:`~.score.score`): each moved to the best of the lattice a third of
     ``step`` apart around it (3 x 3 points, the yaw bin and its
     neighbours)."""
+    grid_scores, weights = scored
     bins = grid.bins
     width = 2 * math.pi / bins
     fine = step / 2.0
@@ -75,7 +77,7 @@ def refined(structure: MapStructure, grid: Profiles, observed: Observed, picks: 
     for i, (_, k) in enumerate(picks):
         ks = (yaws[k] + np.array([-1, 0, 1])) % bins
         sub = around.take(np.arange(i * len(offsets), (i + 1) * len(offsets)))
-        s = score(sub, observed, ks, tol)
+        s, _ = score(sub, observed, ks, tol, weights)
         # Ties keep the grid's own point and yaw (the middle of each axis).
         s = s + np.float32(1e-6) * (np.arange(len(offsets)) == len(offsets) // 2)[:, None] \
             + np.float32(1e-6) * (np.arange(3) == 1)[None]

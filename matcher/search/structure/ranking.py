@@ -53,9 +53,9 @@ def rank_places(linemap, views, px: tuple | None, tol: Tolerances, count: int) -
     if px is not None:
         near = np.hypot(profiles.points[:, 0] - px[0], profiles.points[:, 1] - px[1]) <= px[3] + grid.step / math.sqrt(2)
         profiles = profiles.take(np.flatnonzero(near))
-    scores = score(profiles, observed, yaws, tol)
+    scores, weights = score(profiles, observed, yaws, tol, yaw_slack=1)
     picks = best_peaks(scores, profiles.points, yaws * (2 * math.pi / bins), count, tol.verdict.ambiguous_m,
                        math.radians(tol.verdict.ambiguous_deg))
-    peaks = refined(grid.structure, profiles, observed, picks, yaws, scores, grid.step, tol)
+    peaks = refined(grid.structure, profiles, observed, picks, yaws, (scores, weights), grid.step, tol)
     return Ranking(peaks, int(scores.size), len(yaws), observed, (time.perf_counter() - t0) * 1e3)
 

@@ -10,7 +10,7 @@ cross-correlation of the two histograms (the image's with each line spread
 over its noise, :func:`image_directions`) peaks at the headings that lay the frame's lines along the
 map's walls; each peak is a heading modulo a half turn, so two yaws. The
 peaks kept are those within ``SharedConstants.yaw_peak_share`` of the
-best, each with its neighbouring bins (the peak is good to a bin).
+best; each is good to a bin.
 """
 
 from __future__ import annotations
@@ -54,7 +54,8 @@ def yaw_bins(observed: Observed, map_hist: np.ndarray, bins: int, px: tuple | No
     """Sorted yaw bins (K,) (yaw ``k * 2 pi / bins``) to score: the peaks of
     the correlation of the frame's level lines with ``map_hist``
     (:func:`map_directions`, ``bins / 2`` of them) within ``share`` of the
-    best, both ways round, each with its two neighbours; within the prior's
+    best, both ways round (good to a bin: the grid scores them with a bin
+    of slack, the refinement tries their neighbours); within the prior's
     headings ``px`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians; None: any). A
     prior whose headings hold no peak gets all its bins: the structure does
     not say which."""
@@ -63,7 +64,7 @@ def yaw_bins(observed: Observed, map_hist: np.ndarray, bins: int, px: tuple | No
     corr = np.real(np.fft.ifft(np.conj(np.fft.fft(img)) * np.fft.fft(map_hist)))  # corr[k] = sum img[b] map[b + k]
     peak = (corr >= np.roll(corr, 1)) & (corr > np.roll(corr, -1)) & (corr >= share * corr.max()) & (corr > 0)
     k = np.flatnonzero(peak)
-    cand = np.unique(np.concatenate([k, k + half])[:, None] + np.array([-1, 0, 1])[None]) % bins
+    cand = np.unique(np.concatenate([k, k + half]) % bins)
     if px is None or px[4] >= math.pi:
         return np.unique(cand)
     width = 2 * math.pi / bins
