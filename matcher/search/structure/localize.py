@@ -45,6 +45,11 @@ def localize_frame(linemap, frame: RigFrame, px: tuple | None, tol: Tolerances, 
     clock started at ``t0`` (module docstring)."""
     from matcher.rig.localize import RunInfo, rig_result
 
+    if frame.usable < tol.min_matches:
+        why = (f"only {frame.usable} usable image lines over the frame's {len(frame.views)} camera(s) (need "
+               f"{tol.min_matches} of >= {tol.min_line_px:g} px)")
+        return LocalizeResult(False, decide(Evidence(unsearched=why), tol).reason,
+                              time_ms=Timings(total=(time.perf_counter() - t0) * 1e3))
     ranking = rank_places(linemap, frame.views, px, tol, tol.rig.seeds_per_camera)
     peaks = ranking.peaks
     counts = {"lines": int(sum(len(v.lines.lines) for v in frame.views)), "sets_found": len(peaks.poses),
