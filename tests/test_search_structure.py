@@ -137,6 +137,7 @@ def test_search_chosen_by_the_tolerances():
         matcher.Tolerances(search="grid")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("search", ["tree", "structure"])
 def test_cli_search_option(tmp_path, search):
     """``matcher localize --search`` runs either search on a rig frame."""
