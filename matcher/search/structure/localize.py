@@ -67,9 +67,10 @@ def localize_frame(linemap, frame: RigFrame, px: tuple | None, tol: Tolerances, 
         if found is not None:
             of_peak[i] = len(verified)
             verified.append(found if px is None else _inside(found, px, tol))
-        # The best peak and the runner-up elsewhere are always verified; the
-        # others only while the verdict refuses the best so far.
-        if len(verified) >= 2 and _settled(frame, verified, tol):
+        # The best peak, the runner-up elsewhere and the best peak's
+        # neighbour (ranking.py) are always verified; the others only while
+        # the verdict refuses the best so far.
+        if len(verified) >= 3 and _settled(frame, verified, tol):
             break
     times = {"generate": ranking.ms, "verify": (time.perf_counter() - t_v) * 1e3}
     run = RunInfo(t0, times, counts, UNCUT, px)

@@ -55,6 +55,29 @@ def best_peaks(scores: np.ndarray, points: np.ndarray, yaws: np.ndarray, count: 
     return out
 
 
+def beside_best(scores: np.ndarray, points: np.ndarray, yaws: np.ndarray, picks: list, apart_m: float,
+                apart_rad: float, reach_m: float) -> list[tuple[int, int]]:
+    """The best entry of ``scores`` (P, K) in the best pick's neighbourhood
+    (within ``apart_m`` and ``apart_rad``: the same answer to the verdict)
+    but beyond the refinement's reach (``reach_m``, or a yaw bin), as a
+    list of one pick (none when there is none): a grid's best point a few
+    decimetres from the truth puts the truth's own peak out of the running,
+    and the refinement does not reach it."""
+    if not picks:
+        return []
+    p0, k0 = picks[0]
+    d = np.hypot(points[:, 0] - points[p0, 0], points[:, 1] - points[p0, 1])
+    turn = np.abs(np.remainder(yaws - yaws[k0] + math.pi, 2 * math.pi) - math.pi)
+    step = np.min(np.abs(np.diff(np.sort(yaws)))) if len(yaws) > 1 else math.inf
+    inside = (d[:, None] <= apart_m) & (turn[None] <= apart_rad)
+    beyond = (d[:, None] > reach_m) | (turn[None] > 1.5 * step)
+    s = np.where(inside & beyond, scores, -np.inf)
+    if not np.isfinite(s).any():
+        return []
+    p, k = np.unravel_index(int(np.argmax(s)), s.shape)
+    return [(int(p), int(k))]
+
+
 def refined(structure: MapStructure, grid: Profiles, observed: Observed, picks: list, yaws: np.ndarray,
             scored: tuple, step: float, tol) -> Peaks:
     """The :class:`Peaks` of ``picks`` (:func:`best_peaks` over ``grid`` at

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from matcher.search.structure.observed import Observed, observe
-from matcher.search.structure.peaks import Peaks, best_peaks, refined
+from matcher.search.structure.peaks import Peaks, beside_best, best_peaks, refined
 from matcher.search.structure.profiles import grid_profiles
 from matcher.search.structure.score import score
 from matcher.search.structure.yaw import yaw_bins
@@ -54,8 +54,11 @@ def rank_places(linemap, views, px: tuple | None, tol: Tolerances, count: int) -
         near = np.hypot(profiles.points[:, 0] - px[0], profiles.points[:, 1] - px[1]) <= px[3] + grid.step / math.sqrt(2)
         profiles = profiles.take(np.flatnonzero(near))
     scores, weights = score(profiles, observed, yaws, tol, yaw_slack=1)
-    picks = best_peaks(scores, profiles.points, yaws * (2 * math.pi / bins), count, tol.verdict.ambiguous_m,
+    angles = yaws * (2 * math.pi / bins)
+    picks = best_peaks(scores, profiles.points, angles, count, tol.verdict.ambiguous_m,
                        math.radians(tol.verdict.ambiguous_deg))
+    picks[2:2] = beside_best(scores, profiles.points, angles, picks, tol.verdict.ambiguous_m,
+                             math.radians(tol.verdict.ambiguous_deg), 2 * grid.step)
     peaks = refined(grid.structure, profiles, observed, picks, yaws, (scores, weights), grid.step, tol)
     return Ranking(peaks, int(scores.size), len(yaws), observed, (time.perf_counter() - t0) * 1e3)
 
