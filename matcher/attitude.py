@@ -234,7 +234,7 @@ class Localiser(Protocol):
 class RerunPolicy:
     """How the second runs, on the lines moved with an attitude a first
     run's fit gave, search: ``around_answer``, a narrow prior around that
-    fit's pose (``attitude_again_m``, ``attitude_again_deg``: lost mode,
+    fit's pose (``SharedConstants.lost_seed_m``, ``lost_seed_deg``: lost mode,
     whose problem as asked is the whole map), or else the problem as asked."""
 
     around_answer: bool = False
@@ -325,7 +325,7 @@ def _second_runs(camera: Camera, arr: np.ndarray, tol: Tolerances, localiser: Lo
     band = math.radians(work.attitude_band_deg)
     best = None
     for *_, att, p in fits:
-        near = ((p[0], p[1], math.degrees(p[2]), work.attitude_again_m, work.attitude_again_deg)
+        near = ((p[0], p[1], math.degrees(p[2]), tol.shared.lost_seed_m, tol.shared.lost_seed_deg)
                 if policy.around_answer else None)
         # Widened by what the fit left, at most half a band (matches that
         # leave the pitch loose, vertical edges alone, came from a band).

@@ -80,6 +80,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default 30000: Tolerances.time_budget_ms)")
     p.add_argument("--max-lines", type=int, metavar="N",
                    help="most image lines taken (default 2000: Tolerances.max_lines); more is an error")
+    p.add_argument("--search", choices=("tree", "structure"),
+                   help="how places are ranked before stage 2 verifies them: 'tree', the paper's interpretation "
+                        "tree, or 'structure', every pose of the prior scored from the scene's structure "
+                        "(docs/matcher.md; default per kind of frame, matcher.search.DEFAULTS)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     from matcher.cli_track import add_track_parser
 
@@ -311,6 +315,8 @@ def run_localize(args) -> int:
     cli_rig.check_sources(args)
     prior = _prior_options(args)
     tol = _tolerances(args)
+    if args.search is not None:
+        tol = replace(tol or matcher.Tolerances(), search=args.search)
     _map_input(args.map)
     if cli_rig.rig_requested(args):
         linemap = cli_rig.one_floor(matcher.load_map(args.map), args.storey)

@@ -21,12 +21,14 @@ from linemap.camera import Camera
 from linemap.errors import InputError
 from linemap.geometry import wrap
 from linemap.lmap import LineMap
+from linemap.rig import Rig
 from matcher import ambiguity, attitude
 from matcher.budget import NO_LIMIT, Deadlines
 from matcher.candidates import select_candidates
 from matcher.input_validation import check_lines, check_prior
 from matcher.frame import ImageLines, lines_needed, prepare_lines, too_few_lines
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
+from matcher.search import default_search, search_of
 from matcher.stage2.calibration_check import Where
 from matcher.stage2.calibration_check import doubt as calibration_doubt
 from matcher.stage2.covariance import pose_std_of
@@ -47,8 +49,16 @@ def localize(linemap, camera: Camera, lines, prior, dt: float, dyaw: float, tole
     (:class:`linemap.building.Building`) with the prior's ``storey`` named
     (:func:`matcher.building.localize_on_storey`). Returns a
     :class:`LocalizeResult`, falsy with a ``reason`` when no hypothesis is
-    accepted. Bad input (shapes, NaN, ranges) raises ValueError."""
+    accepted. ``tolerances.search`` chooses how places are ranked
+    (``"tree"``, the paper's interpretation tree, or ``"structure"``,
+    :mod:`matcher.search.structure`, run as a one-camera rig; None: the
+    default, :func:`matcher.search.default_search`). Bad input (shapes,
+    NaN, ranges) raises ValueError."""
     t0 = time.perf_counter()
+    if default_search(search_of(tolerances)) == "structure" and not isinstance(linemap, Building):
+        from matcher.rig.localize import localize_rig
+
+        return localize_rig(linemap, Rig.single(camera), [lines], prior, dt, dyaw, tolerances)
     if isinstance(linemap, Building):
         from matcher.building import localize_on_storey
 

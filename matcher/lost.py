@@ -22,6 +22,7 @@ from matcher.budget import Deadlines
 from matcher.frame import prepare_lines, too_few_lines
 from matcher.lost_votes import vote_places
 from matcher.result import Deferred, LocalizeResult, Timings
+from matcher.search import default_search, search_of
 from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, Sweep, Verdict, decide, trusted
@@ -60,7 +61,16 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     On a building (:class:`linemap.building.Building`), every storey is
     searched and the result names its storey
     (:func:`matcher.building.search_storeys`; ``regions`` then maps a
-    storey's name to its region ids)."""
+    storey's name to its region ids).
+
+    ``tolerances.search == "structure"`` ranks the whole floor at once
+    instead (:mod:`matcher.search.structure`, as a one-camera rig; None:
+    the default, :func:`matcher.search.default_search`)."""
+    if default_search(search_of(tolerances)) == "structure" and not isinstance(linemap, Building):
+        from linemap.rig import Rig
+        from matcher.rig.localize import localize_rig_global
+
+        return localize_rig_global(linemap, Rig.single(camera), [lines], tolerances)
     if isinstance(linemap, Building):
         from matcher.building import search_storeys
 

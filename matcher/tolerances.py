@@ -120,6 +120,22 @@ class SharedConstants(_Constants):
     #: Share of the time budget the searches may use: the final tests of a
     #: few hundred sets found take up to about a third of the search's time.
     search_share: float = 0.7
+    #: The structure search (matcher/search/structure/yaw.py) scores the
+    #: yaws at which the frame's level lines lie along the map's walls: the
+    #: peaks of their directions' correlation within this share of the
+    #: best (a rectangular building's two peaks score alike; clutter's
+    #: lie well below).
+    yaw_peak_share: float = 0.5
+    #: A pose found once is searched again as a narrow prior this far
+    #: around it (metres, degrees): lost mode's rig seeds (each camera's lost
+    #: answers, verified on every camera), the structure search's peaks
+    #: (refined to a few centimetres and a degree) and, in lost mode, the
+    #: attitude's second runs (the first run's pose is off by what its
+    #: attitude was, a few centimetres and tenths of a degree). (The
+    #: attitude's second runs used 0.3 m and 5 degrees before the three
+    #: were made one.)
+    lost_seed_m: float = 0.25
+    lost_seed_deg: float = 4.0
     #: Above this many wall edges, sight lines are first tested against the
     #: edges' bounding boxes (below it the filter costs more than it saves).
     box_filter_edges: int = 512
@@ -432,11 +448,6 @@ class AttitudeConstants(_Constants):
     #: derivatives (radians and metres; far below the pose's noise).
     attitude_fit_iterations: int = 8
     attitude_fit_step: float = 1e-6
-    #: In lost mode the second run is a prior this narrow around the first
-    #: answer, metres and degrees: the first run's pose is off by what its
-    #: attitude was, a few centimetres and tenths of a degree.
-    attitude_again_m: float = 0.3
-    attitude_again_deg: float = 5.0
 
 
 @dataclass(frozen=True)
@@ -526,11 +537,6 @@ class RigConstants(_Constants):
     #: on all of them): the seed's pose comes from one narrow view, the first
     #: refit on all cameras moves it by centimetres, the second settles it.
     verify_rounds: int = 2
-    #: Lost mode: each camera's lost search gets this share of the budget
-    #: left, and its answers are verified as priors this far (metres,
-    #: degrees) around them.
-    lost_seed_m: float = 0.25
-    lost_seed_deg: float = 4.0
     #: The best verified pose must explain this many times the lines of the
     #: best pose elsewhere (farther than ``VerdictConstants.ambiguous_m`` or
     #: ``ambiguous_deg``): the lines a wrong place explains by chance,
@@ -741,10 +747,20 @@ class Tolerances:
     lost: LostConstants = field(default_factory=LostConstants)
     #: ...and a rig of cameras' (matcher/rig/).
     rig: RigConstants = field(default_factory=RigConstants)
+    #: How places are ranked before stage 2 verifies them
+    #: (:mod:`matcher.search`): "tree" (the paper's interpretation tree),
+    #: "structure" (every pose of the prior scored from the scene's
+    #: structure), or None: the default per kind of frame
+    #: (``matcher.search.DEFAULTS``, chosen on measurement).
+    search: str | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name == "search":
+                if v is not None and v not in ("tree", "structure"):
+                    raise InputError(f"tolerance search must be 'tree', 'structure' or None, got {v!r}")
+                continue
             if f.name in CONSTANTS:
                 if not isinstance(v, CONSTANTS[f.name]):
                     raise InputError(f"tolerance {f.name} must be a matcher.tolerances.{CONSTANTS[f.name].__name__}, "

@@ -19,7 +19,10 @@ this order, each where its evidence is given:
    (a rig: ``RigConstants.clear_ratio``), and the lines that clutter
    makes needed (``lines_needed``);
 6. no rival explains as many lines and fits about as well at a pose
-   elsewhere (:mod:`matcher.ambiguity`);
+   elsewhere (:mod:`matcher.ambiguity`); a search that ranked the whole
+   prior (:mod:`matcher.search.structure`) gives its runner-up, the best
+   pose elsewhere, as a rival however few lines it explains, and a
+   refusal then names it beside the best;
 7. lost mode: the best answer's own verdict in its search stands;
 8. lost mode cut short by the time budget: the best so far explains most
    of the image (``vote_trust_share``), or it is only a candidate;
@@ -120,7 +123,11 @@ class Evidence:
     of ``Tolerances.e_accept`` (``RigConstants.e_accept``).
     ``calibration``: why the best pose's matched lines say the camera
     file's calibration is wrong ("" when they do not), worked out when read
-    (:func:`matcher.stage2.calibration_check.doubt`)."""
+    (:func:`matcher.stage2.calibration_check.doubt`).
+    ``runner_up``: a search that ranked every pose of the prior (the
+    structure search), its best pose elsewhere as an answer ``(pose, lines
+    explained once verified (0: not verified), E, cost)``: a rival always
+    known, named in a refusal."""
 
     unsearched: str = ""
     n_correspondences: int = 0
@@ -138,6 +145,7 @@ class Evidence:
     clear_ratio: float | None = None
     e_accept: float | None = None
     calibration: Deferred | None = None
+    runner_up: tuple | None = None
 
 
 def score_accepted(score: float, tol: Tolerances, limit: float | None = None) -> bool:
@@ -154,7 +162,19 @@ def trusted(explained: int, usable: int, work: LostConstants) -> bool:
 
 
 def decide(ev: Evidence, tol: Tolerances) -> Verdict:
-    """The verdict on ``ev`` (the module docstring's tests, in order)."""
+    """The verdict on ``ev`` (the module docstring's tests, in order); a
+    refusal that names no candidate names the best pose and ``ev.runner_up``
+    when it is known."""
+    verdict = _decide(ev, tol)
+    if verdict.status != NOT_LOCALISED or verdict.candidates or ev.runner_up is None or not ev.answers:
+        return verdict
+    x, y, yaw = ev.runner_up[0]
+    return Verdict(NOT_LOCALISED, f"{verdict.reason}; the best pose elsewhere is ({x:.2f}, {y:.2f}, {yaw:.0f} deg)",
+                   tuple(ambiguity.candidates_of([ev.answers[0], ev.runner_up])), verdict.score)
+
+
+def _decide(ev: Evidence, tol: Tolerances) -> Verdict:
+    """:func:`decide` before the runner-up is named."""
     cut = cut_words(ev.cut, tol)
     if ev.unsearched:
         return Verdict(NOT_LOCALISED, ev.unsearched + cut)
@@ -203,6 +223,8 @@ def _refused(ev: Evidence, tol: Tolerances, cut: str) -> Verdict | None:
                                           f"shows {seen} of them: the lines do not look like the map there")
     if ev.clear_ratio is not None and ev.answers:
         rival = ambiguity.rival_apart(list(ev.answers), work, None if ev.spread is None else ev.spread.get())
+        if rival is None or (ev.runner_up is not None and ev.runner_up[1] > rival[1]):
+            rival = ev.runner_up
         if rival is not None and ev.answers[0][1] < ev.clear_ratio * rival[1]:
             return Verdict(NOT_LOCALISED, f"the best pose explains {ev.answers[0][1]} lines and a pose elsewhere "
                                           f"{rival[1]}: not {ev.clear_ratio:g} times as many, too few to tell them "

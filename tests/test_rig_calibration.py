@@ -30,16 +30,21 @@ def _scaled(rig: Rig, scale: float) -> Rig:
 def test_a_rig_whose_focal_length_is_20_percent_off_is_refused_with_its_reason(flat):
     truth = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
     wrong = _scaled(truth, 0.8)
-    unchecked = replace(DEFAULT, verdict=replace(DEFAULT.verdict, calibration_judged=()))
+    tree = replace(DEFAULT, search="tree")
+    unchecked = replace(tree, verdict=replace(DEFAULT.verdict, calibration_judged=()))
     rng = np.random.default_rng([3, 2])  # frames whose wrong answers the check must catch
     frames = [make_rig_frame(flat, truth, rng, 2) for _ in range(2)]
     before = [localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw, unchecked) for f in frames]
-    # Without the check these frames are accepted about half a metre off: the case the check is for.
+    # Without the check the tree's answers to these frames are accepted about
+    # half a metre off: the case the check is for.
     assert all(r and pose_error(r.pose, f.pose)[0] > 0.3 for r, f in zip(before, frames))
     for f in frames:
-        res = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw)
+        res = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw, tree)
         assert not res
         assert "camera calibration" in res.reason and "camera cam" in res.reason
+        # The structure search is not confidently wrong on them either.
+        res = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw, replace(DEFAULT, search="structure"))
+        assert not res or pose_error(res.pose, f.pose)[0] < 0.2, res.pose
 
 
 def test_a_right_rig_is_not_blamed(flat):

@@ -417,6 +417,9 @@ def main(argv=None) -> int:
     ap.add_argument("--budget-ms", type=float, default=matcher.Tolerances().time_budget_ms,
                     help="time budget per call, ms (default the matcher's, %(default)g, which cuts no frame here; "
                          "inf: none, so the answers depend on nothing but the seeds)")
+    ap.add_argument("--search", choices=("tree", "structure"),
+                    help="how places are ranked before stage 2 (matcher.search; default: the matcher's default per "
+                         "kind of frame)")
     add_report_option(ap)
     args = ap.parse_args(argv)
     if min(args.cameras) < 1 or len(set(args.cameras)) != len(args.cameras) or args.rig_repeat < 1 \
@@ -424,7 +427,8 @@ def main(argv=None) -> int:
         print("error: --cameras takes distinct counts of at least 1, --rig-repeat at least 1 and --budget-ms a "
               "positive number (inf: none)", file=sys.stderr)
         return 2
-    args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses, time_budget_ms=args.budget_ms)
+    args.tolerances = matcher.Tolerances(max_hypotheses=args.max_hypotheses, time_budget_ms=args.budget_ms,
+                                         search=args.search)
     if args.quick:
         args.poses, args.baseline_poses = 20, 5
     return reported(args.report, lambda: run(args), __file__, argv)

@@ -84,6 +84,9 @@ def main(argv=None) -> int:
                          "inf: none)")
     ap.add_argument("--max-views", type=int, default=0, help="stop after this many views (0: all)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--search", choices=("tree", "structure"),
+                    help="how places are ranked before stage 2 (matcher.search; default: the matcher's default "
+                         "per kind of frame)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (the views of a panorama stay together)")
     ap.add_argument("--overlays", metavar="DIR", help="save PNGs of the failing views here")
     ap.add_argument("--rows", metavar="FILE.json", help="save every view's results here (for analysis)")
@@ -138,7 +141,8 @@ def run_all(views, floor, lmap_path, camera_height, args) -> int:
     print(f"tour {args.tour}, floor {floor.name}: {len(floor.rooms)} rooms, {len(floor.panos)} panoramas; "
           f"map {len(m.segments)} segments, {len(m.regions) if hasattr(m, 'regions') else m.n_regions} regions; "
           f"camera height {camera_height:.3f} m")
-    print(f"{len(rows)} views: hfov {args.hfov} deg, pitch {args.pitch} deg down, sizes {args.sizes}, "
+    print(f"search {args.search or 'default'}; "
+          f"{len(rows)} views: hfov {args.hfov} deg, pitch {args.pitch} deg down, sizes {args.sizes}, "
           f"{args.headings} headings per panorama, seed {args.seed}, budget "
           f"{'none' if math.isinf(args.budget_ms) else f'{args.budget_ms:g} ms'}; {elapsed / 60:.1f} min with "
           f"{args.jobs} job(s)")
@@ -230,11 +234,11 @@ def run_pano(task):
     import cv2
 
     views, args, lmap_path = task
-    m = matcher.load_map(lmap_path)
+    m = _loaded(lmap_path, args)
     height_m = float(m.meta["camera"]["height_m"])
     panorama = cv2.imread(views[0]["image"], cv2.IMREAD_GRAYSCALE)
     # inf: no budget at all (the matcher's own default would be 30 s).
-    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
+    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms, search=args.search)
     rows = []
     for view in views:
         if "cameras" in view or "whole" in view:
@@ -253,6 +257,25 @@ def run_pano(task):
             save_failures(row, view, image, lines, camera, m, args.overlays)
         rows.append(row)
     return rows
+
+
+_MAPS: dict = {}
+
+
+def _loaded(lmap_path: str, args):
+    """The map, loaded once per worker process, with what the search
+    derives once per map made before any call is timed (as a robot does when
+    it loads its map): the structure search's profiles."""
+    if lmap_path not in _MAPS:
+        m = matcher.load_map(lmap_path)
+        if args.search == "structure":
+            from matcher.search.structure.profiles import grid_profiles
+
+            c = time.process_time()
+            grid_profiles(m, matcher.Tolerances())
+            print(f"  structure profiles of the map: {time.process_time() - c:.1f} s of CPU, once", file=sys.stderr)
+        _MAPS[lmap_path] = m
+    return _MAPS[lmap_path]
 
 
 def draw_prior(truth, rng, peq: int):
@@ -288,13 +311,13 @@ def run_modes(row: dict, args, from_prior, lost) -> None:
     rng = np.random.default_rng([args.seed, row["id"]])
     for peq in args.peq:
         prior, dt, dyaw = draw_prior(truth, rng, peq)
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         res = from_prior(prior, dt, dyaw)
-        row["results"][peq] = _outcome(res, truth, time.perf_counter() - t)
+        row["results"][peq] = _outcome(res, truth, time.perf_counter() - t, time.process_time() - c)
     if args.lost_every and row["id"] % args.lost_every == 0:
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         res = lost()
-        row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t)
+        row["results"]["lost"] = _outcome(res, truth, time.perf_counter() - t, time.process_time() - c)
 
 
 def cut_rig(view, panorama, height_m):
@@ -317,8 +340,8 @@ def pano_frame(view, panorama, height_m):
     return rig, matcher.panorama_lines(panorama, rig)
 
 
-def _outcome(res, truth, seconds):
-    out = {"ok": bool(res), "seconds": seconds, "reason": "" if res else res.reason, "pose": None,
+def _outcome(res, truth, seconds, cpu):
+    out = {"ok": bool(res), "seconds": seconds, "cpu": cpu, "reason": "" if res else res.reason, "pose": None,
            "score": res.score, "runner_up": res.runner_up_score, "matches": len(res.matches),
            "candidates": len(res.candidates),
            # The best hypothesis of a refused answer: what accepting it would have given.
@@ -348,7 +371,7 @@ def table(rows, args) -> str:
     modes = [p for p in args.peq] + (["lost"] if args.lost_every else [])
     columns = ["mode", "views", "views showing >= 6 map lines", "within 20 cm / 5 deg (of those showing)",
                "within 5 cm / 1 deg", "accepted and wrong", "not localised", "time ms median / p95",
-               "lines per view (median)"]
+               "CPU ms median / p95", "lines per view (median)"]
     out = []
     for mode in modes:
         rs = [r for r in rows if mode in r["results"]]
@@ -360,10 +383,12 @@ def table(rows, args) -> str:
         right = sum(c in ("tight", "right") for c in cls)
         right_shown = sum(c in ("tight", "right") for c, s in zip(cls, shown) if s)
         ms = np.array([r["results"][mode]["seconds"] * 1000 for r in rs])
+        cpu = np.array([r["results"][mode].get("cpu", np.nan) * 1000 for r in rs])
         name = f"PEQ {mode}" if mode != "lost" else "lost"
         out.append([name, n, ns, f"{_pct(right, n)} ({_pct(right_shown, ns)})", _pct(cls.count("tight"), n),
                     _pct(cls.count("wrong"), n), _pct(cls.count("none"), n),
-                    f"{np.median(ms):.0f} / {np.percentile(ms, 95):.0f}", f"{np.median([r['lines'] for r in rs]):.0f}"])
+                    f"{np.median(ms):.0f} / {np.percentile(ms, 95):.0f}",
+                    f"{np.median(cpu):.0f} / {np.percentile(cpu, 95):.0f}", f"{np.median([r['lines'] for r in rs]):.0f}"])
     return markdown_table(columns, out)
 
 

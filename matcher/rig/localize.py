@@ -33,6 +33,8 @@ from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
 from matcher.rig.verify import RigRanked, merged, verify_seeds
+from matcher.search import default_search, search_of
+from matcher.search.structure.localize import localize_frame
 from matcher.stage2.fit import coverage_in_sight
 from matcher.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
@@ -45,9 +47,16 @@ def localize_rig(linemap, rig, lines, prior, dt: float, dyaw: float, tolerances:
     per camera (ideal pinhole, in the rig's order), under the robot's
     ``prior`` ``(x, y, yaw_deg)`` within ``dt`` metres and ``dyaw``
     degrees. Returns a :class:`LocalizeResult` of the robot's pose; its
-    ``cameras`` name each camera's matches. Bad input raises InputError."""
+    ``cameras`` name each camera's matches. ``tolerances.search``:
+    ``"tree"`` (each camera's interpretation tree seeds the verification)
+    or ``"structure"`` (:mod:`matcher.search.structure`); None: the default
+    (:func:`matcher.search.default_search`). Bad input raises InputError."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
+    if default_search(search_of(tolerances), rig) == "structure":
+        tol = validated_types(linemap, rig[0].camera, tolerances)
+        px = check_prior(prior, dt, dyaw)
+        return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), px, tol, t0)
     if rig.is_single:
         return localize(linemap, rig[0].camera, _single_lines(rig, lines), prior, dt, dyaw, tolerances)
     tol = validated_types(linemap, rig[0].camera, tolerances)
@@ -148,12 +157,17 @@ def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = Non
     """Lost mode on a rig's frame: each camera's lost search
     (:func:`matcher.localize_global`, a share of the time budget each)
     gives seed poses; each seed, a narrow prior around it
-    (``RigConstants.lost_seed_m``, ``lost_seed_deg``), is verified on every
+    (``SharedConstants.lost_seed_m``, ``lost_seed_deg``), is verified on every
     camera's lines, and the best verified pose is judged by the one verdict
     against all the others (a look-alike place that fits as well is named
-    as a candidate, the result then falsy)."""
+    as a candidate, the result then falsy). ``tolerances.search`` as
+    :func:`localize_rig` reads it (structure: the whole floor ranked at
+    once)."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
+    if default_search(search_of(tolerances), rig) == "structure":
+        tol = validated_types(linemap, rig[0].camera, tolerances)
+        return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), None, tol, t0)
     if rig.is_single:
         return localize_global(linemap, rig[0].camera, _single_lines(rig, lines), tolerances)
     tol = validated_types(linemap, rig[0].camera, tolerances)
@@ -182,16 +196,20 @@ class RunInfo:
 
 
 def rig_result(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, run: RunInfo,
-               rivals: list | None = None) -> LocalizeResult:
+               rivals: list | None = None, runner_up: tuple | None = None) -> LocalizeResult:
     """The :class:`LocalizeResult` of the verified poses as the verdict
     judges them: the best robot pose if accepted (with each camera's
     matches), else a falsy result with the reason and candidates.
     ``rivals``: every answer of the other verifications (lost mode's other
-    seeds), ``(pose_deg, matches, E, cost)``, for the ambiguity test."""
+    seeds), ``(pose_deg, matches, E, cost)``, for the ambiguity test;
+    ``runner_up`` the ranking's best pose elsewhere
+    (:attr:`matcher.verdict.Evidence.runner_up`)."""
     E, order = ranked.score, ranked.order
     best = int(order[0]) if len(order) else None
     finite = [int(h) for h in order if np.isfinite(E[h])]
     ev, pose_std = _evidence(frame, cands, ranked, tol, run.cut, rivals, px=run.px)
+    if runner_up is not None:
+        ev = replace(ev, runner_up=runner_up)
     verdict = decide(ev, tol)
     times = dict(run.times, total=(time.perf_counter() - run.t0) * 1e3)
     listed = [(float(E[h]), _all_matches(frame, cands, ranked, h), _pose_deg(ranked.poses[h])) for h in finite]
@@ -405,7 +423,7 @@ def _seeds_of(res: LocalizeResult, view, tol: Tolerances, tried: list) -> np.nda
 def _verify_lost_seed(linemap, frame: RigFrame, seed: np.ndarray, tol: Tolerances, found: LostFound) -> None:
     """One seed verified on every camera under a narrow prior around it;
     ``found`` keeps the better verification and every answer."""
-    px = (float(seed[0]), float(seed[1]), float(seed[2]), tol.rig.lost_seed_m, math.radians(tol.rig.lost_seed_deg))
+    px = (float(seed[0]), float(seed[1]), float(seed[2]), tol.shared.lost_seed_m, math.radians(tol.shared.lost_seed_deg))
     cands = [_candidates(linemap, v, px, tol) for v in frame.views]
     ranked = verify_seeds(frame.views, cands, seed[None], px, tol)
     answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(ranked.score[h]), float(ranked.cost[h]))
