@@ -117,19 +117,10 @@ def test_cli_localizes_a_simulated_rig_frame(tmp_path):
     import subprocess
     import sys
 
-    from linemap.rig_files import rig_to_dict
+    from cli_helpers import localize_rig_frame, simulated_rig_frame
 
-    rig_file = tmp_path / "ring.json"
-    rig_file.write_text(json.dumps(rig_to_dict(ring_rig(4, hfov_deg=70.0, radius_m=0.2))))
-    out = tmp_path / "frame"
-    subprocess.run([sys.executable, "tools/simulate.py", "--rig", str(rig_file), "--peq", "3", "--seed", "2",
-                    "--no-images", "--out", str(out)], check=True, capture_output=True)
-    truth = json.loads((out / "truth.json").read_text())
-    lines = [str(out / c["lines"]) for c in truth["cameras"]]
-    prior = ",".join(f"{v:.4f}" for v in truth["prior"])
-    run = subprocess.run([sys.executable, "-m", "matcher", "localize", "--map", "maps/flat.lmap", "--rig",
-                          str(out / "rig.json"), "--lines", *lines, "--prior", prior, "--dt", str(truth["dt"]),
-                          "--dyaw", str(truth["dyaw"]), "--json"], capture_output=True, text=True)
+    out, truth, lines = simulated_rig_frame(tmp_path, ring_rig(4, hfov_deg=70.0, radius_m=0.2), 3, 2)
+    run = localize_rig_frame(out, truth, lines, "--json")
     assert run.returncode == 0, run.stderr
     res = json.loads(run.stdout)
     p = truth["pose"]
