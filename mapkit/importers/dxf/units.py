@@ -14,7 +14,7 @@ import numpy as np
 from mapkit.errors import ImplausibleUnitsError, MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
 from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, GAP_UNITS_AGREE_SHARE, GAP_UNITS_MIN_GAPS,
-                               PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH, TYPICAL_EXTENT, ZERO)
+                               PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH, TYPICAL_EXTENT, TYPICAL_WALL_THICKNESS, ZERO)
 
 #: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
 #: astronomical or micro units no floor plan uses).
@@ -101,6 +101,54 @@ def units_from_doors(door_widths_m, unit: str, extent_m: float) -> tuple[str, st
     return best, (f"read in {unit}, the drawing's {len(widths)} doors are a median {median:.2f} m wide, no "
                   f"door's width; read in {best} instead (doors {median * ratio(best):.2f} m, the plan "
                   f"{_fmt(extent_m * ratio(best))} across); pass --units to override")
+
+
+def units_from_evidence(door_widths_m, gap_widths_m, thickness_m: float | None, unit: str,
+                        extent_m: float) -> tuple[str, str] | None:
+    """The unit a drawing without units (``unit`` only guessed from its
+    extent) is drawn in, told by two signs independent of its extent: its
+    doors' width (the door drawings when there are ``DOOR_UNITS_MIN_DOORS``
+    or more, else its doorway gaps when ``GAP_UNITS_MIN_GAPS`` or more) and
+    its walls' thickness (:func:`.wall_thickness.wall_thickness`, or None),
+    all metres as read in ``unit``; ``extent_m`` the plan's extent as read.
+
+    Every standard unit of either system is tried (a header's $MEASUREMENT
+    says how it was set up, not how it was drawn: plans in centimetres
+    come with it set to inches): of those that make the plan a building's
+    size and the doors a door's width (``DOOR_WIDTH_PLAUSIBLE``), the one
+    whose doors and walls are together closest, in log scale, to
+    ``TYPICAL_DOOR_WIDTH`` and ``TYPICAL_WALL_THICKNESS``. Returns
+    ``(unit, warning naming --units)`` when that is not ``unit``; None when
+    it is, or when the doors are too few to tell."""
+    doors = [float(w) for w in door_widths_m if w > 0]
+    what = f"{len(doors)} door drawings"
+    if len(doors) < DOOR_UNITS_MIN_DOORS:
+        doors = [float(w) for w in gap_widths_m if w > 0]
+        what = f"{len(doors)} doorways (gaps in its walls)"
+        if len(doors) < GAP_UNITS_MIN_GAPS:
+            return None
+    door = float(np.median(doors))
+    lo, hi = DOOR_WIDTH_PLAUSIBLE
+
+    def ratio(u: str) -> float:
+        return UNIT_METRES[u] / UNIT_METRES[unit]
+
+    def misfit(u: str) -> float:
+        off = abs(math.log10(door * ratio(u) / TYPICAL_DOOR_WIDTH))
+        if thickness_m is not None and thickness_m > 0:
+            off += abs(math.log10(thickness_m * ratio(u) / TYPICAL_WALL_THICKNESS))
+        return off
+
+    fits = [u for u in _DRAWING_UNITS if _plausible(extent_m * ratio(u)) and lo <= door * ratio(u) <= hi]
+    if not fits:
+        return None
+    best = min(fits, key=misfit)
+    if best == unit:
+        return None
+    walls = "" if thickness_m is None else f", its walls {thickness_m * ratio(best):.2f} m thick"
+    return best, (f"the drawing has no units and was read in {unit} from its extent, but its {what} are then a "
+                  f"median {door:.2f} m wide; read in {best} instead (doors {door * ratio(best):.2f} m{walls}, the "
+                  f"plan {_fmt(extent_m * ratio(best))} across); pass --units to override")
 
 
 def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: str) -> tuple[str, str] | None:
