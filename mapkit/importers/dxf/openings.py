@@ -333,8 +333,7 @@ def _across_to_barrier(item: MultiLineString, jamb, barriers) -> LineString | No
     """For a door drawing that touches one barrier (``jamb``) and stops
     short of the other side of its passage: the line from that jamb along
     the drawing's longer side (its rotated bounding box's) to the first
-    barrier met, at most ``MAX_DOOR_WIDTH`` from the jamb and reached at
-    least half way by the drawing; None otherwise."""
+    barrier met, reached at least half way by the drawing; None otherwise."""
     rect = np.asarray(item.minimum_rotated_rectangle.exterior.coords)[:4]
     sides = np.diff(np.vstack([rect, rect[:1]]), axis=0)
     long = sides[np.argmax(np.linalg.norm(sides, axis=1))]
@@ -347,7 +346,7 @@ def _across_to_barrier(item: MultiLineString, jamb, barriers) -> LineString | No
     reach = (pts - a) @ axis
     if abs(reach.min()) > abs(reach.max()):
         axis, reach = -axis, -reach
-    ray = LineString([a + axis * JAMB_REACH, a + axis * MAX_DOOR_WIDTH])
+    ray = LineString([a + axis * JAMB_REACH, a + axis * 2.0 * float(reach.max())])
     hit = barriers.intersection(ray)
     if hit.is_empty:
         return None
