@@ -153,3 +153,23 @@ def test_a_tile_grid_stopped_at_glass_is_floor_and_a_doorless_light_box_is_not(t
     assert not scene.free_space.contains(Point(5.5, 4))  # inside the light box
     assert len(polygon_parts(scene.free_space)) == 1
     assert any("shut in by walls or glass" in w for w in scene.info["warnings"])
+
+
+def test_door_swings_on_a_layer_read_as_furniture_where_no_door_was_found(tmp_path):
+    # proxy_cityscience: its door swings are on 'Furniture'; read right otherwise, the map has no door at all.
+    plan = row_of_rooms(tmp_path / "f.dxf", n=6, door_layer="Furniture")
+    with pytest.raises(InconsistentDrawingError, match=r"draws 6 door swing\(s\) on 'Furniture'.*--doors LAYER"):
+        load_scene(plan)
+    assert load_scene(plan, BuildOptions(doors=["Furniture"])).info["counts"]["doors"] == 6
+
+
+def test_a_door_line_at_one_wall_gives_no_passage_and_no_error():
+    # A straight door line touching one wall (its rotated box is a line): jps_einkauf, proxy_ensal.
+    from shapely.geometry import MultiLineString, box
+
+    from mapkit.importers.dxf.openings import passage_opening
+
+    walls = box(-0.2, -5.0, 0.0, 5.0)
+    assert passage_opening(MultiLineString([[(0.0, 0.0), (1.0, 0.0)]]), walls) is None
+    assert passage_opening(MultiLineString([[(0.0, 0.0), (1.0, 0.0)]]), walls.union(box(2.0, -5.0, 2.2, 5.0))) \
+        is not None  # the line reaches half way to the next wall: a door across the passage

@@ -334,8 +334,11 @@ def _across_to_barrier(item: MultiLineString, jamb, barriers) -> LineString | No
     short of the other side of its passage: the line from that jamb along
     the drawing's longer side (its rotated bounding box's) to the first
     barrier met, reached at least half way by the drawing; None otherwise."""
-    rect = np.asarray(item.minimum_rotated_rectangle.exterior.coords)[:4]
-    sides = np.diff(np.vstack([rect, rect[:1]]), axis=0)
+    box = item.minimum_rotated_rectangle  # a line's is the line
+    rect = np.asarray(box.exterior.coords if box.geom_type == "Polygon" else box.coords)[:, :2]
+    sides = np.diff(rect, axis=0)
+    if not len(sides):
+        return None
     long = sides[np.argmax(np.linalg.norm(sides, axis=1))]
     if not np.linalg.norm(long) > 0:
         return None

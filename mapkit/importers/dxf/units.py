@@ -113,11 +113,13 @@ def units_from_evidence(door_widths_m, gap_widths_m, thickness_m: float | None, 
     all metres as read in ``unit``; ``extent_m`` the plan's extent as read.
 
     Every standard unit of either system is tried (a header's $MEASUREMENT
-    says how it was set up, not how it was drawn: plans in centimetres
-    come with it set to inches): of those that make the plan a building's
-    size and the doors a door's width (``DOOR_WIDTH_PLAUSIBLE``), the one
-    whose doors and walls are together closest, in log scale, to
-    ``TYPICAL_DOOR_WIDTH`` and ``TYPICAL_WALL_THICKNESS``. Returns
+    says how it was set up, not how it was drawn: plans in centimetres or
+    metres come with it set to inches): of those that make the plan a
+    building's size (``PLAUSIBLE_EXTENT``), the one whose extent, doors and
+    walls are together closest, in log scale, to ``TYPICAL_EXTENT``,
+    ``TYPICAL_DOOR_WIDTH`` and ``TYPICAL_WALL_THICKNESS``: three signs, each
+    weak alone (doorway gaps mix jambs and wide openings, a plan may be a
+    room or a campus), that together tell centimetres from inches. Returns
     ``(unit, warning naming --units)`` when that is not ``unit``; None when
     it is, or when the doors are too few to tell."""
     doors = [float(w) for w in door_widths_m if w > 0]
@@ -128,18 +130,17 @@ def units_from_evidence(door_widths_m, gap_widths_m, thickness_m: float | None, 
         if len(doors) < GAP_UNITS_MIN_GAPS:
             return None
     door = float(np.median(doors))
-    lo, hi = DOOR_WIDTH_PLAUSIBLE
 
     def ratio(u: str) -> float:
         return UNIT_METRES[u] / UNIT_METRES[unit]
 
     def misfit(u: str) -> float:
-        off = abs(math.log10(door * ratio(u) / TYPICAL_DOOR_WIDTH))
+        off = _off_typical(extent_m * ratio(u)) + abs(math.log10(door * ratio(u) / TYPICAL_DOOR_WIDTH))
         if thickness_m is not None and thickness_m > 0:
             off += abs(math.log10(thickness_m * ratio(u) / TYPICAL_WALL_THICKNESS))
         return off
 
-    fits = [u for u in _DRAWING_UNITS if _plausible(extent_m * ratio(u)) and lo <= door * ratio(u) <= hi]
+    fits = [u for u in _DRAWING_UNITS if _plausible(extent_m * ratio(u))]
     if not fits:
         return None
     best = min(fits, key=misfit)
