@@ -392,7 +392,7 @@ TYPICAL_WALL_THICKNESS = 0.2
 #: a wall end runs into a wall standing within ``GAP_UNITS_FACING_DEG``
 #: degrees of square to it; its partner across a doorway is sought among
 #: its ``GAP_UNITS_NEIGHBOURS`` nearest wall ends. With at least
-#: ``GAP_UNITS_MIN_GAPS`` gaps whose median is no door's width
+#: ``DOOR_UNITS_MIN_DOORS`` gaps (as many as door drawings) whose median is no door's width
 #: (``DOOR_WIDTH_PLAUSIBLE``), the unit of the same system (metric or
 #: imperial) that puts it closest to ``TYPICAL_DOOR_WIDTH`` is taken
 #: (:func:`mapkit.importers.dxf.units.units_from_gaps`) if at least
@@ -409,7 +409,6 @@ GAP_UNITS_TOUCH_SHARE = 1e-3
 GAP_UNITS_REACH_SHARE = 0.2
 GAP_UNITS_FACING_DEG = 30.0
 GAP_UNITS_NEIGHBOURS = 16
-GAP_UNITS_MIN_GAPS = 5
 GAP_UNITS_AGREE_SHARE = 0.5
 
 #: Double-line wall ends are capped only if both lines run within this many
