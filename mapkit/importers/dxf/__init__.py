@@ -123,9 +123,8 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
         log.warning(message)
         warnings.append(message)
 
-    guessed = options.units is None and insunits not in INSUNITS
-    unit, factor, strokes, swing_strokes = _flatten_in_units(msp, roles, far, (unit, guessed), factor, extent, options,
-                                                             note)
+    unit, factor, strokes, swing_strokes = _flatten_in_units(  # the unit guessed when the header gives none
+        msp, roles, far, (unit, options.units is None and insunits not in INSUNITS), factor, extent, options, note)
     offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES] + swing_strokes)
     if offset is not None:
         strokes = [replace(s, coords=s.coords - offset) for s in strokes]
