@@ -373,6 +373,16 @@ DOOR_UNITS_MIN_DOORS = 5
 DOOR_WIDTH_PLAUSIBLE = (0.5, 2.5)
 TYPICAL_DOOR_WIDTH = 0.9
 
+#: A drawing without units is read in the unit that puts both its doors'
+#: median width near ``TYPICAL_DOOR_WIDTH`` and its walls' thickness (the
+#: length-weighted median distance between the two lines of its
+#: double-line walls, :mod:`mapkit.importers.dxf.wall_thickness`) near
+#: this, metres, in log scale (:func:`mapkit.importers.dxf.units.units_from_evidence`):
+#: interior partitions of 0.1 m to outer walls of 0.4 m. Two independent
+#: signs tell centimetres from inches (a factor of 2.54) where either alone
+#: may not.
+TYPICAL_WALL_THICKNESS = 0.2
+
 #: Doorway gaps in the wall lines tell the units of a plan that draws no
 #: door symbols (fewer than ``DOOR_UNITS_MIN_DOORS``), measured by
 #: :mod:`mapkit.importers.dxf.doorway_gaps` before the units are known, so
@@ -382,7 +392,7 @@ TYPICAL_DOOR_WIDTH = 0.9
 #: a wall end runs into a wall standing within ``GAP_UNITS_FACING_DEG``
 #: degrees of square to it; its partner across a doorway is sought among
 #: its ``GAP_UNITS_NEIGHBOURS`` nearest wall ends. With at least
-#: ``GAP_UNITS_MIN_GAPS`` gaps whose median is no door's width
+#: ``DOOR_UNITS_MIN_DOORS`` gaps (as many as door drawings) whose median is no door's width
 #: (``DOOR_WIDTH_PLAUSIBLE``), the unit of the same system (metric or
 #: imperial) that puts it closest to ``TYPICAL_DOOR_WIDTH`` is taken
 #: (:func:`mapkit.importers.dxf.units.units_from_gaps`) if at least
@@ -399,7 +409,6 @@ GAP_UNITS_TOUCH_SHARE = 1e-3
 GAP_UNITS_REACH_SHARE = 0.2
 GAP_UNITS_FACING_DEG = 30.0
 GAP_UNITS_NEIGHBOURS = 16
-GAP_UNITS_MIN_GAPS = 5
 GAP_UNITS_AGREE_SHARE = 0.5
 
 #: Double-line wall ends are capped only if both lines run within this many

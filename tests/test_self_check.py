@@ -19,7 +19,8 @@ from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, Mapki
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
-from mapkit_harness.plans.inconsistent import plan_beside_elevation, room_outline_on_layer_0, row_of_rooms
+from mapkit_harness.plans.inconsistent import (doors_across_passages, plan_beside_elevation, room_outline_on_layer_0,
+                                                row_of_rooms, tiled_podium)
 
 
 def test_a_consistent_plan_passes_without_a_word(tmp_path):
@@ -114,3 +115,61 @@ def test_the_command_line_refuses_with_exit_2_one_line_and_no_output(tmp_path):
     run = subprocess.run([sys.executable, "-m", "mapkit", "build", str(path), "-o", str(out), "-q",
                           "--accept-inconsistent"], capture_output=True, text=True)
     assert run.returncode == 0 and out.exists() and "contradicts its drawing" in run.stderr
+
+
+@pytest.mark.parametrize("unit_per_m, measurement, unit", [
+    (100.0, 0, "cm"),           # no units, $MEASUREMENT imperial, drawn in cm (proxy_cucs_l1, proxy_cut_lab)
+    (1 / 0.0254, 0, "in"),      # no units, imperial, drawn in inches: stays inches
+    (100.0, 1, "cm"),           # no units, metric, drawn in cm
+])
+def test_a_unitless_plan_is_read_in_the_unit_its_doors_and_walls_say(tmp_path, unit_per_m, measurement, unit):
+    # Read in inches (the guess of an imperial header from the extent), the cm plan's doors are 2.29 m wide: a
+    # door's width still, so the doors alone did not tell; with its walls' thickness (0.2 m in cm, 0.51 m in
+    # inches) both say cm.
+    scene = load_scene(row_of_rooms(tmp_path / "u.dxf", n=6, insunits=0, unit_per_m=unit_per_m,
+                                    measurement=measurement, wall_thickness=0.2))
+    assert scene.info["units"] == unit
+    assert scene.info["counts"]["doors"] == 6
+    assert 80 < scene.free_space.area < 6 * 24  # the plan is 24 x 6 m
+
+
+def test_doors_across_passages_between_two_walls_faces_are_doors(tmp_path):
+    # A door line from one wall's face to the other's, a double door hinged on a wall's face and stopping short
+    # of a glass screen (proxy_hoteldieu's entrances, barcelona's double door): no wall gap holds them.
+    scene = load_scene(doors_across_passages(tmp_path / "hall.dxf"))
+    assert scene.info["counts"]["doors"] == 2
+    assert not any("not in a wall gap" in w for w in scene.info["warnings"])
+    assert len(polygon_parts(scene.free_space)) == 1
+
+
+def test_a_tile_grid_stopped_at_glass_is_floor_and_a_doorless_light_box_is_not(tmp_path):
+    # barcelona: the podium's last row of tiles is closed by the glass, not by a line of its own; the light box
+    # between two glass panes has no door.
+    from shapely.geometry import Point
+
+    scene = load_scene(tiled_podium(tmp_path / "podium.dxf"))
+    assert scene.info["interior"] == "floor layer"
+    assert scene.free_space.contains(Point(3, 7.5))  # the last row of tiles, under the glass
+    assert not scene.free_space.contains(Point(5.5, 4))  # inside the light box
+    assert len(polygon_parts(scene.free_space)) == 1
+    assert any("shut in by walls or glass" in w for w in scene.info["warnings"])
+
+
+def test_door_swings_on_a_layer_read_as_furniture_where_no_door_was_found(tmp_path):
+    # proxy_cityscience: its door swings are on 'Furniture'; read right otherwise, the map has no door at all.
+    plan = row_of_rooms(tmp_path / "f.dxf", n=6, door_layer="Furniture")
+    with pytest.raises(InconsistentDrawingError, match=r"draws 6 door swing\(s\) on 'Furniture'.*--doors LAYER"):
+        load_scene(plan)
+    assert load_scene(plan, BuildOptions(doors=["Furniture"])).info["counts"]["doors"] == 6
+
+
+def test_a_door_line_at_one_wall_gives_no_passage_and_no_error():
+    # A straight door line touching one wall (its rotated box is a line): jps_einkauf, proxy_ensal.
+    from shapely.geometry import MultiLineString, box
+
+    from mapkit.importers.dxf.openings import passage_opening
+
+    walls = box(-0.2, -5.0, 0.0, 5.0)
+    assert passage_opening(MultiLineString([[(0.0, 0.0), (1.0, 0.0)]]), walls) is None
+    assert passage_opening(MultiLineString([[(0.0, 0.0), (1.0, 0.0)]]), walls.union(box(2.0, -5.0, 2.2, 5.0))) \
+        is not None  # the line reaches half way to the next wall: a door across the passage

@@ -19,7 +19,8 @@ import ezdxf
 
 def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_layer: str = "A-DOOR",
                  insunits: int = 6, unit_per_m: float = 1.0, door_offset: float = 0.0,
-                 stray_wall_layer: str | None = None, lost_doors: int = 0) -> Path:
+                 stray_wall_layer: str | None = None, lost_doors: int = 0, measurement: int | None = None,
+                 wall_thickness: float = 0.0) -> Path:
     """``n`` rooms of 4 x 4 m in a row off a corridor 2 m wide (the plan
     ``4 n`` x 6 m), single-line walls on ``wall_layer``, each room's 0.9 m
     door a leaf and its swing on ``door_layer`` in a gap of the corridor
@@ -28,14 +29,23 @@ def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_
     into the rooms, off an unbroken corridor wall (door drawings no wall
     gap holds), for every room or, with ``lost_doors`` > 0, for that many
     rooms at the east end; ``stray_wall_layer`` adds one short line on
-    that layer (a wall layer holding almost nothing)."""
+    that layer (a wall layer holding almost nothing); ``measurement`` sets
+    the header's $MEASUREMENT (0: imperial); ``wall_thickness`` (m) > 0
+    draws the outer walls' inner faces too, that far inside the outline
+    (double-line outer walls)."""
     k = unit_per_m
     doc = ezdxf.new("R2013")
     doc.header["$INSUNITS"] = insunits
+    if measurement is not None:
+        doc.header["$MEASUREMENT"] = measurement
     msp = doc.modelspace()
     wall, door = {"layer": wall_layer}, {"layer": door_layer}
     w = 4.0
     msp.add_lwpolyline([(0, 0), (n * w * k, 0), (n * w * k, 6 * k), (0, 6 * k)], close=True, dxfattribs=wall)
+    if wall_thickness > 0:
+        t = wall_thickness
+        msp.add_lwpolyline([(-t * k, -t * k), ((n * w + t) * k, -t * k), ((n * w + t) * k, (6 + t) * k),
+                            (-t * k, (6 + t) * k)], close=True, dxfattribs=wall)
     for i in range(1, n):
         msp.add_line((i * w * k, 0), (i * w * k, 4 * k), dxfattribs=wall)
     for i in range(n):
@@ -114,4 +124,66 @@ def plan_beside_elevation(path: str | Path, n: int = 4, gap: float = 1.5) -> Pat
     return Path(path)
 
 
-__all__ = ["plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms"]
+def doors_across_passages(path: str | Path) -> Path:
+    """A hall 12 x 4 m (walls on 'Walls', 0.2 m thick double lines) and, on
+    'Doors', two doors that close the hall's width between its two long
+    walls' faces, where no wall stops (proxy_hoteldieu's entrance doors
+    across passages, barcelona's double door between a glass screen's end
+    and a wall): at x = 4 a door line 3.6 m long from face to face; at
+    x = 8 a double door, two leaves drawn open with their swings, hinged
+    on the north wall's face and stopping 0.3 m short of a glass screen
+    ('Crystal', along y = 0.6 from the west wall to x = 9) that runs along
+    the hall's south side."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall = {"layer": "Walls"}
+    msp.add_lwpolyline([(-0.2, -0.2), (12.2, -0.2), (12.2, 4.2), (-0.2, 4.2)], close=True, dxfattribs=wall)
+    msp.add_lwpolyline([(0, 0), (12, 0), (12, 4), (0, 4)], close=True, dxfattribs=wall)
+    msp.add_line((4, 0.0), (4, 4.0), dxfattribs={"layer": "Doors"})
+    msp.add_line((0, 0.6), (9, 0.6), dxfattribs={"layer": "Crystal"})
+    for hinge, start, end in (((8, 4.0), 270, 360), ((8, 0.9), 0, 90)):
+        msp.add_line(hinge, (hinge[0] + 1.55, hinge[1]), dxfattribs={"layer": "Doors"})
+        msp.add_arc(hinge, 1.55, start, end, dxfattribs={"layer": "Doors"})
+    doc.saveas(path)
+    return Path(path)
+
+
+def tiled_podium(path: str | Path) -> Path:
+    """A podium of 12 x 8 m whose floor is a grid of 1 m tiles on
+    'Flooring' (barcelona's): the grid's lines run up to a glass screen
+    ('Crystal') along its north edge, y = 8, without a line of their own
+    there; walls on 'Walls' (single lines) stand along its west and east
+    edges (up to 0.5 m short of the glass) and its south edge but for a 5 m
+    entrance (x 2..7); a partition at x = 9 (as far north as the west and
+    east walls) with a 1 m doorway at y 3..4 and a door swing in it
+    ('Doors'); a light box, two glass panes at x = 5 and x = 6 from y = 2
+    to y = 6, closed by a freestanding wall along y = 2 and a glass screen
+    along y = 6 (each from x = 4 to x = 7), stands on the tiles with no
+    door into it."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    floor, wall, glass = {"layer": "Flooring"}, {"layer": "Walls"}, {"layer": "Crystal"}
+    for x in range(13):
+        msp.add_line((x, 0), (x, 8), dxfattribs=floor)
+    for y in range(8):  # no line along y = 8: the glass is there
+        msp.add_line((0, y), (12, y), dxfattribs=floor)
+    msp.add_line((-0.5, 8), (12.5, 8), dxfattribs=glass)
+    msp.add_line((0, 0), (0, 7.5), dxfattribs=wall)
+    msp.add_line((12, 0), (12, 7.5), dxfattribs=wall)
+    msp.add_line((0, 0), (2, 0), dxfattribs=wall)
+    msp.add_line((7, 0), (12, 0), dxfattribs=wall)
+    msp.add_line((9, 0), (9, 3), dxfattribs=wall)
+    msp.add_line((9, 4), (9, 7.5), dxfattribs=wall)
+    msp.add_line((9, 3), (9.9, 3), dxfattribs={"layer": "Doors"})
+    msp.add_arc((9, 3), 0.9, 0, 90, dxfattribs={"layer": "Doors"})
+    for x in (5, 6):
+        msp.add_line((x, 2), (x, 6), dxfattribs=glass)
+    msp.add_line((4, 2), (7, 2), dxfattribs=wall)
+    msp.add_line((4, 6), (7, 6), dxfattribs=glass)
+    doc.saveas(path)
+    return Path(path)
+
+
+__all__ = ["doors_across_passages", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms", "tiled_podium"]

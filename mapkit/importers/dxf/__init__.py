@@ -38,8 +38,9 @@ from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
 from mapkit.importers.dxf.openings import drawing_items
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.swing_layer import adopt_swing_layer
-from mapkit.importers.dxf.units import (INSUNITS, decide_units, units_from_doors, units_from_gaps,
+from mapkit.importers.dxf.units import (INSUNITS, decide_units, units_from_doors, units_from_evidence, units_from_gaps,
                                         units_from_size_and_doors)
+from mapkit.importers.dxf.wall_thickness import wall_thickness
 from mapkit.options import BuildOptions
 from mapkit.importers.dxf.reconstruct import reconstruct_scene
 from mapkit.importers.dxf.room_layers import door_lines_apart
@@ -122,7 +123,8 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
         log.warning(message)
         warnings.append(message)
 
-    unit, factor, strokes, swing_strokes = _flatten_in_units(msp, roles, far, unit, factor, extent, options, note)
+    unit, factor, strokes, swing_strokes = _flatten_in_units(  # the unit guessed when the header gives none
+        msp, roles, far, (unit, options.units is None and insunits not in INSUNITS), factor, extent, options, note)
     offset = local_origin([s for s in strokes if roles.get(s.layer) in _USED_ROLES] + swing_strokes)
     if offset is not None:
         strokes = [replace(s, coords=s.coords - offset) for s in strokes]
@@ -238,23 +240,29 @@ def _names(layers: list[str]) -> str:
     return ", ".join(f"'{n}'" for n in layers)
 
 
-def _flatten_in_units(msp, roles: dict, far: list, unit: str, factor: float, extent: float, options: BuildOptions,
-                      note) -> tuple[str, float, list, list]:
-    """:func:`_flatten` in the drawing's ``unit`` (``factor`` metres per
-    drawing unit; ``extent`` the plan's, drawing units), read again in the
-    unit its doors say (:func:`.units.units_from_doors`), or in a plan
-    without door symbols the unit its doorway gaps say
-    (:func:`.units.units_from_gaps`), when the header's or the guessed one
-    makes them no door's width and the user gave neither ``--units`` nor
-    ``--scale``. Returns the unit, the factor and the strokes."""
+def _flatten_in_units(msp, roles: dict, far: list, unit_guessed: tuple[str, bool], factor: float, extent: float,
+                      options: BuildOptions, note) -> tuple[str, float, list, list]:
+    """:func:`_flatten` in the drawing's unit (``unit_guessed``: its name and
+    whether it was only guessed from the extent, the header giving none;
+    ``factor`` metres per drawing unit; ``extent`` the plan's, drawing
+    units), read again in another unit when the user gave neither
+    ``--units`` nor ``--scale`` and: the unit was guessed and its doors and
+    walls say another (:func:`.units.units_from_evidence`); or the header's
+    unit makes its doors (:func:`.units.units_from_doors`), in a plan
+    without door symbols its doorway gaps (:func:`.units.units_from_gaps`),
+    no door's width. Returns the unit, the factor and the strokes."""
+    unit, guessed = unit_guessed
     first_notes: list[str] = []
     strokes, swing_strokes = _flatten(msp, roles, far, factor, options, first_notes.append)
     told = None
     if options.units is None and float(options.scale) == 1.0:
         widths = door_widths(strokes, roles)
-        told = units_from_doors(widths, unit, extent * factor)
-        if len(widths) < DOOR_UNITS_MIN_DOORS:  # too few door symbols to tell: the gaps in its walls tell
-            walls = [s for s in strokes if roles.get(s.layer) == "walls"]
+        walls = [s for s in strokes if roles.get(s.layer) == "walls"]
+        if guessed:
+            told = units_from_evidence(widths, wall_doorway_gaps(walls), wall_thickness(walls), unit, extent * factor)
+        elif len(widths) >= DOOR_UNITS_MIN_DOORS:
+            told = units_from_doors(widths, unit, extent * factor)
+        else:  # too few door symbols to tell: the gaps in its walls tell
             told = units_from_gaps(wall_doorway_gaps(walls), unit, extent * factor)
     if told is None:
         for message in first_notes:

@@ -3,7 +3,7 @@
 Users name layers with ``--walls/--doors/--windows/--ignore`` globs
 (fnmatch, case-insensitive). Without them, roles are guessed from the names
 architects commonly use, in English, German, French, Spanish, Italian,
-Portuguese, Dutch, Russian, Chinese, Japanese and Korean, and in the US National CAD
+Portuguese, Dutch, Polish, Czech, Russian, Chinese, Japanese and Korean, and in the US National CAD
 Standard (``A-WALL``, ``A-DOOR``, ``A-GLAZ``, ``A-COLS``, ``A-FURN`` ...)
 and their numbered variants; zone and space polygons (``Zone``, ``Space``,
 ``Room``, ``Pieces``, ``Raum``) give the free space like a floor layer;
@@ -28,7 +28,7 @@ ROLES = ("walls", "doors", "windows", "floor", "ignore")
 # "Staircase_outertwall", "Innenwand", "Trennwaende") are walls, a
 # "curtainwall" or "Glaswand" glass.
 _IGNORE_FIRST = r"""
-    text|texts|txt|texte|texto|testo|tekst|anno|annotation|notes?|dims?|dimensions?|dimension
+    text|texts|txt|texte|texto|testo|testi|tekst|anno|annotation|notes?|dims?|dimensions?|dimension
     |cotas?|cotation|cotations?|quotas?|quote|bemassung|bemasung|masse|maatvoering
     |patt|pattern|patterns?|tiles?|tiling|carrelage|fliesen|baldosas?|piastrelle
     |furn|furniture|mobilier|moebel|mobel|muebles?|mobiliario|arredo|arredi|meubilair|meubels?
@@ -40,17 +40,19 @@ _IGNORE_FIRST = r"""
     |hatch|hatches|hatching|schraffur|schraffuren|hachures?|hachurage|tramas?|retini|arcering
     |luft|lueftung|luftung|ventilation|background|hintergrund|hintergrundbild|underlay|xref|images?
 """
-_DOORS = r"doors?|door|dr|porte|portes|tuer|tur|tueren|turen|puertas?|porta|porte|deur|deuren|portas?"
+_DOORS = r"doors?|door|dr|porte|portes|tuer|tur|tueren|turen|puertas?|porta|porte|deur|deuren|portas?|drzwi|dvere|dveri"
 _WINDOWS = r"""
     windows?|wndw|glaz|glazing|glass|crystal|cristal|cristales|vitre|vitres|vitrage|fenetres?
     |fenster|glas|verglasung|ventanas?|vidrio|finestr[ae]|vetro|vetri|ramen|raam|janelas?|vidro|curtain|cwmg
-    |curtainwalls?|glasswalls?|glaswand|glaswaende|glaswande|[a-z]+fenster
+    |curtainwalls?|glasswalls?|glaswand|glaswaende|glaswande|[a-z]+fenster|okna|okno|okien
+    |serramenti|serramento
 """
 _WALLS = r"""
     walls?|wall|wand|waende|wande|mauer|mauern|murs?|muros?|muri|muur|muren|wanden|pared|paredes|parete|pareti|parede|paredes
     |partitions?|prtn|cloisons?|tabiques?|tramezz[io]|structure|structural|struct|strs|tragwerk
     |columns?|cols?|colonnes?|colonnas?|columnas?|pilier|piliers|pilar|pilares|pilastr[io]|poteaux?|stuetzen?|stutzen?|kolom|kolommen
-    |core|beton|concrete|hormigon|masonry|maconnerie|mauerwerk
+    |core|beton|concrete|hormigon|masonry|maconnerie|mauerwerk|muratura|murature|muratur[ae]|sciany|sciana|scianki
+    |zdi|zed|zdivo|steny|stena|muro|muros|murs?|alvenaria|metselwerk
     |facades?|fassaden?|fachadas?|facciata|facciate|gevel|gevels|envelope|shell
     |[a-z]+walls?|[a-z]+wand|[a-z]+waende|[a-z]+wande
 """

@@ -302,6 +302,64 @@ def cut_opening(item: MultiLineString, walls, max_wall_thickness: float) -> Poly
     return footprint
 
 
+def passage_opening(item: MultiLineString, barriers) -> Polygon | None:
+    """The opening of a door that closes a passage between the faces of two
+    barriers running across it (a door across a corridor between two
+    walls' faces, a double door between a glass screen's end and a wall),
+    where :func:`find_opening` finds no wall gap: the line between the two
+    barrier pieces farthest apart that the drawing ``item`` touches (its
+    jambs), ``THIN_WALL`` deep. None when it touches fewer than two, the
+    line is shorter than ``MIN_OPENING_WIDTH``, or runs mostly in a barrier
+    (a door drawn against a wall's face)."""
+    near = barriers.intersection(item.buffer(JAMB_REACH))
+    jambs = [g for g in shapely.get_parts(near) if g.area > 0]
+    if len(jambs) == 1:
+        line = _across_to_barrier(item, jambs[0], barriers)
+        if line is None:
+            return None
+    elif len(jambs) >= 2:
+        centres = np.array([[p.x, p.y] for p in (j.representative_point() for j in jambs)])
+        d = np.linalg.norm(centres[:, None] - centres[None], axis=-1)
+        i, k = np.unravel_index(np.argmax(d), d.shape)
+        line = LineString(nearest_points(jambs[i], jambs[k]))
+    else:
+        return None
+    if line.length < MIN_OPENING_WIDTH or barriers.intersection(line).length > 0.5 * line.length:
+        return None
+    return line.buffer(THIN_WALL / 2.0, cap_style="flat")
+
+
+def _across_to_barrier(item: MultiLineString, jamb, barriers) -> LineString | None:
+    """For a door drawing that touches one barrier (``jamb``) and stops
+    short of the other side of its passage: the line from that jamb along
+    the drawing's longer side (its rotated bounding box's) to the first
+    barrier met, reached at least half way by the drawing; None otherwise."""
+    box = item.minimum_rotated_rectangle  # a line's is the line
+    rect = np.asarray(box.exterior.coords if box.geom_type == "Polygon" else box.coords)[:, :2]
+    sides = np.diff(rect, axis=0)
+    if not len(sides):
+        return None
+    long = sides[np.argmax(np.linalg.norm(sides, axis=1))]
+    if not np.linalg.norm(long) > 0:
+        return None
+    start, _ = nearest_points(jamb, item)
+    a = np.array([start.x, start.y])
+    pts = np.concatenate([np.asarray(g.coords)[:, :2] for g in item.geoms])
+    axis = long / np.linalg.norm(long)
+    reach = (pts - a) @ axis
+    if abs(reach.min()) > abs(reach.max()):
+        axis, reach = -axis, -reach
+    ray = LineString([a + axis * JAMB_REACH, a + axis * 2.0 * float(reach.max())])
+    hit = barriers.intersection(ray)
+    if hit.is_empty:
+        return None
+    end, _ = nearest_points(hit, shapely.Point(a))
+    b = np.array([end.x, end.y])
+    if float(reach.max()) < 0.5 * float(np.hypot(*(b - a))):
+        return None
+    return LineString([a, b])
+
+
 def glass_footprint(item: MultiLineString) -> Polygon:
     """Footprint of free-standing glass (no wall gap): the lines thickened to ``THIN_WALL``.
 
@@ -321,4 +379,4 @@ def _lines(geom) -> MultiLineString:
     return MultiLineString([g for g in shapely.get_parts(geom) if isinstance(g, LineString) and not g.is_empty])
 
 
-__all__ = ["cut_opening", "door_openings", "door_strokes", "drawing_items", "find_opening", "glass_footprint", "opening_at_wall_end", "opening_width"]
+__all__ = ["cut_opening", "door_openings", "door_strokes", "drawing_items", "find_opening", "glass_footprint", "passage_opening", "opening_at_wall_end", "opening_width"]

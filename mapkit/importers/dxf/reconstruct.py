@@ -41,7 +41,7 @@ from mapkit.importers.dxf.enclosure import end_bridges, passable
 from mapkit.importers.dxf.jamb_ticks import split_jamb_ticks, tick_doorways
 from mapkit.importers.dxf.layer_roles import is_zone_layer
 from mapkit.importers.dxf.pocket_doors import pocket_opening
-from mapkit.importers.dxf.openings import (cut_opening, door_openings, door_strokes, drawing_items, find_opening,
+from mapkit.importers.dxf.openings import (cut_opening, door_openings, door_strokes, drawing_items, find_opening, passage_opening,
                                           glass_footprint, opening_width)
 from mapkit.importers.dxf.reachable import describe_left_out, entered_parts
 from mapkit.importers.dxf.room_layers import door_line_opening, entered_spaces, room_faces
@@ -96,6 +96,15 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
         if shafts:
             warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
                  f"{sum(p.area for p in shafts):.1f} m2")
+    elif interior_source == "floor layer" and door_gaps and not any(is_zone_layer(s.layer) for s in drawing.role("floor")):
+        # A floor layer says where the floor is, not where the rooms are: a space shut in by walls or glass that
+        # none of the plan's doors opens is no place the robot reaches (a light box between two glass panes).
+        # Where the drawing says where its rooms are, such a space is a room whose door was missed: the
+        # self-check (:mod:`.self_check`) refuses it.
+        free, shut_in = _without_shafts(free, _largest(free), door_gaps, options.robot_radius)
+        if shut_in:
+            warn(f"{len(shut_in)} space(s) shut in by walls or glass with no door into them are not free space: "
+                 f"{sum(p.area for p in shut_in):.1f} m2")
     if stair_runs:
         free = _without_stairs(free, stair_runs, [walls, obstacles, *door_gaps, *bridges],
                                door_gaps + _doorways(bridges, interior, obstacles) + door_items, options, warn, info)
@@ -243,8 +252,11 @@ def _openings(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, 
             cut = cut_opening(item, walls, options.max_wall_thickness)
             if cut is None:  # a swing over a wall left unbroken under it: opened where its leaf closes
                 cut = closed_leaf_opening(item, walls, options.max_wall_thickness)
-            # A plan drawn one layer per room: a door line is a door where it meets walls at both ends.
-            gap = cut if cut is not None or not drawing.role("rooms") else door_line_opening(item, walls)
+            # A door drawn as one line (no leaf, no swing) is a door where it meets walls at both ends:
+            # across a passage between two walls' faces, a shop front, a lane's end.
+            gap = cut if cut is not None else door_line_opening(item, walls)
+            if gap is None:  # a door closing a passage between the faces of two walls (or glass) across it
+                gap = passage_opening(item, barriers)
             if gap is None or _claimed(gap, door_gaps + window_gaps):
                 lost.append(item.centroid)
                 continue
@@ -353,6 +365,11 @@ def _without_shafts(free: MultiPolygon, rooms, door_gaps: list[Polygon], robot_r
     return MultiPolygon(keep), shafts
 
 
+def _largest(free: MultiPolygon) -> Polygon:
+    """The largest part of ``free`` (an empty polygon when it is empty)."""
+    return max(free.geoms, key=lambda p: p.area, default=Polygon())
+
+
 def _free_space(interior, walls, obstacles, robot_radius: float) -> MultiPolygon:
     """Where the robot's centre may be: the interior less walls and
     obstacles, shrunk by ``robot_radius`` (m), slivers under
@@ -428,7 +445,7 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     holes = [Polygon(ring) for poly in shapely.get_parts(shut) if isinstance(poly, Polygon) for ring in poly.interiors]
     enclosed = unary_union(holes) if holes else Polygon()
     hull = shut.convex_hull
-    floor_area = _floor_extent(floor)
+    floor_area = _floor_extent(floor, shut)
     if rooms is not None and not rooms.is_empty:
         # Rooms whose own outline the walls around them close (:func:`.room_layers.entered_spaces`) too.
         entered = entered_spaces(holes, door_gaps, bridges, rooms)
@@ -471,8 +488,11 @@ def _between_zones(walls, zones, max_wall_thickness: float):
     return unary_union(thin) if thin else Polygon()
 
 
-def _floor_extent(floor: list[Stroke]) -> Polygon | MultiPolygon:
-    """What a floor layer covers: its closed outlines and fills, and the faces its lines enclose."""
+def _floor_extent(floor: list[Stroke], barriers=None) -> Polygon | MultiPolygon:
+    """What a floor layer covers: its closed outlines and fills, and the faces its lines enclose,
+    with the ``barriers`` (walls, glass, doors' gaps; None: none) where they meet them: a tile
+    grid or a floor's edge drawn up to a wall or a glass screen and stopped there encloses the
+    floor between its lines and that wall (the faces inside the barriers are no floor)."""
     if not floor:
         return Polygon()
     lines = []
@@ -483,12 +503,28 @@ def _floor_extent(floor: list[Stroke]) -> Polygon | MultiPolygon:
         elif len(s.coords) >= 2:
             lines.append(shapely.LineString(s.coords))
     if lines:
-        noded = unary_union(lines)
-        polys.extend(shapely.get_parts(shapely.polygonize(shapely.get_parts(noded))))
+        faces = list(shapely.get_parts(shapely.polygonize(shapely.get_parts(unary_union(lines)))))
+        polys.extend(faces)
+        if faces and barriers is not None and not barriers.is_empty:
+            polys.extend(_floor_faces_at_barriers(lines, barriers, max(f.area for f in faces)))
     polys = [p for p in polys if isinstance(p, Polygon | MultiPolygon) and p.area > 0]
     if not polys:
         return Polygon()
     return unary_union(polys)
+
+
+def _floor_faces_at_barriers(lines: list, barriers, largest: float) -> list[Polygon]:
+    """The faces a floor's ``lines`` enclose together with the outlines of
+    the ``barriers`` they run up to (a tile grid stopped at a wall or a glass
+    screen leaves its last row of tiles open there), no larger than the
+    ``largest`` face the lines enclose on their own (m2; a tile): a pool or
+    a courtyard that the grid's edge and walls happen to enclose is no tile.
+    Faces inside the barriers are left out."""
+    # Only the barriers' outlines near the floor's lines: a whole building's are costly to node.
+    near = shapely.box(*unary_union(lines).bounds).buffer(SNAP_GAP)
+    edges = lines + list(shapely.get_parts(barriers.boundary.intersection(near)))
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(unary_union(edges))))
+    return [f for f in faces if 0 < f.area <= largest and not barriers.contains(f.representative_point())]
 
 
 def _strokes_geometry(strokes: list[Stroke]):

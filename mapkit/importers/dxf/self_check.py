@@ -22,6 +22,12 @@ result that contradicts it is built wrong:
 - **the doors**: the door drawings are used as doors
   (``SELF_CHECK_MIN_DOORS_USED``): where most are not, the rooms behind
   them are lost or sealed.
+- **doors drawn elsewhere**: where the map found no door, the drawing
+  draws none on any layer: a stroke that is an arc of a door leaf's radius
+  (``DOOR_SWING_RADIUS``, within ``DOOR_SWING_SNAP``) turning a quarter
+  (between half of ``DOOR_SWING_MAX_SWEEP_DEG`` and all of it), its leaf
+  drawn from its centre to one of its ends, on a layer read as furniture
+  or of no role is a door swing the map left out.
 - **the rooms are reachable**: where the plan's doors were found and the
   drawing says where its rooms are (walls enclosing them, room outlines,
   room polygons), no part
@@ -48,7 +54,9 @@ from mapkit.importers.dxf.openings import door_strokes, drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.scene import Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
+from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_SWING_MAX_SWEEP_DEG, DOOR_SWING_RADIUS, DOOR_SWING_SNAP,
+                               DOOR_SWING_TIP_SHARE,
+                               DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
                                SELF_CHECK_CELL_M, SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
                                SELF_CHECK_WALL_SHARE, ZERO)
 
@@ -183,6 +191,11 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
         found.append(Inconsistency(
             f"{ev.doors_used} of the {ev.doors_drawn} door drawings are used as doors (each door is one or two "
             "drawings): the rooms behind the others are lost", ("--doors LAYER", "--walls LAYER", "--units")))
+    swings = _swings_elsewhere(drawing) if ev.doors_used == 0 else {}
+    if swings:
+        found.append(Inconsistency(
+            f"the map found no door, but the drawing draws {sum(swings.values())} door swing(s) on "
+            + ", ".join(f"'{layer}' ({n})" for layer, n in sorted(swings.items())), ("--doors LAYER",)))
     # Where the drawing says where its rooms are (walls enclosing them, room
     # outlines or room polygons): a floor outline of a pavilion's podium, cut
     # by glass and freestanding walls, says nothing of rooms.
@@ -195,6 +208,50 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
             f"{' ...' if len(cut_off) > 4 else ''} m2) are cut off from the rest with no door found at them, though "
             "the plan's other doors were found", ("--doors LAYER",)))
     return found
+
+
+def _swings_elsewhere(drawing: PlanDrawing) -> dict[str, int]:
+    """Door swings (see the module docstring) on the layers the plan left
+    out (furniture, layers of no role), per layer: an arc whose hinge (its
+    centre) and one of its ends a leaf drawn on the same layer reaches (a
+    vertex within ``DOOR_SWING_TIP_SHARE`` of the radius of each; a stair's
+    or a table's arcs have none)."""
+    out: dict[str, int] = {}
+    for layer, strokes in drawing.ignored.items():
+        arcs = [(k, _swing_arc(s.coords)) for k, s in enumerate(strokes) if not s.closed and len(s.coords) >= 4]
+        arcs = [(k, arc) for k, arc in arcs if arc is not None]
+        if not arcs:
+            continue
+        n = 0
+        for k, (centre, r, ends) in arcs:
+            others = [np.asarray(s.coords, dtype=float)[:, :2] for j, s in enumerate(strokes) if j != k]
+            reach = max(DOOR_SWING_SNAP, DOOR_SWING_TIP_SHARE * r)
+            n += any(np.linalg.norm(v - centre, axis=1).min() <= reach
+                     and min(np.linalg.norm(v - e, axis=1).min() for e in ends) <= reach for v in others)
+        if n:
+            out[layer] = n
+    return out
+
+
+def _swing_arc(coords) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]] | None:
+    """``(centre, radius, ends)`` of a polyline (N, 2+) metres that is an arc
+    of a door leaf's radius turning about a quarter; None otherwise."""
+    p = np.asarray(coords, dtype=float)[:, :2]
+    a, b, c = p[0], p[len(p) // 2], p[-1]
+    m = 2.0 * np.array([b - a, c - a])
+    if abs(np.linalg.det(m)) <= ZERO.distance:
+        return None
+    centre = np.linalg.solve(m, np.array([b @ b - a @ a, c @ c - a @ a]))
+    radii = np.linalg.norm(p - centre, axis=1)
+    r = float(radii.mean())
+    lo, hi = DOOR_SWING_RADIUS
+    if not lo <= r <= hi or float(np.abs(radii - r).max()) > DOOR_SWING_SNAP:
+        return None
+    u, v = a - centre, c - centre
+    sweep = float(np.degrees(np.arccos(np.clip(u @ v / (np.linalg.norm(u) * np.linalg.norm(v)), -1.0, 1.0))))
+    if not 0.5 * DOOR_SWING_MAX_SWEEP_DEG <= sweep <= DOOR_SWING_MAX_SWEEP_DEG:
+        return None
+    return centre, r, (a, c)
 
 
 def _rooms_cut_off(scene: Scene, robot_radius: float) -> list[float]:

@@ -13,8 +13,8 @@ import numpy as np
 
 from mapkit.errors import ImplausibleUnitsError, MapkitError
 from mapkit.units import UNIT_METRES, canonical_units
-from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, GAP_UNITS_AGREE_SHARE, GAP_UNITS_MIN_GAPS,
-                               PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH, TYPICAL_EXTENT, ZERO)
+from mapkit.tolerances import (DOOR_UNITS_MIN_DOORS, DOOR_WIDTH_PLAUSIBLE, GAP_UNITS_AGREE_SHARE,
+                               PLAUSIBLE_EXTENT, TYPICAL_DOOR_WIDTH, TYPICAL_EXTENT, TYPICAL_WALL_THICKNESS, ZERO)
 
 #: $INSUNITS code -> unit name (codes of the DXF reference; the rest are
 #: astronomical or micro units no floor plan uses).
@@ -103,13 +103,62 @@ def units_from_doors(door_widths_m, unit: str, extent_m: float) -> tuple[str, st
                   f"{_fmt(extent_m * ratio(best))} across); pass --units to override")
 
 
+def units_from_evidence(door_widths_m, gap_widths_m, thickness_m: float | None, unit: str,
+                        extent_m: float) -> tuple[str, str] | None:
+    """The unit a drawing without units (``unit`` only guessed from its
+    extent) is drawn in, told by two signs independent of its extent: its
+    doors' width (the door drawings when there are ``DOOR_UNITS_MIN_DOORS``
+    or more, else its doorway gaps when ``DOOR_UNITS_MIN_DOORS`` or more) and
+    its walls' thickness (:func:`.wall_thickness.wall_thickness`, or None),
+    all metres as read in ``unit``; ``extent_m`` the plan's extent as read.
+
+    Every standard unit of either system is tried (a header's $MEASUREMENT
+    says how it was set up, not how it was drawn: plans in centimetres or
+    metres come with it set to inches): of those that make the plan a
+    building's size (``PLAUSIBLE_EXTENT``), the one whose extent, doors and
+    walls are together closest, in log scale, to ``TYPICAL_EXTENT``,
+    ``TYPICAL_DOOR_WIDTH`` and ``TYPICAL_WALL_THICKNESS``: three signs, each
+    weak alone (doorway gaps mix jambs and wide openings, a plan may be a
+    room or a campus), that together tell centimetres from inches. Returns
+    ``(unit, warning naming --units)`` when that is not ``unit``; None when
+    it is, or when the doors are too few to tell."""
+    doors = [float(w) for w in door_widths_m if w > 0]
+    what = f"{len(doors)} door drawings"
+    if len(doors) < DOOR_UNITS_MIN_DOORS:
+        doors = [float(w) for w in gap_widths_m if w > 0]
+        what = f"{len(doors)} doorways (gaps in its walls)"
+        if len(doors) < DOOR_UNITS_MIN_DOORS:
+            return None
+    door = float(np.median(doors))
+
+    def ratio(u: str) -> float:
+        return UNIT_METRES[u] / UNIT_METRES[unit]
+
+    def misfit(u: str) -> float:
+        off = _off_typical(extent_m * ratio(u)) + abs(math.log10(door * ratio(u) / TYPICAL_DOOR_WIDTH))
+        if thickness_m is not None and thickness_m > 0:
+            off += abs(math.log10(thickness_m * ratio(u) / TYPICAL_WALL_THICKNESS))
+        return off
+
+    fits = [u for u in _DRAWING_UNITS if _plausible(extent_m * ratio(u))]
+    if not fits:
+        return None
+    best = min(fits, key=misfit)
+    if best == unit:
+        return None
+    walls = "" if thickness_m is None else f", its walls {thickness_m * ratio(best):.2f} m thick"
+    return best, (f"the drawing has no units and was read in {unit} from its extent, but its {what} are then a "
+                  f"median {door:.2f} m wide; read in {best} instead (doors {door * ratio(best):.2f} m{walls}, the "
+                  f"plan {_fmt(extent_m * ratio(best))} across); pass --units to override")
+
+
 def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: str) -> tuple[str, str] | None:
     """The one unit that makes a drawing both a building's size and its
     doors a door's width, when its header's ``stated`` unit makes it no
     building (:class:`~mapkit.errors.ImplausibleUnitsError`): ``extent``
     its largest side, ``door_widths`` the widths of its door drawings and
     ``gap_widths`` of its doorway gaps, all in drawing units. The doors
-    judge when any are drawn, else the gaps (``GAP_UNITS_MIN_GAPS`` or
+    judge when any are drawn, else the gaps (``DOOR_UNITS_MIN_DOORS`` or
     more). Returns ``(unit, warning naming --units)``, or None when no unit
     or several fit (a 2 m door is a door in metres and in feet)."""
     widths = [float(w) for w in door_widths if w > 0]
@@ -117,7 +166,7 @@ def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: st
     if not widths:
         widths = [float(w) for w in gap_widths if w > 0]
         what = f"{len(widths)} doorways (gaps in its walls)"
-        if len(widths) < GAP_UNITS_MIN_GAPS:
+        if len(widths) < DOOR_UNITS_MIN_DOORS:
             return None
     median = float(np.median(widths))
     lo, hi = DOOR_WIDTH_PLAUSIBLE
@@ -140,10 +189,10 @@ _GAP_UNITS = {"metric": ("mm", "cm", "dm", "m"), "imperial": ("in", "ft")}
 
 def _gaps_no_door_fits(gap_widths_m) -> tuple[np.ndarray, float] | None:
     """The positive doorway widths (metres as read) and their median, when
-    there are ``GAP_UNITS_MIN_GAPS`` of them or more and the median is no
+    there are ``DOOR_UNITS_MIN_DOORS`` of them or more and the median is no
     door's width (``DOOR_WIDTH_PLAUSIBLE``); None otherwise."""
     widths = np.asarray([w for w in gap_widths_m if w > 0], dtype=float)
-    if len(widths) < GAP_UNITS_MIN_GAPS:
+    if len(widths) < DOOR_UNITS_MIN_DOORS:
         return None
     median = float(np.median(widths))
     lo, hi = DOOR_WIDTH_PLAUSIBLE
@@ -158,7 +207,7 @@ def units_from_gaps(gap_widths_m, unit: str, extent_m: float) -> tuple[str, str]
     ``gap_widths_m`` the free widths of its doorways as read in ``unit``
     (metres, :func:`.doorway_gaps.doorway_gaps`), ``extent_m`` its extent
     as read. Returns ``(unit, warning)``, or None when the gaps agree with
-    ``unit``, are too few (``GAP_UNITS_MIN_GAPS``), or no unit of the same
+    ``unit``, are too few (``DOOR_UNITS_MIN_DOORS``), or no unit of the same
     system makes most of them a door's width (``GAP_UNITS_AGREE_SHARE``)
     and the plan closer to a building's typical size."""
     gaps = _gaps_no_door_fits(gap_widths_m)
@@ -188,7 +237,7 @@ def scale_from_gaps(gap_widths_m) -> tuple[int, float, float] | None:
     drawn at a fraction of its size, one traced over a scan in pixels):
     ``(count, median, scale)``, the scale that makes their median
     ``TYPICAL_DOOR_WIDTH`` (two significant digits), from ``gap_widths_m``
-    (metres as read); None when they are too few (``GAP_UNITS_MIN_GAPS``)
+    (metres as read); None when they are too few (``DOOR_UNITS_MIN_DOORS``)
     or already a door's width. Only an estimate (real doorways are 0.7 to
     2 m wide): named in a refusal, never applied."""
     gaps = _gaps_no_door_fits(gap_widths_m)
