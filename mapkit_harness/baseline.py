@@ -10,7 +10,7 @@ import time
 import numpy as np
 
 from linemap.camera import Camera
-from matcher.stage1.constraints import wrap
+from matcher.search.tree.constraints import wrap
 
 
 def baseline_localize(linemap, camera: Camera, lines, prior, dt, dyaw, time_limit_s: float = 2.0,

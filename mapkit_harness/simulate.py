@@ -22,7 +22,7 @@ import numpy as np
 from linemap.camera import Camera
 from linemap.rig import Mount, Rig
 from matcher.map_geometry.occlusion import wall_edges
-from matcher.stage1.constraints import wrap
+from matcher.search.tree.constraints import wrap
 
 from mapkit_harness.visibility_oracle import sight_blocked
 

@@ -4,9 +4,9 @@ Light by design: numpy, scipy and OpenCV only. Maps and cameras come from
 the numpy-only core :mod:`linemap`; nothing of ``mapkit`` or the authoring
 stack (ezdxf, trimesh, shapely, viser) is imported here.
 
-The method's two stages have a folder each (:mod:`matcher.stage1`,
+The method's two stages have a folder each (:mod:`matcher.search.tree`,
 hypothesis generation; :mod:`matcher.stage2`, verification);
-:mod:`matcher.strategy` says which hypothesis sources run and when;
+:mod:`matcher.search.tree.strategy` says which hypothesis sources run and when;
 :mod:`matcher.from_prior` and :mod:`matcher.lost` are the entry points.
 
     >>> import matcher

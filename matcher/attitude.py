@@ -37,7 +37,7 @@ import numpy as np
 
 from linemap.camera import Camera, world2cam_rotation
 from matcher.input_validation import check_lines
-from matcher.stage1.constraints import plane_noises
+from matcher.search.tree.constraints import plane_noises
 from matcher.tolerances import Tolerances
 
 

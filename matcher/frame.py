@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from linemap.camera import Camera
-from matcher.stage1.constraints import bearing_noise, line_pieces, plane_noises, vertical_bearing, vertical_candidates
+from matcher.search.tree.constraints import bearing_noise, line_pieces, plane_noises, vertical_bearing, vertical_candidates
 from matcher.tolerances import Tolerances
 
 
@@ -29,7 +29,7 @@ class ImageLines:
     the right; ``alpha_eps`` (M,) their noise bound; ``usable`` (M,) bool long
     enough to use; ``searched`` (M,) bool the longest usable ones, those
     stage 1 searches with (:func:`searched_lines`); ``pieces`` (M, M) bool, couples that may be pieces of one
-    broken line (:func:`~matcher.stage1.constraints.line_pieces`), or None: none."""
+    broken line (:func:`~matcher.search.tree.constraints.line_pieces`), or None: none."""
 
     lines: np.ndarray
     normals: np.ndarray

@@ -1,7 +1,7 @@
 """Localisation from a prior: :func:`localize`.
 
     lines -> frame (matcher.frame) -> candidates (matcher.candidates)
-          -> strategy (matcher.strategy: stage 1 sources, stage 2 after each)
+          -> strategy (matcher.search.tree.strategy: stage 1 sources, stage 2 after each)
           -> LocalizeResult (matcher.result)
 
 Lost mode, with no prior, is :func:`matcher.lost.localize_global`: this
@@ -33,7 +33,7 @@ from matcher.stage2.calibration_check import Where
 from matcher.stage2.calibration_check import doubt as calibration_doubt
 from matcher.stage2.covariance import pose_std_of
 from matcher.stage2.fit import coverage as coverage_of
-from matcher.strategy import SOURCES, TREE_ALONE, Answer, Problem, run_strategy
+from matcher.search.tree.strategy import SOURCES, TREE_ALONE, Answer, Problem, run_strategy
 from matcher.tolerances import DEFAULT, Tolerances
 from matcher.verdict import BY_SEARCH_BUDGET, BY_TIME, UNCUT, Evidence, decide
 
@@ -135,7 +135,7 @@ def validated_types(linemap, camera, tolerances) -> Tolerances:
 @dataclass(frozen=True)
 class Scope:
     """What one search covers: the strategy's hypothesis ``sources``
-    (:data:`matcher.strategy.SOURCES`) and ``candidate_ids``, the segments
+    (:data:`matcher.search.tree.strategy.SOURCES`) and ``candidate_ids``, the segments
     to consider instead of those of the regions the prior disk meets (lost
     mode: a region's list; None: those). ``whole_map``: the prior is one
     piece of lost mode's search of the whole map, not a bound on where the
@@ -152,7 +152,7 @@ def localize_prepared(linemap, camera: Camera, image_lines: ImageLines, px, tol:
     """One prior ``px`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians) on prepared
     lines, within the time budget's ``deadlines`` (``t0`` the start of the
     call's clock): the candidates (:mod:`matcher.candidates`), then the
-    strategy (:mod:`matcher.strategy`), then the verdict
+    strategy (:mod:`matcher.search.tree.strategy`), then the verdict
     (:mod:`matcher.verdict`) and the result; ``scope`` what it covers."""
     times: dict[str, float] = {}
     cands = select_candidates(linemap, camera, px, tol, scope.candidate_ids)

@@ -23,7 +23,7 @@ from matcher.frame import prepare_lines, too_few_lines
 from matcher.lost_votes import vote_places
 from matcher.result import Deferred, LocalizeResult, Timings
 from matcher.search import default_search, search_of
-from matcher.strategy import SOURCES, TREE_ALONE
+from matcher.search.tree.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, Sweep, Verdict, decide, trusted
 
@@ -46,7 +46,7 @@ def localize_global(linemap, camera: Camera, lines, tolerances: Tolerances | Non
     a region has given an answer, the later regions' trees look only for
     sets that could beat it (at least its matches less one: stage 2 adds a
     line or so). The regions are first searched with the tree alone
-    (:data:`~matcher.strategy.TREE_ALONE`); only when none gives an answer
+    (:data:`~matcher.search.tree.strategy.TREE_ALONE`); only when none gives an answer
     does a second pass run the whole strategy (second search, resection),
     which costs most on the many regions where the robot is not.
     ``time_ms['total']`` covers all tries (the other entries are the winning

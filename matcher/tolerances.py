@@ -143,7 +143,7 @@ class SharedConstants(_Constants):
 
 @dataclass(frozen=True)
 class Stage1Constants(_Constants):
-    """Constants of stage 1 (matcher/stage1/, and matcher/strategy.py's
+    """Constants of stage 1 (matcher/search/tree/, and its strategy.py's
     merge of its searches): the correspondences, the pairwise test, the
     interpretation tree's tests at a grid pose, the resection from vertical
     edges.

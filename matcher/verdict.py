@@ -12,7 +12,7 @@ this order, each where its evidence is given:
    gave an answer (lost mode);
 3. the best pose's score E is within ``e_accept`` (method.md section 8):
    :func:`score_accepted`, the one test the strategy
-   (:mod:`matcher.strategy`) also asks while it chooses its sources;
+   (:mod:`matcher.search.tree.strategy`) also asks while it chooses its sources;
 4. the map segments the pose predicts in view are seen
    (``coverage_min_predicted``, ``coverage_min_share``);
 5. it explains clearly more lines than the best answer at another place

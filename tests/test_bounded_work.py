@@ -60,7 +60,7 @@ def test_line_pieces_in_blocks_is_the_whole_pass(monkeypatch):
     """Line preparation compares every pair of lines a block of rows at a
     time (bounded memory however many lines): the same pairs as all at once."""
     import matcher
-    from matcher.stage1 import constraints
+    from matcher.search.tree import constraints
 
     rng = np.random.default_rng(5)
     cam = matcher.Camera.from_dict({"width": 640, "height": 480, "fx": 500.0, "fy": 500.0, "cx": 320.0,

@@ -43,9 +43,9 @@ NOT_THRESHOLDS = {
     ("matcher/tracking/route_plot.py", "_WALL"): "colours of a picture",
     ("matcher/tracking/route_plot.py", "_LOST"): "colours of a picture",
     ("matcher/tracking/route_plot.py", "_JUMP_M"): "where a picture breaks its line",
-    ("matcher/stage1/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
-    ("matcher/stage1/constraints.py", "_PAIR_BLOCK"): "a work size bounding temporaries, not a tolerance",
-    ("matcher/stage1/tree.py", "_BIT_LEVELS"): "the bits of an int64, sign spared",
+    ("matcher/search/tree/constraints.py", "_NOISE_CASES"): "the signs of the noise model's extreme cases",
+    ("matcher/search/tree/constraints.py", "_PAIR_BLOCK"): "a work size bounding temporaries, not a tolerance",
+    ("matcher/search/tree/tree.py", "_BIT_LEVELS"): "the bits of an int64, sign spared",
 }
 
 

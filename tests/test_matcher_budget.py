@@ -79,8 +79,8 @@ def test_pairwise_tests_stop_at_the_search_deadline(small_map, cam):
     search deadline, and stage 1 hands on no sets, truncated and out of time."""
     from matcher.candidates import select_candidates
     from matcher.frame import prepare_lines
-    from matcher.stage1.generate import generate
-    from matcher.stage1.pairwise import pair_compatibility
+    from matcher.search.tree.generate import generate
+    from matcher.search.tree.pairwise import pair_compatibility
 
     fr = make_frame(small_map, cam, np.random.default_rng([7, 5]), 5)
     img = prepare_lines(cam, np.asarray(fr.lines, float), DEFAULT)
@@ -97,7 +97,7 @@ def test_pairwise_tests_stop_at_the_search_deadline(small_map, cam):
 
 
 def _correspondences(cands, cam, img, prior):
-    from matcher.stage1.correspondences import find_correspondences
+    from matcher.search.tree.correspondences import find_correspondences
 
     return find_correspondences(cands.reps, cam, img, prior, DEFAULT, cands.sight, cands.faces, {})
 

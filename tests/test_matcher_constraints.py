@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from linemap.camera import Camera, world2cam_rotation
-from matcher.stage1.constraints import (
+from matcher.search.tree.constraints import (
     binary_constraint,
     line_pieces,
     unary_constraint,

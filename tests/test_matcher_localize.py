@@ -166,7 +166,7 @@ def test_second_search_rule():
     that lost one clutter line (E small) does not; a truncated search never."""
     from types import SimpleNamespace
 
-    from matcher.strategy import doubtful
+    from matcher.search.tree.strategy import doubtful
     from matcher.tolerances import DEFAULT
 
     def case(kept, largest, E, truncated=False):

@@ -13,7 +13,7 @@ from mapkit_harness.simulate import make_frame, paper_camera
 
 import matcher
 from matcher.map_geometry.freespace import FreeSpace, free_space
-from matcher.stage1.correspondences import horizon_side_ok
+from matcher.search.tree.correspondences import horizon_side_ok
 from matcher.tolerances import DEFAULT
 
 FLAT = Path(__file__).resolve().parents[1] / "maps" / "flat.lmap"
@@ -106,7 +106,7 @@ def test_frame_of_vertical_edges_only(flat):
 
 
 def test_halfplane_reachable_hand_worked():
-    from matcher.stage1 import posegrid
+    from matcher.search.tree import posegrid
 
     dt = 1.0
     # One strip x = 0 (|x| <= 0.1): its feasible set is the chord x ~ 0, y in [-1, 1].
@@ -124,7 +124,7 @@ def test_halfplane_reachable_hand_worked():
 def test_stretch_and_weak_axis_against_sampling():
     """The pinned test's two pieces: the weak axis of two crossing strips and
     the extent of their common part along it, against a dense sampling."""
-    from matcher.stage1 import posegrid
+    from matcher.search.tree import posegrid
 
     dt, q_max = 1.0, 1.5
     rng = np.random.default_rng(3)
@@ -151,7 +151,7 @@ def test_stretch_and_weak_axis_against_sampling():
 
 
 def test_feasible_ellipse_reaches_equals_halfplane_reachable():
-    from matcher.stage1 import posegrid
+    from matcher.search.tree import posegrid
 
     rng = np.random.default_rng(5)
     a = rng.normal(size=(40, 2))
@@ -192,7 +192,7 @@ def test_vertical_edge_behind_the_camera_is_not_a_candidate():
     pass for any image line at some yaw: its bearing line runs through the
     disk, on both sides of the edge. The camera must stand behind the edge
     on the ray towards it."""
-    from matcher.stage1.correspondences import ModelLines, Pairs, YawGrid, _half_planes
+    from matcher.search.tree.correspondences import ModelLines, Pairs, YawGrid, _half_planes
 
     class _Img:
         alpha = np.array([0.0])  # the line is straight ahead
@@ -234,7 +234,7 @@ def test_collinear_groups_hand_worked_and_from_map_labels(flat):
 
 
 def test_vectorised_stretches_and_weak_axes_match_the_scalar_ones():
-    from matcher.stage1 import posegrid
+    from matcher.search.tree import posegrid
 
     rng = np.random.default_rng(11)
     ang = rng.uniform(0, np.pi, (3, 12))
@@ -253,8 +253,8 @@ def test_vectorised_stretches_and_weak_axes_match_the_scalar_ones():
 def _loose_set_facing_an_edge(walls):
     """Three strips along x through the disk centre (the position is loose
     along x), the last one a vertical edge at (3, 0) seen straight ahead."""
-    from matcher.stage1 import posegrid
-    from matcher.stage1.tree import TreeInput
+    from matcher.search.tree import posegrid
+    from matcher.search.tree.tree import TreeInput
 
     strip = posegrid.strip_quadratics(np.array([0.0, 1.0]), np.array(0.0), np.array(0.05))
     quad = np.broadcast_to(strip, (3, 1, 6)).copy()
@@ -270,7 +270,7 @@ def test_edge_seen_from_a_loose_region_hand_worked():
     edge at (3, 0): a wall at x = 2 hides it from the whole region, a
     doorway in that wall lets it be seen, and a wall off to the side does
     not matter."""
-    from matcher.stage1.set_visibility import edge_seen_from_region
+    from matcher.search.tree.set_visibility import edge_seen_from_region
 
     from dataclasses import replace
 
@@ -323,8 +323,8 @@ def test_aiming_at_large_sets_first_finds_the_same_sets_sooner(flat, monkeypatch
     enumerates some thirty of them before it meets the six; the passes
     aiming at large sets first (tree.search's default) return the same sets
     in a fraction of the nodes."""
-    import matcher.stage1.generate as generate
-    from matcher.stage1.tree import search
+    import matcher.search.tree.generate as generate
+    from matcher.search.tree.tree import search
 
     cam = paper_camera(1.2, 0.0)
     rng = np.random.default_rng([0, 5])
@@ -385,8 +385,8 @@ def test_lines_reached_as_bits_equals_the_matrix_product(flat, monkeypatch):
     """The look-ahead counts the lines a candidate still reaches as bits of
     one integer (up to 63 lines) or by a one-hot matrix product (more): both
     give the same search, set for set and node for node."""
-    import matcher.stage1.generate as generate
-    import matcher.stage1.tree as tree
+    import matcher.search.tree.generate as generate
+    import matcher.search.tree.tree as tree
 
     cam = paper_camera(1.2, 0.0)
     rng = np.random.default_rng([1, 5])

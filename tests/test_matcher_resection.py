@@ -13,8 +13,8 @@ import pytest
 import matcher
 from linemap.geometry import wrap
 from matcher.tolerances import DEFAULT
-from matcher.stage1.resection import resect as _resect
-from matcher.stage1.resection import EdgeCorrespondences, triples, vertical_hypotheses
+from matcher.search.tree.resection import resect as _resect
+from matcher.search.tree.resection import EdgeCorrespondences, triples, vertical_hypotheses
 from mapkit_harness.simulate import make_frame, paper_camera, pose_error
 
 WORK = DEFAULT.stage1

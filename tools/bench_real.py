@@ -21,6 +21,8 @@ at the true pose (``mapkit_harness.simulate.visible_lines``); :func:`matcher.loc
 from a prior drawn within each PEQ's bounds (``mapkit_harness.simulate.PEQ``, as in
 ``tools/bench_paper.py``: dt 0.2 to 1.0 m, dyaw 10 to 50 deg); and
 :func:`matcher.localize_global` (lost mode) on every ``--lost-every``-th view;
+with ``--oracle``, also from a prior centred on the true pose (PEQ 1's
+bounds): what the map allows at best, the cap of the other modes;
 each call within ``--budget-ms`` (default 1 s: unbounded, a real view can
 take a minute and a whole run hours).
 A table per mode: views, views showing at least 6 map lines, within
@@ -79,6 +81,9 @@ def main(argv=None) -> int:
     ap.add_argument("--peq", type=int, nargs="*", default=sorted(PEQ), choices=sorted(PEQ),
                     help="PEQ levels to run (default 1 to 5). " + PEQ_HELP)
     ap.add_argument("--lost-every", type=int, default=4, help="lost mode on every N-th view (0: none; default 4)")
+    ap.add_argument("--oracle", action="store_true",
+                    help="also localise from a prior centred on the true pose, with PEQ 1's bounds: the share "
+                         "right the map allows at best (ZInD's annotated layout as the map)")
     ap.add_argument("--budget-ms", type=float, default=1000.0,
                     help="time budget per call, ms (default 1000, which keeps a run of the sample tour near 15 min; "
                          "inf: none)")
@@ -314,6 +319,10 @@ def run_modes(row: dict, args, from_prior, lost) -> None:
         t, c = time.perf_counter(), time.process_time()
         res = from_prior(prior, dt, dyaw)
         row["results"][peq] = _outcome(res, truth, time.perf_counter() - t, time.process_time() - c)
+    if args.oracle:
+        t, c = time.perf_counter(), time.process_time()
+        res = from_prior(truth, *PEQ[1])
+        row["results"]["oracle"] = _outcome(res, truth, time.perf_counter() - t, time.process_time() - c)
     if args.lost_every and row["id"] % args.lost_every == 0:
         t, c = time.perf_counter(), time.process_time()
         res = lost()
@@ -368,7 +377,7 @@ def classify(o) -> str:
 
 
 def table(rows, args) -> str:
-    modes = [p for p in args.peq] + (["lost"] if args.lost_every else [])
+    modes = [p for p in args.peq] + (["oracle"] if args.oracle else []) + (["lost"] if args.lost_every else [])
     columns = ["mode", "views", "views showing >= 6 map lines", "within 20 cm / 5 deg (of those showing)",
                "within 5 cm / 1 deg", "accepted and wrong", "not localised", "time ms median / p95",
                "CPU ms median / p95", "lines per view (median)"]
@@ -384,7 +393,7 @@ def table(rows, args) -> str:
         right_shown = sum(c in ("tight", "right") for c, s in zip(cls, shown) if s)
         ms = np.array([r["results"][mode]["seconds"] * 1000 for r in rs])
         cpu = np.array([r["results"][mode].get("cpu", np.nan) * 1000 for r in rs])
-        name = f"PEQ {mode}" if mode != "lost" else "lost"
+        name = mode if mode in ("lost", "oracle") else f"PEQ {mode}"
         out.append([name, n, ns, f"{_pct(right, n)} ({_pct(right_shown, ns)})", _pct(cls.count("tight"), n),
                     _pct(cls.count("wrong"), n), _pct(cls.count("none"), n),
                     f"{np.median(ms):.0f} / {np.percentile(ms, 95):.0f}",
@@ -428,7 +437,7 @@ def save_failures(row, view, image, lines, camera, m, folder):
         c = classify(o)
         if c in ("tight", "right"):
             continue
-        name = f"view{row['id']:03d}_{row['pano']}_{mode if mode == 'lost' else f'peq{mode}'}_{c}.png"
+        name = f"view{row['id']:03d}_{row['pano']}_{mode if mode in ('lost', 'oracle') else f'peq{mode}'}_{c}.png"
         cv2.imwrite(str(Path(folder) / name), draw_overlay(image, lines, camera, m, row["truth"], o["pose"]))
 
 

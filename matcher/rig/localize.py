@@ -36,7 +36,7 @@ from matcher.rig.verify import RigRanked, merged, verify_seeds
 from matcher.search import default_search, search_of
 from matcher.search.structure.localize import localize_frame
 from matcher.stage2.fit import coverage_in_sight
-from matcher.strategy import SOURCES, TREE_ALONE
+from matcher.search.tree.strategy import SOURCES, TREE_ALONE
 from matcher.tolerances import Tolerances
 from matcher.verdict import BY_TIME, UNCUT, Evidence, decide, trusted
 
@@ -97,7 +97,7 @@ def _prior_search(linemap, frame: RigFrame, px: tuple, tol: Tolerances, deadline
     """The cameras searched, those with the most usable lines first, each
     one's new seeds verified on every camera as they come: first every
     camera with the interpretation tree alone
-    (:data:`~matcher.strategy.TREE_ALONE`), then, only if none of their
+    (:data:`~matcher.search.tree.strategy.TREE_ALONE`), then, only if none of their
     seeds verified, with the whole strategy. The search stops before the
     other cameras' trees once it is settled (:func:`_settled`: the verdict
     accepts a pose that the seeds of ``RigConstants.settled_cameras``

@@ -3,7 +3,7 @@
 Each camera is searched as a single camera is, from its view of the
 robot's prior (:meth:`~matcher.rig.frame.CameraView.camera_prior`): its
 candidate segments, stage 1's interpretation tree on its lines, stage 2 on
-the sets found (:mod:`matcher.strategy`). A narrow view rarely decides
+the sets found (:mod:`matcher.search.tree.strategy`). A narrow view rarely decides
 alone, but its best few poses, taken to the robot through the mount, are
 where the verification on every camera's lines starts
 (:mod:`matcher.rig.verify`).
@@ -20,7 +20,7 @@ from matcher.budget import Deadlines
 from matcher.candidates import Candidates, select_candidates
 from matcher.frame import too_few_lines
 from matcher.rig.frame import CameraView
-from matcher.strategy import Answer, Problem, run_strategy
+from matcher.search.tree.strategy import Answer, Problem, run_strategy
 from matcher.tolerances import Tolerances
 
 

@@ -1,8 +1,8 @@
 """Two ways to rank the places a frame may have been taken from, one way to
 verify them.
 
-- ``tree``: the paper's interpretation tree (:mod:`matcher.stage1`, with
-  the strategy of :mod:`matcher.strategy`): correspondences between image
+- ``tree``: the paper's interpretation tree (:mod:`matcher.search.tree`, with
+  the strategy of :mod:`matcher.search.tree.strategy`): correspondences between image
   lines and map segments, grown into consistent sets inside the prior.
 - ``structure`` (:mod:`matcher.search.structure`): every pose the prior
   allows (the whole floor when lost) scored at once from the scene's

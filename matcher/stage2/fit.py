@@ -5,7 +5,7 @@ One fit test (:func:`fits`) serves the whole of stage 2: dropping matches
 that do not fit, sliding a loose pose (with a tighter end allowance), and
 adding the lines of other visible segments. One visibility test
 (:func:`visible`) at the refined pose; stage 1's own, at a grid pose a few
-centimetres off, is looser (:mod:`matcher.stage1.set_visibility`).
+centimetres off, is looser (:mod:`matcher.search.tree.set_visibility`).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ origin, heading 0) through its mount, so a rig or a panorama is one set of
 observations and votes once:
 
 - a **vertical line** (a vertical edge's candidate,
-  :func:`matcher.stage1.constraints.vertical_candidates`) is the bearing of
+  :func:`matcher.search.tree.constraints.vertical_candidates`) is the bearing of
   a corner or jamb, ``mount yaw - alpha``, good to its bearing noise;
 - any other line is taken as **level** in the world (most long lines of a
   room are: floor and ceiling junctions, door heads, sills): its plane's

@@ -10,7 +10,7 @@ of view) and image lines l:
    meets the disk), bearing test on ``Lv x lv``, and the horizon test on
    heights: the survivors are the correspondences;
 3. for each correspondence and grid yaw: the yaw mask (direction or bearing
-   constraint), the position strip as a quadratic (:mod:`matcher.stage1.posegrid`)
+   constraint), the position strip as a quadratic (:mod:`matcher.search.tree.posegrid`)
    and a half-plane (vertical edges lie ahead; wall faces are seen from the
    room side); a correspondence with no feasible grid pose is dropped.
 """
@@ -25,8 +25,8 @@ import numpy as np
 from linemap.camera import Camera, world2cam_rotation
 from linemap.geometry import segment_is_vertical
 from matcher.frame import ImageLines
-from matcher.stage1 import posegrid
-from matcher.stage1.constraints import distinct_points, unary_constraint, wrap
+from matcher.search.tree import posegrid
+from matcher.search.tree.constraints import distinct_points, unary_constraint, wrap
 from matcher.tolerances import Tolerances
 
 

@@ -3,19 +3,19 @@
 For one prior (a disk of positions, an interval of headings) and the
 candidate model segments it meets:
 
-1. correspondences (:mod:`matcher.stage1.correspondences`): the unary,
+1. correspondences (:mod:`matcher.search.tree.correspondences`): the unary,
    vertical and horizon tests, then each survivor's yaw mask, position
    strip and half-plane on the pose grid;
-2. pairwise compatibility (:mod:`matcher.stage1.pairwise`);
-3. the interpretation tree (:mod:`matcher.stage1.tree`): the maximal sets of
+2. pairwise compatibility (:mod:`matcher.search.tree.pairwise`);
+3. the interpretation tree (:mod:`matcher.search.tree.tree`): the maximal sets of
    correspondences that are pairwise compatible and whose whole feasible
    pose set is non-empty, with at least the minimum number of matches,
-   each passing the set checks (:mod:`matcher.stage1.set_visibility`).
+   each passing the set checks (:mod:`matcher.search.tree.set_visibility`).
 
 Each hypothesis carries the grid yaw and position at which it is feasible:
 the starting point of stage 2. The tree's input stays with the hypotheses
 (``Hypotheses.tree_input``), for the other hypothesis sources of
-:mod:`matcher.strategy` and for tools that look inside.
+:mod:`matcher.search.tree.strategy` and for tools that look inside.
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ from matcher.candidates import Candidates
 from matcher.frame import ImageLines
 from matcher.projection import ShownSpans
 from matcher.map_geometry.occlusion import SightRays
-from matcher.stage1.correspondences import Correspondences, find_correspondences
-from matcher.stage1.pairwise import pair_compatibility
-from matcher.stage1.tree import TreeInput, search
+from matcher.search.tree.correspondences import Correspondences, find_correspondences
+from matcher.search.tree.pairwise import pair_compatibility
+from matcher.search.tree.tree import TreeInput, search
 from matcher.tolerances import Tolerances
 
 

@@ -16,7 +16,7 @@ class TreeInput:
     """Per correspondence k: strip quadratics ``quad`` (K, Y, 6) and yaw masks
     ``mask`` (K, Y) on the grid ``yaws`` (Y,); ``compat`` (K, K) bool pairwise
     compatibility (the tree relies on it: a pair in compat is taken as
-    feasible, as :func:`matcher.stage1.pairwise.pair_compatibility` tests it, and two
+    feasible, as :func:`matcher.search.tree.pairwise.pair_compatibility` tests it, and two
     correspondences on one segment are in compat only if their lines may be
     pieces of one line); ``segments``
     (K, 2, 3) the matched model segment (world); ``centre`` (3,) the prior

@@ -14,9 +14,9 @@ import numpy as np
 
 from matcher.budget import NO_LIMIT, Deadlines
 from matcher.frame import ImageLines
-from matcher.stage1 import posegrid
-from matcher.stage1.constraints import binary_constraint
-from matcher.stage1.correspondences import Correspondences
+from matcher.search.tree import posegrid
+from matcher.search.tree.constraints import binary_constraint
+from matcher.search.tree.correspondences import Correspondences
 from matcher.tolerances import Tolerances
 
 

@@ -6,13 +6,13 @@ The paper's method is one pass: stage 1 (generate hypotheses) then stage 2
 each when the answer so far calls for it:
 
 1. :class:`TreeSearch`, the interpretation tree of stage 1
-   (:func:`matcher.stage1.generate.generate`): always.
+   (:func:`matcher.search.tree.generate.generate`): always.
 2. :class:`SecondSearch`, the tree again keeping sets one smaller than the
    largest (``match_slack`` 1), when stage 2 doubts the answer: nothing was
    accepted, or the best hypothesis kept fewer matches than the largest set
    had (a clutter line may have padded the largest sets past the true one).
 3. :class:`Resection`, poses resected from triples of vertical edges
-   (:mod:`matcher.stage1.resection`), when the tree ran out of budget or
+   (:mod:`matcher.search.tree.resection`), when the tree ran out of budget or
    nothing it found held: where vertical edges leave the position loose the
    tree meets thousands of sets.
 
@@ -33,8 +33,8 @@ import numpy as np
 from matcher.budget import Deadlines
 from matcher.candidates import Candidates
 from matcher.frame import ImageLines
-from matcher.stage1.generate import Hypotheses, generate, search_again
-from matcher.stage1.resection import EdgeCorrespondences, vertical_hypotheses
+from matcher.search.tree.generate import Hypotheses, generate, search_again
+from matcher.search.tree.resection import EdgeCorrespondences, vertical_hypotheses
 from matcher.stage2.rank import Ranked, verify_hypotheses
 from matcher.tolerances import Tolerances
 from matcher.verdict import score_accepted
@@ -167,7 +167,7 @@ def run_strategy(problem: Problem, sources=SOURCES) -> Answer:
 
 def with_resection(hyps: Hypotheses, held: list[int], problem: Problem) -> Hypotheses:
     """The sets ``held`` (indices) of ``hyps`` followed by those of
-    :mod:`matcher.stage1.resection` (poses resected from triples of vertical
+    :mod:`matcher.search.tree.resection` (poses resected from triples of vertical
     edges), at most ``max_hypotheses`` in all; ``counts["resection"]`` says
     how many the resection gave."""
     tol = problem.tol

@@ -5,10 +5,10 @@ are the line's candidate model segments (those that passed the unary or
 vertical tests) and "unmatched" (clutter, or a segment not in the lists).
 A node is a set R of correspondences whose feasible pose set is non-empty:
 a child adds a candidate that is pairwise compatible with every member and
-keeps the whole set feasible (:mod:`matcher.stage1.posegrid`, checked for all the
+keeps the whole set feasible (:mod:`matcher.search.tree.posegrid`, checked for all the
 line's candidates at once). Pairwise compatibility holds matching one to
 one: two lines share a segment only when they are pieces of one broken
-line (:func:`matcher.stage1.constraints.line_pieces`). A branch is cut when
+line (:func:`matcher.search.tree.constraints.line_pieces`). A branch is cut when
 it cannot reach the minimum number of matches, which rises to the largest
 set found minus ``match_slack``. A leaf is reported if it is maximal (no
 skipped line could join). The tree is searched first in passes that aim at
@@ -30,9 +30,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from matcher.stage1 import posegrid
-from matcher.stage1.set_visibility import check_once, final_check, visible_at_best, visible_best
-from matcher.stage1.tree_input import TreeInput
+from matcher.search.tree import posegrid
+from matcher.search.tree.set_visibility import check_once, final_check, visible_at_best, visible_best
+from matcher.search.tree.tree_input import TreeInput
 from matcher.tolerances import Tolerances
 
 #: A sort key above every real one.
@@ -73,7 +73,7 @@ class InterpretationTree:
     The search state (the sets found, the bound on their size, the node
     count, whether a budget cut it) lives in the fields; :meth:`search`
     runs it. With ``eager`` every leaf gets the set checks as it is found
-    (:func:`~matcher.stage1.set_visibility.final_check`) instead of afterwards.
+    (:func:`~matcher.search.tree.set_visibility.final_check`) instead of afterwards.
     """
 
     def __init__(self, inp: TreeInput, tol: Tolerances, eager: bool = False) -> None:

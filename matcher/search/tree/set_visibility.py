@@ -1,6 +1,6 @@
 """Stage 1: the tests a set of correspondences passes beyond feasibility.
 
-The interpretation tree (:mod:`matcher.stage1.tree`) keeps a set when its
+The interpretation tree (:mod:`matcher.search.tree.tree`) keeps a set when its
 strips meet at some grid pose. A set must also put the camera where the
 robot can stand (free space) and see each matched segment there (in front
 of the camera, not hidden by a wall). Those tests need a pose that the set
@@ -22,8 +22,8 @@ import heapq
 import numpy as np
 
 from matcher.map_geometry.occlusion import sight_clear
-from matcher.stage1 import posegrid
-from matcher.stage1.tree_input import TreeInput
+from matcher.search.tree import posegrid
+from matcher.search.tree.tree_input import TreeInput
 from matcher.tolerances import SharedConstants, Stage1Constants, Tolerances
 
 
