@@ -149,9 +149,10 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
     distance of the walls seen from it: a bound made for the nearest wall
     lets most lines take a wrong segment and pulls the pose away) and the
     pose refitted, the bound halved pass by pass down to stage 2's own;
-    then stage 2's verification of the peak and of every pass's pose
-    (a narrower pass can lock onto a wrong line near the truth and pull
-    the pose off; stage 2 keeps the pose that explains the most lines).
+    then stage 2's verification of the peak, the first pass's pose and the
+    last's (a narrower pass can lock onto a wrong line near the truth and
+    pull the pose off; stage 2 keeps the pose that explains the most
+    lines).
     None when no camera has candidates."""
     cands = []
     for v in frame.views:
@@ -172,7 +173,7 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
         poses = refine_robot(poses, parts, wide.stage2, robust=True, iterations=tol.stage2.refit_iterations)
         passes.append(poses)
         gate /= 2.0
-    return cands, verify_seeds(frame.views, cands, np.vstack([peaks.poses[i:i + 1], *passes]), prior, tol)
+    return cands, verify_seeds(frame.views, cands, _seeds(peaks.poses[i:i + 1], passes), prior, tol)
 
 def _best_key(ranked: RigRanked) -> tuple:
     """The ranking key (lines explained most, then cost, then E) of the best
@@ -194,3 +195,11 @@ def _answers(ranked: RigRanked) -> list:
             out.append(((float(p[0]), float(p[1]), yaw), int(ranked.n[h]), float(ranked.score[h]),
                         float(ranked.cost[h])))
     return out
+
+
+
+def _seeds(peak: np.ndarray, passes: list) -> np.ndarray:
+    """(S, 3) the seeds stage 2 verifies for one peak (1, 3): the peak
+    itself, the first pass's pose (matched within the widest bound) and the
+    last's (:func:`_verify`)."""
+    return np.vstack([peak, *passes[:1], *passes[-1:]])
