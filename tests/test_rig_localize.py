@@ -169,7 +169,7 @@ def test_search_stops_once_two_cameras_found_the_accepted_pose(flat):
     rig = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
     rig_frame(flat, rig, rng)  # the first frame's other two cameras see too little to make a difference
     f, _ = rig_frame(flat, rig, rng)
-    tol = matcher.Tolerances()
+    tol = matcher.Tolerances(search="tree")  # the tree's own early stop
     never = replace(tol, rig=replace(tol.rig, settled_cameras=len(rig) + 1))
     a = localize_rig(flat, rig, f.lines, f.prior, f.dt, f.dyaw, tolerances=tol)
     b = localize_rig(flat, rig, f.lines, f.prior, f.dt, f.dyaw, tolerances=never)

@@ -12,10 +12,16 @@ of a rig twice, on the robot's best pose:
    focal length 20 % short moves the robot half a metre to make up for it,
    as it moves one camera; one camera's few matches do not show it, all
    the cameras' together do.
-2. **Each camera on its own**: the single camera's check on that camera's
-   matches at its pose, within the robot's prior carried to it
-   (:meth:`~matcher.rig.frame.CameraView.camera_prior`): one camera of the
-   rig whose file is wrong.
+2. **Each camera on its own**: the same fit with one calibration
+   parameter free for that camera alone, the robot's pose fitted on every
+   camera's matches: one camera of the rig whose file is wrong. The pose
+   is the robot's, fixed by all the cameras through their mounts, not the
+   camera's own: a camera's few lines (a panorama's view holds 6 to 20)
+   fitted with its pose and a focal length free leave the four nearly
+   undetermined, and the map's own error (decimetres on a plan drawn from
+   annotations) is then taken up by a focal length 1.1 to 2.7 times the
+   file's, at a camera pose metres away; pinned by the others, a right
+   camera's lines have nothing left over for the focal length to explain.
 
 The thresholds are the single camera's (``VerdictConstants``), chosen and
 held out on its own benchmark; ``python tools/bench_calibration.py
@@ -26,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from matcher.stage2.calibration_check import MatchedLines, blamed_parameters, doubt
+from matcher.stage2.calibration_check import MatchedLines, blamed_parameters
 
 
 class RigMatchedLines:
@@ -36,9 +42,10 @@ class RigMatchedLines:
     pose, their derivatives in the robot's pose through each mount, a
     calibration change applied to every camera alike."""
 
-    def __init__(self, per_camera, tol) -> None:
+    def __init__(self, per_camera, tol, only: int | None = None) -> None:
         self.parts = [(MatchedLines(view.camera, lines, segments, tol), view.mount)
                       for view, lines, segments in per_camera]
+        self.only = only
 
     def __len__(self) -> int:
         return sum(len(data) for data, _ in self.parts)
@@ -46,8 +53,12 @@ class RigMatchedLines:
     def weighted(self, pose: np.ndarray, calib: np.ndarray, jacobian: bool = False):
         """(2T,) noise-weighted residuals of every camera at robot ``pose``
         (3,) and calibration ``calib`` (4,), and with ``jacobian`` their
-        (2T, 3) derivatives in the robot's pose."""
-        out = [data.weighted(mount.camera_poses(pose), calib, jacobian) for data, mount in self.parts]
+        (2T, 3) derivatives in the robot's pose. With ``only`` (an index
+        into the cameras) the calibration change is that camera's alone,
+        the others at their files'."""
+        file = np.array([1.0, 0.0, 0.0, 0.0])
+        out = [data.weighted(mount.camera_poses(pose), calib if self.only in (None, c) else file, jacobian)
+               for c, (data, mount) in enumerate(self.parts)]
         if not jacobian:
             return np.concatenate(out)
         J = [Jc @ mount.jacobian(pose[2]) for (_, Jc), (_, mount) in zip(out, self.parts)]
@@ -71,14 +82,19 @@ def rig_doubt(per_camera, robot_pose: np.ndarray, tol, px: tuple | None) -> str:
         return (f"the matched lines of every camera fit the map far better with {f.off_by(per_camera[0][0].camera)} "
                 f"for camera {name}, alike in every camera's file (the pose would be {x:.2f}, {y:.2f}, {yaw:.1f} "
                 f"deg), than with the camera files' calibration: check the camera calibration")
+    if len(per_camera) == 1:  # one camera: "every camera alike" was its check
+        return ""
     blamed = []
-    for view, lines, segments in per_camera:
-        prior = None if px is None else view.camera_prior(px)
-        why = doubt(view.camera, lines, segments, view.mount.camera_poses(robot_pose), tol, prior)
-        if why:
-            blamed.append((view.name, why))
+    for c, (view, lines, _) in enumerate(per_camera):
+        if len(lines) < tol.verdict.calibration_min_lines:  # too few residuals to tell a calibration from noise
+            continue
+        alone = blamed_parameters(RigMatchedLines(per_camera, tol, only=c), view.camera, robot_pose, tol, px)
+        if alone:
+            blamed.append((view, alone[0]))
     if not blamed:
         return ""
-    name, why = blamed[0]
-    others = "".join(f"; so do camera {n}'s" for n, _ in blamed[1:])
-    return f"camera {name}: {why}{others}"
+    (view, f), others = blamed[0], "".join(f"; so do camera {v.name}'s" for v, _ in blamed[1:])
+    x, y, yaw = f.pose
+    return (f"camera {view.name}: the matched lines fit the map far better with {f.off_by(view.camera)} "
+            f"for that camera alone (the robot's pose would be {x:.2f}, {y:.2f}, {yaw:.1f} deg) than with its camera "
+            f"file's calibration: check the camera calibration{others}")

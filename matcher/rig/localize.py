@@ -165,7 +165,7 @@ def localize_rig_global(linemap, rig, lines, tolerances: Tolerances | None = Non
     once)."""
     t0 = time.perf_counter()
     rig = check_rig(rig)
-    if default_search(search_of(tolerances), rig) == "structure":
+    if default_search(search_of(tolerances), rig, lost=True) == "structure":
         tol = validated_types(linemap, rig[0].camera, tolerances)
         return localize_frame(linemap, prepare_rig_frame(rig, lines, tol), None, tol, t0)
     if rig.is_single:

@@ -145,10 +145,15 @@ def _inside(found: tuple, px: tuple, tol: Tolerances) -> tuple:
 def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: Tolerances):
     """``(candidates per camera, RigRanked)`` of peak ``i`` verified under
     ``prior`` (a narrow one around it, radians): its lines matched within a
-    bound widened to what the peak's slack moves a line by (at the nearest
-    wall seen from it) and the pose refitted, the bound halved pass by pass
-    down to stage 2's own, then stage 2's verification; None when no
-    camera has candidates."""
+    bound widened to what the peak's slack moves a line by (at the median
+    distance of the walls seen from it: a bound made for the nearest wall
+    lets most lines take a wrong segment and pulls the pose away) and the
+    pose refitted, the bound halved pass by pass down to stage 2's own;
+    then stage 2's verification of the peak, the first pass's pose and the
+    last's (a narrower pass can lock onto a wrong line near the truth and
+    pull the pose off; stage 2 keeps the pose that explains the most
+    lines).
+    None when no camera has candidates."""
     cands = []
     for v in frame.views:
         c = select_candidates(linemap, v.camera, v.camera_prior(prior), tol)
@@ -159,14 +164,16 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
     fx = max(v.camera.fx for v in frame.views)
     gate = fx * (peaks.slack_rad + peaks.slack_m / max(float(peaks.near_m[i]), 1e-3))
     poses = peaks.poses[i:i + 1]
+    passes = []
     while gate > tol.stage2.fit_pose_px:
         wide = replace(tol, stage2=replace(tol.stage2, fit_pose_px=gate))
         parts = [camera_matches(v, c.segments, extend_all(v.camera, v.lines, c.segments, v.mount.camera_poses(poses),
                                                           no_matches(), np.arange(len(poses)), wide, c.walls), wide)
                  for v, c in pairs]
         poses = refine_robot(poses, parts, wide.stage2, robust=True, iterations=tol.stage2.refit_iterations)
+        passes.append(poses)
         gate /= 2.0
-    return cands, verify_seeds(frame.views, cands, poses, prior, tol)
+    return cands, verify_seeds(frame.views, cands, _seeds(peaks.poses[i:i + 1], passes), prior, tol)
 
 def _best_key(ranked: RigRanked) -> tuple:
     """The ranking key (lines explained most, then cost, then E) of the best
@@ -188,3 +195,11 @@ def _answers(ranked: RigRanked) -> list:
             out.append(((float(p[0]), float(p[1]), yaw), int(ranked.n[h]), float(ranked.score[h]),
                         float(ranked.cost[h])))
     return out
+
+
+
+def _seeds(peak: np.ndarray, passes: list) -> np.ndarray:
+    """(S, 3) the seeds stage 2 verifies for one peak (1, 3): the peak
+    itself, the first pass's pose (matched within the widest bound) and the
+    last's (:func:`_verify`)."""
+    return np.vstack([peak, *passes[:1], *passes[-1:]])

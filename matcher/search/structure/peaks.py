@@ -6,8 +6,9 @@ Peaks are taken best first, each one's neighbourhood (poses within
 the verdict) then put out of the running, so the second peak is the best
 pose *elsewhere* in the whole prior: the rival a verdict needs, known
 whether or not it is verified. Each peak is then refined on a finer
-lattice around it (a third of the grid's step, the profiles cast afresh
-for those points, the neighbouring yaws too).
+lattice around it (half the grid's step, the profiles cast afresh for
+those points, the neighbouring yaws too), each camera's observations seen
+from that camera's own place on the robot rather than its centre.
 """
 
 from __future__ import annotations
@@ -19,16 +20,19 @@ import numpy as np
 
 from matcher.search.structure.observed import Observed
 from matcher.search.structure.profiles import MapStructure, Profiles, profiles_at
-from matcher.search.structure.score import score
+from matcher.search.structure.score import score_by_mount
 
 
 @dataclass(frozen=True)
 class Peaks:
     """``poses`` (Q, 3) robot poses ``(x, y, theta)``, best first, refined;
     ``scores`` (Q,) their grid scores (:mod:`.score`); ``near_m`` (Q,) the
-    nearest wall junction from each, metres; ``slack_m`` and
-    ``slack_rad``: how far the truth may still be from a refined peak
-    (half the finer lattice's diagonal, a yaw bin)."""
+    median distance of the wall junctions seen from each, metres; ``slack_m`` and
+    ``slack_rad``: how far the truth may still be from a refined peak:
+    the grid score's own position tolerance (half the grid's diagonal,
+    the farthest camera's lever and the map's error: the score cannot tell
+    places apart within it, and the refinement's best may lie anywhere
+    inside), and a yaw bin."""
 
     poses: np.ndarray
     scores: np.ndarray
@@ -82,9 +86,11 @@ def refined(structure: MapStructure, grid: Profiles, observed: Observed, picks: 
             scored: tuple, step: float, tol) -> Peaks:
     """The :class:`Peaks` of ``picks`` (:func:`best_peaks` over ``grid`` at
     yaw bins ``yaws``, ``scored`` the grid's scores and their weights,
-    :func:`~.score.score`): each moved to the best of the lattice a third of
-    ``step`` apart around it (3 x 3 points, the yaw bin and its
-    neighbours)."""
+    :func:`~.score.score`): each moved to the best of the lattice half
+    ``step`` apart around it (5 x 5 points, the yaw bin and its
+    neighbours), each camera's observations compared with what the map
+    shows from that camera's own place on the robot
+    (:func:`~.score.score_by_mount`)."""
     grid_scores, weights = scored
     bins = grid.bins
     width = 2 * math.pi / bins
@@ -94,19 +100,27 @@ def refined(structure: MapStructure, grid: Profiles, observed: Observed, picks: 
     if not picks:
         return Peaks(np.zeros((0, 3)), np.zeros(0), np.zeros(0), fine / math.sqrt(2.0), width)
     centres = grid.points[[p for p, _ in picks]]
-    pts = (centres[:, None] + offsets[None]).reshape(-1, 2)
-    around = profiles_at(structure, pts, bins, fine / math.sqrt(2.0), tol)
+    headings = np.array([yaws[k] for _, k in picks], dtype=float) * width
+    robot = centres[:, None] + offsets[None]  # (Q, O, 2) the robot's places
+    G, O = len(observed.mounts), len(offsets)
+    c, s_ = np.cos(headings), np.sin(headings)
+    lever = np.stack([c[:, None] * observed.mounts[None, :, 0] - s_[:, None] * observed.mounts[None, :, 1],
+                      s_[:, None] * observed.mounts[None, :, 0] + c[:, None] * observed.mounts[None, :, 1]], axis=-1)
+    pts = robot[:, None] + lever[:, :, None]  # (Q, G, O, 2) each mount group's camera place
+    around = profiles_at(structure, pts.reshape(-1, 2), bins, fine / math.sqrt(2.0), tol)
     poses = []
     for i, (_, k) in enumerate(picks):
         ks = (yaws[k] + np.array([-1, 0, 1])) % bins
-        sub = around.take(np.arange(i * len(offsets), (i + 1) * len(offsets)))
-        s, _ = score(sub, observed, ks, tol, weights)
+        # Each group seen from its own place at the pick's heading (a yaw
+        # bin either side moves a camera by its lever times a bin: a few
+        # millimetres).
+        parts = [around.take(np.arange((i * G + g) * O, (i * G + g + 1) * O)) for g in range(G)]
+        s = score_by_mount(parts, observed, ks, tol, weights)
         # Ties keep the grid's own point and yaw (the middle of each axis).
-        s = s + np.float32(1e-6) * (np.arange(len(offsets)) == len(offsets) // 2)[:, None] \
-            + np.float32(1e-6) * (np.arange(3) == 1)[None]
+        s = s + np.float32(1e-6) * (np.arange(O) == O // 2)[:, None] + np.float32(1e-6) * (np.arange(3) == 1)[None]
         q, j = np.unravel_index(int(np.argmax(s)), s.shape)
-        poses.append([sub.points[q, 0], sub.points[q, 1], float(ks[j]) * width])
+        poses.append([robot[i, q, 0], robot[i, q, 1], float(ks[j]) * width])
     rows = [p for p, _ in picks]
-    near = grid.nearest_m(rows)
-    return Peaks(np.array(poses), np.array([grid_scores[p, k] for p, k in picks]), near, fine / math.sqrt(2.0),
-                 width)
+    near = grid.typical_m(rows)
+    return Peaks(np.array(poses), np.array([grid_scores[p, k] for p, k in picks]), near,
+                 grid.slack_m + observed.lever + tol.model_m, width)

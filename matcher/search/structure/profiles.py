@@ -27,6 +27,7 @@ Per point and bin:
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -77,12 +78,14 @@ class Profiles:
         return Profiles(self.points[rows], self.floor_inv[:, rows], self.ceiling_inv[:, rows],
                         self.ceiling_z[:, rows], self.edge_cum[:, rows], self.slack_m)
 
-    def nearest_m(self, rows) -> np.ndarray:
-        """(R,) the nearest junction seen from ``points[rows]``, metres."""
-        inv = np.fmax(np.nanmax(np.nan_to_num(self.floor_inv[:, rows], nan=0.0), axis=0),
-                      np.nanmax(np.nan_to_num(self.ceiling_inv[:, rows], nan=0.0), axis=0))
-        with np.errstate(divide="ignore"):
-            return 1.0 / inv.astype(float)
+    def typical_m(self, rows) -> np.ndarray:
+        """(R,) the median distance of the junctions seen from
+        ``points[rows]`` (over the bearings holding one), metres."""
+        inv = np.fmax(np.nan_to_num(self.floor_inv[:, rows], nan=0.0), np.nan_to_num(self.ceiling_inv[:, rows], nan=0.0))
+        inv = np.where(inv > 0, inv, np.nan)
+        with np.errstate(divide="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a point that sees no junction: NaN, inf below
+            return np.nan_to_num(1.0 / np.nanmedian(inv.astype(float), axis=0), nan=np.inf)
 
 
 def bins_of(tol: Tolerances) -> int:
@@ -117,6 +120,26 @@ class GridProfiles:
         self.step, points = lattice(linemap, tol, self.bins)
         self.profiles = profiles_at(self.structure, points, self.bins, self.step / math.sqrt(2.0), tol)
         self.directions = map_directions(linemap, self.bins // 2)
+        self._cell = np.round((points - points.min(axis=0, initial=0.0)) / self.step).astype(np.int64) \
+            if len(points) else np.zeros((0, 2), np.int64)
+        shape = self._cell.max(axis=0) + 1 if len(points) else np.zeros(2, np.int64)
+        self._row = np.full(tuple(int(n) for n in shape), -1, np.int64)
+        self._row[self._cell[:, 0], self._cell[:, 1]] = np.arange(len(points))
+
+    def shifted(self, rows: np.ndarray, offset: np.ndarray) -> tuple[np.ndarray, float]:
+        """``(rows (R,), residual)``: the lattice points nearest to
+        ``points[rows] + offset`` ((2,) metres: a camera's place on a robot
+        at those points), and how far that is from the offset, metres.
+        Where the nearest lattice point is off the lattice (out of the map's
+        regions) the point itself."""
+        shift = np.round(np.asarray(offset, dtype=float) / self.step).astype(np.int64)
+        residual = float(np.hypot(*(np.asarray(offset, dtype=float) - shift * self.step)))
+        cell = self._cell[rows] + shift
+        fits = np.all((cell >= 0) & (cell < np.array(self._row.shape)), axis=1)
+        out = np.array(rows, dtype=np.int64)
+        found = self._row[cell[fits, 0], cell[fits, 1]]
+        out[np.flatnonzero(fits)[found >= 0]] = found[found >= 0]
+        return out, residual
 
 
 class _Kept:

@@ -18,7 +18,7 @@ import numpy as np
 from matcher.search.structure.observed import Observed, observe
 from matcher.search.structure.peaks import Peaks, beside_best, best_peaks, refined
 from matcher.search.structure.profiles import grid_profiles
-from matcher.search.structure.score import score
+from matcher.search.structure.score import score_on_grid
 from matcher.search.structure.yaw import yaw_bins
 from matcher.tolerances import Tolerances
 
@@ -49,11 +49,12 @@ def rank_places(linemap, views, px: tuple | None, tol: Tolerances, count: int) -
     bins = grid.bins
     observed = observe(views, 2 * math.pi / bins)
     yaws = yaw_bins(observed, grid.directions, bins, px, tol.shared.yaw_peak_share)
-    profiles = grid.profiles
+    rows = np.arange(len(grid.profiles.points))
     if px is not None:
-        near = np.hypot(profiles.points[:, 0] - px[0], profiles.points[:, 1] - px[1]) <= px[3] + grid.step / math.sqrt(2)
-        profiles = profiles.take(np.flatnonzero(near))
-    scores, weights = score(profiles, observed, yaws, tol, yaw_slack=1)
+        pts = grid.profiles.points
+        rows = np.flatnonzero(np.hypot(pts[:, 0] - px[0], pts[:, 1] - px[1]) <= px[3] + grid.step / math.sqrt(2))
+    profiles = grid.profiles.take(rows)
+    scores, weights = score_on_grid(grid, rows, observed, yaws, tol, yaw_slack=1)
     angles = yaws * (2 * math.pi / bins)
     picks = best_peaks(scores, profiles.points, angles, count, tol.verdict.ambiguous_m,
                        math.radians(tol.verdict.ambiguous_deg))

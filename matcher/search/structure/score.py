@@ -34,6 +34,7 @@ block of samples at a time.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -49,11 +50,57 @@ def score(profiles: Profiles, observed: Observed, yaws: np.ndarray, tol, weights
     ``tol.model_m``; samples compared with all places in blocks of about
     ``MapIndexConstants.ray_chunk`` pairs (a work size); each vertical
     line's bearing widened by ``yaw_slack`` bins either way (yaws good to
-    that many bins)."""
+    that many bins). Every observation is taken as seen from the place
+    (the robot's centre), widened by the frame's lever."""
     vert, depth = shares(profiles, observed, yaws, tol, yaw_slack)
     if weights is None:
         weights = chance_weights(vert, depth)
-    return vert * np.float32(weights[0]) + depth * np.float32(weights[1]), weights
+    return _weighed(vert, depth, weights), weights
+
+
+def score_on_grid(grid, rows: np.ndarray, observed: Observed, yaws: np.ndarray, tol,
+                  yaw_slack: int = 0) -> tuple[np.ndarray, tuple]:
+    """``(scores (R, K) float32, weights)`` as :func:`score`'s for the
+    lattice points ``rows`` of ``grid`` (:class:`~.profiles.GridProfiles`)
+    at yaw bins ``yaws``, each mount group's observations compared with
+    the lattice point nearest its camera's place at each yaw (the rounding
+    taken as the group's lever: at most half the lattice's diagonal, none
+    for a camera at the robot's centre)."""
+    width = 2 * math.pi / grid.bins
+    vert = depth = 0
+    for g, (mx, my) in enumerate(observed.mounts):
+        part = observed.part(g)
+        if mx == 0.0 and my == 0.0:
+            v, d = _counts(grid.profiles.take(rows), part, yaws, tol, yaw_slack)
+        else:
+            v, d = np.zeros((len(rows), len(yaws)), np.float32), np.zeros((len(rows), len(yaws)), np.float32)
+            for j, k in enumerate(np.asarray(yaws, dtype=np.int64)):
+                c, s = math.cos(k * width), math.sin(k * width)
+                cols, residual = grid.shifted(rows, np.array([c * mx - s * my, s * mx + c * my]))
+                vk, dk = _counts(grid.profiles.take(cols), replace(part, lever=residual), yaws[j:j + 1], tol,
+                                 yaw_slack)
+                v[:, j], d[:, j] = vk[:, 0], dk[:, 0]
+        vert, depth = vert + v, depth + d
+    vert, depth = _normalised(vert, depth, observed)
+    weights = chance_weights(vert, depth)
+    return _weighed(vert, depth, weights), weights
+
+
+def score_by_mount(parts: list, observed: Observed, yaws: np.ndarray, tol, weights: tuple) -> np.ndarray:
+    """(P, K) float32 scores as :func:`score`'s, each mount group's
+    observations (``observed.part(g)``) compared with the profiles seen
+    from that group's own position: ``parts[g]`` the :class:`Profiles` of
+    the P places' camera positions of group ``g`` (no lever: bearings and
+    floor distances from each camera's own place)."""
+    vert = depth = 0
+    for g, profiles in enumerate(parts):
+        v, d = _counts(profiles, observed.part(g), yaws, tol, 0)
+        vert, depth = vert + v, depth + d
+    return _weighed(*_normalised(vert, depth, observed), weights)
+
+
+def _weighed(vert: np.ndarray, depth: np.ndarray, weights: tuple) -> np.ndarray:
+    return vert * np.float32(weights[0]) + depth * np.float32(weights[1])
 
 
 def chance_weights(vert: np.ndarray, depth: np.ndarray) -> tuple[float, float]:
@@ -68,6 +115,21 @@ def shares(profiles: Profiles, observed: Observed, yaws: np.ndarray, tol,
     """``(vertical, depth)`` (P, K) float32 each: the two shares of the
     module docstring, of each place at each yaw bin (vertical bearings
     widened by ``yaw_slack`` bins)."""
+    return _normalised(*_counts(profiles, observed, yaws, tol, yaw_slack), observed)
+
+
+def _normalised(vert: np.ndarray, depth: np.ndarray, observed: Observed) -> tuple[np.ndarray, np.ndarray]:
+    """The counts of :func:`_counts` as shares of the whole frame's vertical
+    lines and bearing bins seen."""
+    n_bins = float(observed.floor.weight.sum() + observed.ceiling.weight.sum())
+    return (vert / np.float32(max(len(observed.vertical), 1)), depth / np.float32(n_bins) if n_bins else depth)
+
+
+def _counts(profiles: Profiles, observed: Observed, yaws: np.ndarray, tol,
+            yaw_slack: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertical, depth)`` (P, K) float32: the vertical lines that meet an
+    edge in sight, and the weighted floor and ceiling samples that agree,
+    of each place at each yaw bin."""
     P, K, bins = len(profiles.points), len(yaws), profiles.bins
     vert_out = np.zeros((P, K), dtype=np.float32)
     out = np.zeros((P, K), dtype=np.float32)
@@ -78,16 +140,14 @@ def shares(profiles: Profiles, observed: Observed, yaws: np.ndarray, tol,
     block = max(1, tol.map_index.ray_chunk // P)
     vert = _vertical_terms(observed, width, bins, yaw_slack)
     floor, ceiling = _Terms(observed.floor, width, slack, block), _Terms(observed.ceiling, width, slack, block)
-    n_bins = floor.bins_seen + ceiling.bins_seen
     for j, k in enumerate(np.asarray(yaws, dtype=np.int64)):
         if vert is not None:
             lo, span = vert
             start = (k + lo) % bins
             hits = profiles.edge_cum[start + span + 1] > profiles.edge_cum[start]  # (J, P)
-            vert_out[:, j] = hits.mean(axis=0, dtype=np.float32)
-        if n_bins:
-            got = floor.hits(profiles.floor_inv, None, k) + ceiling.hits(profiles.ceiling_inv, profiles.ceiling_z, k)
-            out[:, j] = got / np.float32(n_bins)
+            vert_out[:, j] = hits.sum(axis=0, dtype=np.float32)
+        if len(floor.bin) or len(ceiling.bin):
+            out[:, j] = floor.hits(profiles.floor_inv, None, k) + ceiling.hits(profiles.ceiling_inv, profiles.ceiling_z, k)
     return vert_out, out
 
 
@@ -104,21 +164,16 @@ def _vertical_terms(observed: Observed, width: float, bins: int, yaw_slack: int)
 
 class _Terms:
     """One kind of samples (floor or ceiling) ready to score: each one's bin
-    at yaw 0, weight (one over its bin's samples), the tangent of its
+    at yaw 0, weight (:class:`~.observed.Samples`), the tangent of its
     elevation and its noise in tangent (the elevation's noise times the
-    tangent's derivative), the camera height; ``bins_seen`` the bins
-    holding samples; ``slack`` the position slack, metres; ``block`` how
-    many samples are compared with all places at once."""
+    tangent's derivative), the camera height; ``slack`` the position
+    slack, metres; ``block`` how many samples are compared with all
+    places at once."""
 
     def __init__(self, samples: Samples, width: float, slack: float, block: int) -> None:
         self.block = block
         self.bin = np.floor(samples.bearing / width).astype(np.int64)
-        self.bins_seen = 0
-        self.weight = np.zeros(0, np.float32)
-        if len(self.bin):
-            _, inverse, counts = np.unique(self.bin, return_inverse=True, return_counts=True)
-            self.weight = (1.0 / counts[inverse]).astype(np.float32)
-            self.bins_seen = len(counts)
+        self.weight = samples.weight.astype(np.float32)
         self.tan = np.tan(samples.elevation).astype(np.float32)[:, None]
         self.noise = (samples.eps / np.cos(samples.elevation) ** 2).astype(np.float32)[:, None]
         self.height = samples.height
