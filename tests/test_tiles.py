@@ -104,3 +104,30 @@ def test_a_tile_takes_every_segment_within_reach(office):
         ids = tile_segments(floor.segments, tile.bounds, floor.settings)
         near = np.nonzero(shapely.distance(lines, shapely.box(*tile.bounds)) <= reach(floor.settings))[0]
         assert np.isin(near, ids).all() and len(ids) < len(floor.segments)
+
+
+def test_a_failing_tile_is_named_with_its_place(office, monkeypatch):
+    import mapkit.tiles as tiles
+
+    floor = office[0.0]
+    plan = plan_tiles(floor.free_space, floor.settings, TILE_SIDE)
+
+    monkeypatch.setattr(tiles, "build_tile", lambda *a: (_ for _ in ()).throw(ZeroDivisionError("boom")))
+    with pytest.raises(tiles.TileFailed, match=r"tile 1 of 4 \(x -?\d+\.\d to -?\d+\.\d m, y .*\) failed: ZeroDivisionError: boom"):
+        build_regions_in_tiles(floor, plan)
+
+
+def test_the_memory_budget_chooses_one_piece_or_the_tile_side():
+    from shapely.geometry import box
+
+    from mapkit.errors import MapkitError
+    from mapkit.tiles import predicted_peak_mb, tile_side_for_budget
+
+    settings = RegionSettings()
+    assert tile_side_for_budget(box(0, 0, 50, 50), settings, 2000.0) is None  # an office of 10 x 10 rooms
+    side = tile_side_for_budget(box(0, 0, 200, 200), settings, 2000.0)
+    assert 2 * reach(settings) < side < 200
+    assert predicted_peak_mb((side + 2 * reach(settings)) ** 2) == pytest.approx(2000.0)
+    assert tile_side_for_budget(box(0, 0, 200, 200), settings, 500.0) < side
+    with pytest.raises(MapkitError, match="--memory-budget 150 MB is too small .* give at least"):
+        tile_side_for_budget(box(0, 0, 200, 200), settings, 150.0)
