@@ -716,12 +716,13 @@ REGION_BOUND_MIN_AREA_M2 = 150.0
 #: The region stage's peak memory, predicted before it runs to choose
 #: between one piece and tiles (``mapkit.tiles``): a fixed part, MB, and MB
 #: per m2 of free space it works on. Fitted on generated offices of 5 m
-#: rooms, one piece, ``mapkit build`` peak resident memory on 2 cores: 10 x
-#: 10 rooms (about 2,400 m2 of free space) 484 MB, 20 x 20 (9,600 m2) 1,694
-#: MB (issue 46's table, 8e7a635). A tile works on the free space within
-#: its segments' reach of its own square.
-REGION_PEAK_BASE_MB = 80.0
-REGION_PEAK_MB_PER_M2 = 0.17
+#: rooms, one piece, ``mapkit build`` peak resident memory on 2 cores
+#: (``tools/bench_tiles.py``, docs/benchmarks/tiles.md): 10 x 10 rooms
+#: (2,023 m2 of free space) 485 MB, 20 x 20 (8,130 m2) 1,669 MB; the line
+#: through them, rounded. A tile works on the free space within its
+#: segments' reach of its own square (checked on the tiles of 40 x 40 rooms).
+REGION_PEAK_BASE_MB = 90.0
+REGION_PEAK_MB_PER_M2 = 0.19
 
 #: The peak memory a build aims to stay under when ``--memory-budget`` is
 #: not given, MB: a floor predicted above it is built in tiles sized to it.
