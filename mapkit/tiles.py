@@ -230,6 +230,22 @@ def tile_segments(segments: np.ndarray, bounds: tuple, settings: RegionSettings)
     return np.union1d(near, np.asarray(sharing, dtype=np.int64))
 
 
+def _edges_near(occ, segs: np.ndarray, settings: RegionSettings):
+    """``occ`` with only the edges whose boxes meet the squares the sweep
+    looks at around the samples of ``segs`` (half-side ``max_range`` over
+    the cosine, plus 1 cm, as :mod:`mapkit.visibility` sweeps), in their
+    order: each sample's sweep sees the same edges in the same order, so
+    its polygon is the same bit for bit, and the sweep does not pay for the
+    whole floor's walls. ``geometry`` stays the whole floor's."""
+    from mapkit.visibility import Occluders
+
+    box = settings.max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01 + TILE_REACH_SLACK
+    lo = segs[:, :, :2].reshape(-1, 2).min(axis=0) - box
+    hi = segs[:, :, :2].reshape(-1, 2).max(axis=0) + box
+    keep = (occ.hi[:, 0] >= lo[0]) & (occ.lo[:, 0] <= hi[0]) & (occ.hi[:, 1] >= lo[1]) & (occ.lo[:, 1] <= hi[1])
+    return Occluders(occ.edges[keep], occ.lo[keep], occ.hi[keep], occ.geometry)
+
+
 def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> TileRegions:
     """The regions of one tile (see the module docstring), ``workers`` threads."""
     from linemap.camera import Camera
@@ -243,8 +259,8 @@ def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> Ti
         return TileRegions(tile.index, [], [], np.zeros(0, dtype=np.uint64), {"segments": 0, "quadtree_leaves": 0})
     camera = Camera.from_dict(floor.camera)
     sight = Sight(camera.height_m, camera.elevation_range(), settings.max_range, float(settings.min_visible_length))
-    sr = segment_regions_within(floor.segments[ids], Occluders.from_geometry(floor.occluders), sight,
-                                floor.free_space, workers=workers)
+    occ = _edges_near(Occluders.from_geometry(floor.occluders), floor.segments[ids], settings)
+    sr = segment_regions_within(floor.segments[ids], occ, sight, floor.free_space, workers=workers)
     grown = grow_regions(sr.regions, floor.free_space, settings.eps, workers)
     del sr
     release_memory()
