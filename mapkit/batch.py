@@ -228,27 +228,13 @@ def run_jobs(jobs: list[Job], options, *, workers: int | None = None, scheduler:
     one thread each (started here and stopped on return). ``on_result``
     is called with each result as it arrives (a bar over the tasks with
     ``progress``). Returns the results in the order of ``jobs``."""
-    import logging
-
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import as_completed
 
     if not jobs:
         return []
     cluster = None
     try:
-        if scheduler:
-            try:
-                client = Client(scheduler, timeout="10s")
-            except (OSError, TimeoutError) as exc:
-                raise MapkitError(f"--scheduler {scheduler}: cannot connect ({str(exc).splitlines()[0][:200]}); "
-                                  "check the address and that 'dask scheduler' runs there") from None
-        else:
-            # No dashboard; the scheduler's HTTP server (health checks) on a free port, not 8787,
-            # which another cluster on the machine may hold (distributed then warns on stderr).
-            cluster = LocalCluster(n_workers=workers or default_workers(len(jobs)), threads_per_worker=1,
-                                   processes=True, dashboard_address="127.0.0.1:0",
-                                   scheduler_kwargs={"dashboard": False}, silence_logs=logging.ERROR)
-            client = Client(cluster)
+        client, cluster = open_client(workers or default_workers(len(jobs)), scheduler)
         with client:
             # pure=False: a rerun after a failure builds again, never a result the cluster kept.
             futures = {client.submit(build_job, job, options, pure=False, key=f"build-{k}-{job.source.name}"): k
@@ -272,6 +258,28 @@ def run_jobs(jobs: list[Job], options, *, workers: int | None = None, scheduler:
     return results  # type: ignore[return-value]
 
 
+def open_client(workers: int, scheduler: str | None):
+    """``(client, cluster)``: a Dask client of the running cluster at
+    ``scheduler`` (cluster None), else of a local cluster of ``workers``
+    processes of one thread each, started here (the caller closes it).
+    MapkitError when the scheduler cannot be reached."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="10s"), None
+        except (OSError, TimeoutError) as exc:
+            raise MapkitError(f"--scheduler {scheduler}: cannot connect ({str(exc).splitlines()[0][:200]}); "
+                              "check the address and that 'dask scheduler' runs there") from None
+    # No dashboard; the scheduler's HTTP server (health checks) on a free port, not 8787,
+    # which another cluster on the machine may hold (distributed then warns on stderr).
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address="127.0.0.1:0",
+                           scheduler_kwargs={"dashboard": False}, silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
 def _bar(total: int, enabled: bool):
     if not enabled:
         return None
@@ -281,4 +289,4 @@ def _bar(total: int, enabled: bool):
 
 
 __all__ = ["BUG", "BUILT", "FAILED", "Job", "JobResult", "build_job", "default_workers", "is_up_to_date",
-           "plan_jobs", "run_jobs"]
+           "open_client", "plan_jobs", "run_jobs"]

@@ -19,6 +19,7 @@ from dataclasses import MISSING, asdict, dataclass, field, fields
 from mapkit.errors import MapkitError
 from mapkit.parallel import MAX_DEFAULT_JOBS, default_jobs
 from mapkit.tolerances import (
+    DEFAULT_MEMORY_BUDGET_MB,
     DXF_MAX_ENTITIES,
     MAX_FLOOR_AREA_M2,
     MAX_REGION_SECONDS_PER_100M2,
@@ -203,6 +204,16 @@ class BuildOptions:
         help="threads for the region stage's geometry work (default {default}: the cores available, at most "
              f"{MAX_DEFAULT_JOBS}; 1: one thread); the map is the same byte for byte")
 
+    # ---- tiles (not recorded as options: the map's META records the tiling) ----
+    memory_budget: float = option(
+        DEFAULT_MEMORY_BUDGET_MB, group="", metavar="MB", allowed=Range(0.0, lo_open=True, unit="MB"),
+        help="peak memory the region stage aims to stay under, MB (default {default}): a floor predicted above it "
+             "is built in tiles sized to it (docs/tiles.md); smaller floors in one piece, as always")
+    tile_side: float | None = option(
+        None, group="", metavar="M", allowed=POSITIVE_M,
+        help="build the region stage in tiles of at most this side, metres, whatever the floor's size "
+             "(default: none, or what --memory-budget needs)")
+
     def __post_init__(self):
         self.validate()
 
@@ -229,7 +240,7 @@ class BuildOptions:
         """JSON-able record of every option that shapes the map (stored in
         it); the limits of work are left out."""
         d = asdict(self)
-        for name in LIMITS:
+        for name in LIMITS + TILING:
             d.pop(name)
         for name in RECORDED_WHEN_SET:
             if d[name] is None or d[name] is False:
@@ -239,6 +250,10 @@ class BuildOptions:
 
 #: Fields of :class:`BuildOptions` that bound the work rather than shape the map.
 LIMITS = ("max_entities", "max_floor_area", "max_region_seconds_per_100m2", "jobs")
+#: Fields of :class:`BuildOptions` that choose one piece or tiles: left out of
+#: the recorded options (a floor built in one piece keeps its bytes); a tiled
+#: map records the tiling it was built with in META ``stats.regions``.
+TILING = ("memory_budget", "tile_side")
 #: Flags no longer taken: each with the field that replaced it (the flag is
 #: taken where that field's is) and the one-line error that names it.
 RETIRED_FLAGS = {
@@ -289,6 +304,8 @@ def _check_field(f, value) -> None:
         raise OptionError(f, f"must be a camera.json object, got {value!r}")
     elif kind == "list[str]" and not (isinstance(value, list) and all(isinstance(v, str) for v in value)):
         raise OptionError(f, f"must be a list of layer names or globs, got {value!r}")
+    elif kind == "float | None" and not (value is None or (isinstance(value, (int, float)) and not isinstance(value, bool))):
+        raise OptionError(f, f"must be a number, got {value!r}")
     elif kind == "int | None" and not (value is None or (isinstance(value, int) and not isinstance(value, bool))):
         raise OptionError(f, f"must be an integer, got {value!r}")
     elif kind in ("str", "str | None") and not (isinstance(value, str) or (value is None and kind != "str")):

@@ -56,8 +56,11 @@ class BuildReport:
     warnings: list[str] = field(default_factory=list)
 
 
-def build_map(plan: str | Path, options: BuildOptions | None = None, progress: bool = False) -> tuple[LineMap, BuildReport]:
-    """Run the whole pipeline on a DXF plan or a mesh; nothing is written."""
+def build_map(plan: str | Path, options: BuildOptions | None = None, progress: bool = False,
+              runner=None) -> tuple[LineMap, BuildReport]:
+    """Run the whole pipeline on a DXF plan or a mesh; nothing is written.
+    ``runner`` (:class:`mapkit.tile_runner.DaskTiles`; None: this process)
+    runs the tiles of a floor built in tiles."""
     from mapkit.importers import load_scene
 
     options = options or BuildOptions()
@@ -66,18 +69,17 @@ def build_map(plan: str | Path, options: BuildOptions | None = None, progress: b
     t = time.perf_counter()
     with step("import", progress):
         scene = load_scene(plan, options)
-    return build_map_of_scene(scene, plan, options, progress, import_seconds=time.perf_counter() - t)
+    return build_map_of_scene(scene, plan, options, progress, import_seconds=time.perf_counter() - t, runner=runner)
 
 
 def build_map_of_scene(scene, plan: str | Path, options: BuildOptions | None = None, progress: bool = False,
-                       import_seconds: float = 0.0) -> tuple[LineMap, BuildReport]:
+                       import_seconds: float = 0.0, runner=None) -> tuple[LineMap, BuildReport]:
     """The pipeline from an imported ``scene`` of the file ``plan`` (named
     and hashed in the map's META): edges, regions, the map; nothing is
     written. One scene of a file with several (a building's storeys)."""
     from linemap.camera import Camera
 
     from mapkit.edges import extract_edges
-    from mapkit.vir import RegionSettings, build_regions
 
     options = options or BuildOptions()
     options.validate()
@@ -101,8 +103,7 @@ def build_map_of_scene(scene, plan: str | Path, options: BuildOptions | None = N
 
     _check_region_time(segments, scene, options, plan)
     t = time.perf_counter()
-    part = build_regions(segments, scene.walls, scene.free_space, camera, RegionSettings.from_options(options),
-                         progress=progress, workers=options.jobs)
+    part = _build_regions(segments, scene, camera, options, progress, runner)
     report.seconds["regions"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -130,9 +131,29 @@ def build_map_of_scene(scene, plan: str | Path, options: BuildOptions | None = N
     with step("assemble", progress):
         linemap = assemble_map(segments, kinds, polygons, lists, scene.walls, meta)
     report.seconds["assemble"] = time.perf_counter() - t
-    report.counts = counts
+    report.counts = {**counts, "tiles": part.stats["tiles"]} if "tiles" in part.stats else counts
     report.warnings = list(scene.info.get("warnings", []))
     return linemap, report
+
+
+def _build_regions(segments: np.ndarray, scene, camera, options: BuildOptions, progress: bool, runner):
+    """The region stage: in one piece (:func:`mapkit.vir.build_regions`), or
+    in tiles (:mod:`mapkit.tiles`) when ``options.tile_side`` is set or the
+    floor's predicted peak memory is past ``options.memory_budget``."""
+    from mapkit.tiles import Floor, build_regions_in_tiles, plan_tiles, tile_side_for_budget
+    from mapkit.vir import RegionSettings, build_regions
+
+    settings = RegionSettings.from_options(options)
+    side = options.tile_side
+    if side is None:
+        side = tile_side_for_budget(scene.free_space, settings, options.memory_budget)
+    if side is None:
+        return build_regions(segments, scene.walls, scene.free_space, camera, settings, progress=progress,
+                             workers=options.jobs)
+    plan = plan_tiles(scene.free_space, settings, side)
+    log.info("region stage in %d tiles of %.1f m", len(plan.tiles), plan.side)
+    floor = Floor(np.asarray(segments, dtype=float), scene.walls, scene.free_space, camera.to_dict(), settings)
+    return build_regions_in_tiles(floor, plan, runner, progress, options.jobs)
 
 
 def _check_floor(free_space, options: BuildOptions, plan: Path) -> None:

@@ -722,6 +722,35 @@ MAX_FLOOR_AREA_M2 = 250_000.0
 MAX_REGION_SECONDS_PER_100M2 = 10.0
 REGION_BOUND_MIN_AREA_M2 = 150.0
 
+#: The region stage's peak memory, predicted before it runs to choose
+#: between one piece and tiles (``mapkit.tiles``): a fixed part, MB, and MB
+#: per m2 of free space it works on. Fitted on generated offices of 5 m
+#: rooms, one piece, ``mapkit build`` peak resident memory on 2 cores
+#: (``tools/bench_tiles.py``, docs/benchmarks/tiles.md): 10 x 10 rooms
+#: (2,023 m2 of free space) 485 MB, 20 x 20 (8,130 m2) 1,669 MB; the line
+#: through them, rounded. A tile works on the free space within its
+#: segments' reach of its own square (checked on the tiles of 40 x 40 rooms).
+REGION_PEAK_BASE_MB = 90.0
+REGION_PEAK_MB_PER_M2 = 0.19
+
+#: The peak memory a build aims to stay under when ``--memory-budget`` is
+#: not given, MB: a floor predicted above it is built in tiles sized to it.
+#: A fixed figure, not read from the machine, so that a plan and its options
+#: give the same map on every machine; 2 GB runs on a laptop, and on a
+#: 2-worker local cluster of a 8 GB one.
+DEFAULT_MEMORY_BUDGET_MB = 2000.0
+
+#: Tiles narrower than this many times the segments' reach (``max_range``
+#: plus the region growth) are not made: each tile sweeps every segment
+#: within reach of it, so a tile that narrow does (1 + 2 / this)^2 = 9 times
+#: its own share of the work. A budget that needs narrower tiles is refused.
+TILE_MIN_SIDE_PER_REACH = 1.0
+
+#: Added to a tile's reach, metres: a segment farther than the reach from
+#: the tile cannot be listed in it, up to the overlay grid (``OVERLAY_GRID``)
+#: and float noise; 1 cm is far more than both.
+TILE_REACH_SLACK = 0.01
+
 #: The region stage's predicted seconds (``mapkit.region_cost``): per sight
 #: test (a sample point against an occluder edge within --max-range of it),
 #: per vertex of a sample point's visibility polygon (the overlays that

@@ -466,7 +466,46 @@ def _node_lists(dec_node: list, dec_seg: list, n_nodes: int) -> tuple[np.ndarray
     return node_ptr, node_segs
 
 
-def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False, workers: int = 1) -> Leaves:
+@dataclass(frozen=True)
+class QuadRoots:
+    """Where a quadtree starts when it covers part of a floor (a tile,
+    :mod:`mapkit.tiles`): the whole floor's frame (``depth``, ``size``,
+    ``origin`` of :func:`_quadtree_frame`) and the cells ``ix``, ``iy`` (C,)
+    int64 of ``level`` it starts from. The cells, their boxes and the tests
+    on them are those of the whole floor's tree, bit for bit."""
+
+    depth: int
+    size: float
+    origin: np.ndarray
+    level: int
+    ix: np.ndarray
+    iy: np.ndarray
+
+
+def quadtree_roots(free_space, min_cell: float) -> QuadRoots:
+    """The one root of the whole floor's quadtree (level 0)."""
+    depth, size, origin = _quadtree_frame(free_space, min_cell)
+    return QuadRoots(depth, size, origin, 0, np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64))
+
+
+def _root_level(grown: np.ndarray, roots: QuadRoots) -> _Level:
+    """The first level of a tree starting at ``roots``: one node per root
+    cell, each paired with every region whose box meets the cell's."""
+    s = roots.size / 2.0**roots.level
+    bx, by = roots.origin[0] + roots.ix * s, roots.origin[1] + roots.iy * s
+    tree = shapely.STRtree(grown)
+    if roots.level == 0:  # the whole floor's square, as it has always been asked
+        ps = tree.query(shapely.box(bx[0], by[0], bx[0] + s, by[0] + s))
+        pc = np.zeros(len(ps), dtype=np.int32)
+    else:
+        pc, ps = tree.query(shapely.box(bx, by, bx + s, by + s))
+    n = len(roots.ix)
+    return _Level(roots.ix.astype(np.int64), roots.iy.astype(np.int64), np.arange(n, dtype=np.int64),
+                  pc.astype(np.int32), ps.astype(np.int32), np.zeros(len(ps), dtype=bool))
+
+
+def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bool = False, workers: int = 1,
+                    roots: QuadRoots | None = None) -> Leaves:
     """Subdivide until each cell's list is decided (see the module docstring).
 
     Per level, every still-undecided (cell, segment) pair is tested at once
@@ -478,23 +517,25 @@ def quadtree_leaves(grown: np.ndarray, free_space, min_cell: float, progress: bo
     segment's region held the parent's centre (a corner of the child) meets
     it without a test. What a cell is covered by is stored once, at that
     cell (:class:`Leaves`). The pair tests run in ``workers`` threads.
+
+    ``roots`` (None: the whole floor's one root) starts the tree at some
+    cells of the whole floor's tree instead (a tile): their leaves are
+    those of the whole floor's tree within them, with the same lists (a
+    leaf of the whole tree larger than a root cell comes out cut along it).
     """
     from tqdm import tqdm
 
-    depth, size, origin = _quadtree_frame(free_space, min_cell)
+    roots = roots or quadtree_roots(free_space, min_cell)
+    depth, size, origin = roots.depth, roots.size, roots.origin
     free = free_space
     shapely.prepare(free)
 
-    tree = shapely.STRtree(grown)
-    ps = tree.query(shapely.box(origin[0], origin[1], origin[0] + size, origin[1] + size)).astype(np.int32)
-    cells = _Level(np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64),
-                   np.zeros(len(ps), dtype=np.int32), ps, np.zeros(len(ps), dtype=bool))
-    del ps
-    parents = [np.full(1, -1, dtype=np.int64)]
-    n_nodes = 1
+    cells = _root_level(grown, roots)
+    parents = [np.full(len(cells.node), -1, dtype=np.int64)]
+    n_nodes = len(cells.node)
     out_level, out_ix, out_iy, out_node = [], [], [], []
     dec_node, dec_seg = [], []
-    for lev in tqdm(range(depth + 1), desc="region quadtree", disable=not progress, leave=False):
+    for lev in tqdm(range(roots.level, depth + 1), desc="region quadtree", disable=not progress, leave=False):
         cells, decided, done = _decide_level(cells, grown, free, (origin, size / 2.0**lev), lev == depth, workers)
         dec_node.append(decided[0])
         dec_seg.append(decided[1])
@@ -864,7 +905,8 @@ def leaf_squares(leaves: Leaves) -> np.ndarray:
 
 def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_space, n_segments: int, workers: int = 1):
     """Outlines (union of each region's leaf squares, cut to the free space),
-    lists, and the Morton order used. Regions left empty by the cut are dropped.
+    lists, and each region's Morton key (R,) uint64, in which order they
+    come. Regions left empty by the cut are dropped.
 
     Squares are unioned with GEOS's coverage union (see :func:`leaf_squares`),
     collinear grid vertices are dropped, then the free space, clipped to the
@@ -892,16 +934,17 @@ def region_geometry(leaves: Leaves, group: np.ndarray, bits: list[int], free_spa
         return polygonal(shapely.intersection(merged, polygonal(local)))
 
     cut = map_chunks(outline, [np.arange(n_groups)], workers)
-    polygons, lists = [], []
+    polygons, lists, keys = [], [], []
     ids = np.arange(n_segments)
     for g in order:
         parts = [p for p in polygon_parts(cut[g]) if p.area > 0]
         if not parts:
             continue
+        keys.append(first_key[g])
         polygons.append(parts[0] if len(parts) == 1 else shapely.MultiPolygon(parts))
         row = np.frombuffer(bits[g].to_bytes((n_segments + 7) // 8, "little"), dtype=np.uint8)
         lists.append(ids[np.unpackbits(row, count=n_segments, bitorder="little").astype(bool)].astype(np.int64))
-    return polygons, lists, order
+    return polygons, lists, np.array(keys, dtype=np.uint64)
 
 
-__all__ = ["Leaves", "RegionPartition", "RegionSettings", "build_regions", "grow_regions", "merge_leaves", "quadtree_leaves", "region_geometry"]
+__all__ = ["Leaves", "RegionPartition", "RegionSettings", "build_regions", "grow_regions", "merge_leaves", "quadtree_leaves", "quadtree_roots", "region_geometry", "QuadRoots"]

@@ -251,3 +251,18 @@ def test_the_command_exits_3_on_a_bug_and_2_on_bad_input(monkeypatch, capsys, in
     monkeypatch.setattr(batch, "run_jobs", results(batch.FAILED, "flat.dxf: no walls"))
     code, out, err = run(capsys, "build", *plans, "-o", tmp_path / "b")
     assert code == 2 and "failed 2 of 2 inputs" in out
+
+
+@pytest.mark.slow
+def test_tiles_of_one_floor_on_a_real_cluster_give_the_local_build(capsys, inputs, cluster, tmp_path):
+    """One floor built in tiles (--tile-side) as tasks on the cluster: the
+    map of the tiles built one after the other in this process."""
+    from linemap.lmap import load_map
+
+    args = [inputs / "office2.dxf", "--tile-side", "6", "--max-range", "4", "-q"]
+    code, _, err = run(capsys, "build", *args, "-o", tmp_path / "here.lmap")
+    assert code == 0, err
+    code, _, err = run(capsys, "build", *args, "-o", tmp_path / "cluster.lmap", "--scheduler", cluster)
+    assert code == 0, err
+    assert (tmp_path / "cluster.lmap").read_bytes() == (tmp_path / "here.lmap").read_bytes()
+    assert load_map(tmp_path / "here.lmap").meta["stats"]["regions"]["tiles"] == 4

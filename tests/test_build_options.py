@@ -26,7 +26,7 @@ from mapkit.options import (
 
 #: A valid value other than the default, per field type (as typed on the
 #: command line, and as the field then holds it).
-ARGV_VALUE = {"bool": (None, True), "float": ("0.35", 0.35), "int": ("3", 3), "int | None": ("2", 2), "str | None": ("cm", "cm"), "list[str]": ("A*", ["A*"])}
+ARGV_VALUE = {"bool": (None, True), "float": ("0.35", 0.35), "int": ("3", 3), "int | None": ("2", 2), "float | None": ("12.5", 12.5), "str | None": ("cm", "cm"), "list[str]": ("A*", ["A*"])}
 #: Fields whose sample value the generic one does not fit.
 SPECIAL = {"floor_name": ("floor_02", "floor_02"), "up": ("y", "y"), "max_entities": ("500", 500),
            "wall_height": ("3.5", 3.5), "window_sill": ("0.5", 0.5), "window_head": ("2.2", 2.2),

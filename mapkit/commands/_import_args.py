@@ -17,7 +17,7 @@ from mapkit.errors import MapkitError
 from mapkit.options import IMPORT_GROUPS, RETIRED_FLAGS, BuildOptions, OptionError, flags_of
 
 #: argparse ``type`` of each field type that takes a value.
-_PARSERS = {"float": float, "int": int, "int | None": int, "str": str, "str | None": str}
+_PARSERS = {"float": float, "float | None": float, "int": int, "int | None": int, "str": str, "str | None": str}
 
 
 def output_file(path, suffixes, inputs=()) -> Path:

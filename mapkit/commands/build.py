@@ -23,14 +23,16 @@ def add_arguments(p) -> None:
                    help="map file to write; for an IFC model of several storeys a folder: DIR/<storey>.lmap and "
                         "DIR/building.json (--storey NAME with OUT.lmap: that storey); for several inputs a folder "
                         "(made if missing): DIR/<stem>.lmap per plan, DIR/<stem>/ per IFC model")
-    g = p.add_argument_group("many inputs at once (Dask; pip install 'mapkit[dask]')")
+    g = p.add_argument_group("many inputs, or a large floor's tiles, at once (Dask; pip install 'mapkit[dask]')")
     where = g.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, metavar="N",
                        help="worker processes of a local Dask cluster, one build each at a time (default: the "
-                            "cores available, at most one per input)")
+                            "cores available, at most one per input); with one input and -o OUT.lmap, one tile of a "
+                            "floor built in tiles (--memory-budget) each")
     where.add_argument("--scheduler", metavar="ADDRESS",
-                       help="run the builds on the running Dask cluster at ADDRESS (tcp://HOST:PORT); its "
-                            "workers must see the inputs and DIR at the same paths")
+                       help="run the builds (with one input and -o OUT.lmap: its tiles) on the running Dask "
+                            "cluster at ADDRESS (tcp://HOST:PORT); its workers must see the inputs and DIR at the "
+                            "same paths")
     add_import_arguments(p)
     cam = default_camera()
     g = p.add_argument_group("camera (what 'visible' means)")
@@ -99,22 +101,41 @@ def run(args) -> int:
     from mapkit.pipeline import build_map
 
     options = options_from_args(args)
-    if len(args.plans) > 1 or args.workers is not None or args.scheduler is not None:
+    one_map = len(args.plans) == 1 and args.output.lower().endswith(".lmap")
+    if not one_map and (len(args.plans) > 1 or args.workers is not None or args.scheduler is not None):
         return _run_batch(args, options)
     args.plan = args.plans[0]
     if _is_building(args):
         return _run_building(args, options)
     out = output_file(args.output, (".lmap",), [args.plan])
-    linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty())
+    linemap, report = build_map(args.plan, options, progress=not args.quiet and sys.stderr.isatty(),
+                                runner=_tile_runner(args))
     size = save_map(out, linemap)
     if not args.quiet:
         c = report.counts
         t = " ".join(f"{k} {v:.2f}s" for k, v in report.seconds.items())
+        tiles = f", regions in {c['tiles']} tiles" if "tiles" in c else ""
         print(
             f"wrote {out}: {c['segments']} segments, {c['regions']} regions, "
-            f"mean list {c['mean_list_length']:.1f}, {size / 1024:.1f} KiB  ({t})"
+            f"mean list {c['mean_list_length']:.1f}, {size / 1024:.1f} KiB{tiles}  ({t})"
         )
     return 0
+
+
+def _tile_runner(args):
+    """One map with --workers or --scheduler: its tiles (if it is built in
+    tiles) as Dask tasks; None: in this process."""
+    if args.workers is None and args.scheduler is None:
+        return None
+    if args.workers is not None and args.workers < 1:
+        raise MapkitError(f"--workers must be at least 1, got {args.workers}")
+    try:
+        import distributed  # noqa: F401 - only to say what to install
+    except ImportError:
+        raise MapkitError("--workers and --scheduler need Dask: pip install 'mapkit[dask]'") from None
+    from mapkit.tile_runner import DaskTiles
+
+    return DaskTiles(args.workers, args.scheduler)
 
 
 def _is_building(args) -> bool:

@@ -1,0 +1,82 @@
+"""The tiles of one floor (:mod:`mapkit.tiles`) as Dask tasks:
+``mapkit build PLAN -o OUT.lmap --workers N`` (a local cluster of N
+processes) or ``--scheduler ADDRESS`` (a running cluster), the options of
+the batch builds (:mod:`mapkit.batch`).
+
+The floor (segments, walls, free space, camera, settings) and the tiling
+are sent to every worker once; each task builds one tile
+(:func:`mapkit.tiles.build_tile`, one thread) and sends back its regions.
+The tiles' results are put together in the tiles' order, so the map is the
+same byte for byte however the tasks were scheduled, and the same as a
+build of the tiles in one process. A tile that fails stops the build, named
+with its place. Dask is imported only here.
+"""
+
+from __future__ import annotations
+
+import uuid
+from dataclasses import dataclass
+
+from mapkit.errors import MapkitError
+
+
+@dataclass(frozen=True)
+class DaskTiles:
+    """Where the tiles run: a local cluster of ``workers`` processes (None:
+    one per core available, at most one per tile), or the running cluster
+    at ``scheduler``."""
+
+    workers: int | None = None
+    scheduler: str | None = None
+
+    def run(self, floor, plan, progress: bool = False) -> list:
+        """Every tile of ``plan`` built on the cluster: their
+        :class:`~mapkit.tiles.TileRegions`, in tile order; a bar over the
+        tiles with ``progress``. MapkitError (bad input) or
+        :class:`~mapkit.tiles.TileFailed` naming the first tile that failed."""
+        from distributed import as_completed
+
+        from mapkit.batch import default_workers, open_client
+        from mapkit.tiles import TileFailed, build_tile
+
+        n = len(plan.tiles)
+        client, cluster = open_client(self.workers or default_workers(n), self.scheduler)
+        run = uuid.uuid4().hex[:8]  # keys of this build only, on a cluster that may hold others'
+        try:
+            with client:
+                floor_f, plan_f = client.scatter([floor, plan], broadcast=True)
+                futures = {client.submit(build_tile, floor_f, plan_f, tile, 1, pure=False,
+                                         key=f"tile-{run}-{tile.index}"): tile for tile in plan.tiles}
+                results = [None] * n
+                bar = _bar(n, progress)
+                try:
+                    for future in as_completed(futures):
+                        tile = futures[future]
+                        try:
+                            results[tile.index] = future.result()
+                        except MapkitError as exc:
+                            raise MapkitError(f"tile {tile.index + 1} of {n} ({tile.place()}): {exc}") from None
+                        except Exception as exc:
+                            raise TileFailed(tile, n, exc) from exc
+                        if bar is not None:
+                            bar.update(1)
+                finally:
+                    if bar is not None:
+                        bar.close()
+                    for future in futures:
+                        future.cancel()
+        finally:
+            if cluster is not None:
+                cluster.close()
+        return results
+
+
+def _bar(total: int, enabled: bool):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="tiles", unit="tile", leave=False)
+
+
+__all__ = ["DaskTiles"]
