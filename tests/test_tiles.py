@@ -18,16 +18,16 @@ from mapkit_harness.plans.drawings import office_grid
 
 #: A short sight range keeps tiles of a few metres meaningful (a tile
 #: computes every segment within reach) and the test quick.
-RANGE = 4.0
-TILE_SIDE = 8.0
+RANGE = 3.0
+TILE_SIDE = 6.0
 
 
 @pytest.fixture(scope="module")
 def office(tmp_path_factory):
-    """A 3 x 3 office of 5 m rooms: its floor (segments, walls, free space,
+    """A 2 x 2 office of 5 m rooms: its floor (segments, walls, free space,
     camera) at merge growth 0 and at the default."""
     path = tmp_path_factory.mktemp("tiles") / "office.dxf"
-    office_grid(path, n=3)
+    office_grid(path, n=2)
     options = BuildOptions()
     scene = load_scene(path, options)
     segments, _ = extract_edges(scene, options)
@@ -89,7 +89,7 @@ def test_merged_tiles_keep_every_leaf_list_and_the_region_count(office, builds):
     leaf = _lists_at(exact.polygons, exact.lists, pts)
     merged = _lists_at(merged_tiles.polygons, merged_tiles.lists, pts)
     assert all(np.isin(leaf[k], merged[k]).all() for k in range(len(pts)) if leaf[k] is not None)
-    # Tiles of 8 m on a floor of 15 m: the borders cut a large share of the
+    # Tiles of 6 m on a floor of 10 m: the borders cut a large share of the
     # regions here (10 % more measured); at real tile sizes, a few per cent.
     assert abs(len(merged_tiles.polygons) - len(merged_one.polygons)) <= 0.15 * len(merged_one.polygons)
     ratio = merged_tiles.stats["mean_list_length"] / merged_one.stats["mean_list_length"]
