@@ -56,9 +56,11 @@ LIGHT_DEG = 20.0
 #: Sigma of the Gaussian blur of a rendered panorama, pixels.
 BLUR_PX = 0.6
 #: Column blocks a panorama and a view are cast in (each against the walls in
-#: its bearings; more blocks, fewer walls per ray, more passes).
-_PANO_BLOCKS = 48
-_VIEW_BLOCKS = 64
+#: its bearings; more blocks, fewer walls per ray, more passes). The image
+#: is the same for any count; these were the fastest on the example flat
+#: (a view 15 % and a panorama 37 % less CPU than at 64 and 48 blocks).
+_PANO_BLOCKS = 96
+_VIEW_BLOCKS = 160
 #: Pixels cast per batch (bounds the (pixels, walls) arrays).
 _CHUNK = 65536
 
