@@ -17,8 +17,6 @@ from __future__ import annotations
 import uuid
 from dataclasses import dataclass
 
-from mapkit.errors import MapkitError
-
 
 @dataclass(frozen=True)
 class DaskTiles:
@@ -35,9 +33,10 @@ class DaskTiles:
         tiles with ``progress``. MapkitError (bad input) or
         :class:`~mapkit.tiles.TileFailed` naming the first tile that failed."""
         from distributed import as_completed
+        from tqdm import tqdm
 
         from mapkit.batch import default_workers, open_client
-        from mapkit.tiles import TileFailed, build_tile
+        from mapkit.tiles import build_tile, tile_error
 
         n = len(plan.tiles)
         client, cluster = open_client(self.workers or default_workers(n), self.scheduler)
@@ -48,35 +47,22 @@ class DaskTiles:
                 futures = {client.submit(build_tile, floor_f, plan_f, tile, 1, pure=False,
                                          key=f"tile-{run}-{tile.index}"): tile for tile in plan.tiles}
                 results = [None] * n
-                bar = _bar(n, progress)
                 try:
-                    for future in as_completed(futures):
-                        tile = futures[future]
-                        try:
-                            results[tile.index] = future.result()
-                        except MapkitError as exc:
-                            raise MapkitError(f"tile {tile.index + 1} of {n} ({tile.place()}): {exc}") from None
-                        except Exception as exc:
-                            raise TileFailed(tile, n, exc) from exc
-                        if bar is not None:
+                    with tqdm(total=n, desc="tiles", unit="tile", disable=not progress, leave=False) as bar:
+                        for future in as_completed(futures):
+                            tile = futures[future]
+                            try:
+                                results[tile.index] = future.result()
+                            except Exception as exc:
+                                raise tile_error(tile, n, exc) from exc
                             bar.update(1)
                 finally:
-                    if bar is not None:
-                        bar.close()
                     for future in futures:
                         future.cancel()
         finally:
             if cluster is not None:
                 cluster.close()
         return results
-
-
-def _bar(total: int, enabled: bool):
-    if not enabled:
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc="tiles", unit="tile", leave=False)
 
 
 __all__ = ["DaskTiles"]

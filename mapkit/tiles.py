@@ -314,12 +314,19 @@ def run_here(floor: Floor, plan: TilePlan, progress: bool, workers: int) -> list
     for tile in tqdm(plan.tiles, desc="tiles", unit="tile", disable=not progress, leave=False):
         try:
             out.append(build_tile(floor, plan, tile, workers))
-        except MapkitError as exc:
-            raise MapkitError(f"tile {tile.index + 1} of {len(plan.tiles)} ({tile.place()}): {exc}") from exc
         except Exception as exc:
-            raise TileFailed(tile, len(plan.tiles), exc) from exc
+            raise tile_error(tile, len(plan.tiles), exc) from exc
         release_memory()
     return out
+
+
+def tile_error(tile: Tile, n_tiles: int, exc: Exception) -> Exception:
+    """What a tile's failure is reported as: bad input (MapkitError) stays
+    bad input, named with the tile's place; anything else is
+    :class:`TileFailed` (a bug)."""
+    if isinstance(exc, MapkitError):
+        return MapkitError(f"tile {tile.index + 1} of {n_tiles} ({tile.place()}): {exc}")
+    return TileFailed(tile, n_tiles, exc)
 
 
 class TileFailed(RuntimeError):
@@ -331,4 +338,5 @@ class TileFailed(RuntimeError):
 
 
 __all__ = ["Floor", "Tile", "TileFailed", "TilePlan", "TileRegions", "build_regions_in_tiles", "build_tile",
-           "join_tiles", "plan_tiles", "predicted_peak_mb", "reach", "tile_segments", "tile_side_for_budget"]
+           "join_tiles", "plan_tiles", "predicted_peak_mb", "reach", "tile_error", "tile_segments",
+           "tile_side_for_budget"]

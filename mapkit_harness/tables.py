@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import platform
 import shlex
@@ -169,3 +170,14 @@ def reported(path: str | os.PathLike | None, run: Callable[[], int], script: str
                      + tee.kept.getvalue().rstrip("\n") + "\n")
         print(f"report: {path}", file=sys.stderr)
     return code
+
+
+def row_from_child(cmd: Sequence[str]) -> dict:
+    """A benchmark's row measured in a fresh interpreter (``cmd``, whose
+    last line of output is the row as JSON), so that its peak memory is its
+    own; a failed child raises RuntimeError with its last line."""
+    done = subprocess.run(list(cmd), capture_output=True, text=True)
+    if done.returncode != 0:
+        lines = (done.stderr or done.stdout).strip().splitlines()
+        raise RuntimeError(lines[-1] if lines else f"exit status {done.returncode}")
+    return json.loads(done.stdout.strip().splitlines()[-1])

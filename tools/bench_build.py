@@ -23,13 +23,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from mapkit_harness.tables import Table, add_report_option, reported
+from mapkit_harness.tables import Table, add_report_option, reported, row_from_child
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -105,11 +104,7 @@ def run_case(path: Path, extra: list[str], load_repeats: int) -> dict:
 def run_in_child(path: Path, extra: list[str], load_repeats: int) -> dict:
     """:func:`run_case` in a fresh interpreter, so that its peak memory is its own."""
     cmd = [sys.executable, __file__, "--child", str(path), "--load-repeats", str(load_repeats), "--", *extra]
-    done = subprocess.run(cmd, capture_output=True, text=True)
-    if done.returncode != 0:
-        lines = (done.stderr or done.stdout).strip().splitlines()
-        raise RuntimeError(lines[-1] if lines else f"exit status {done.returncode}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return row_from_child(cmd)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,13 +21,12 @@ import json
 import os
 import resource
 import shlex
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from mapkit_harness.tables import Table, add_report_option, reported
+from mapkit_harness.tables import Table, add_report_option, reported, row_from_child
 
 #: (rooms per side, extra ``mapkit build`` options): one piece is forced by a
 #: budget no floor reaches; tiles by the default budget (2000 MB) or a smaller one.
@@ -72,11 +71,7 @@ def child(plan: Path, options: list[str]) -> dict:
 
 def run_row(plan: Path, options: str) -> dict:
     cmd = [sys.executable, __file__, "--child", str(plan), "--", *shlex.split(options)]
-    done = subprocess.run(cmd, capture_output=True, text=True)
-    if done.returncode != 0:
-        lines = (done.stderr or done.stdout).strip().splitlines()
-        raise RuntimeError(lines[-1] if lines else f"exit status {done.returncode}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return row_from_child(cmd)
 
 
 def main(argv: list[str] | None = None) -> int:

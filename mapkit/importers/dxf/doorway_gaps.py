@@ -42,7 +42,7 @@ def doorway_gaps(strokes: list, extent: float) -> np.ndarray:
         return np.zeros(0)
     touch = GAP_UNITS_TOUCH_SHARE * extent
     reach = GAP_UNITS_REACH_SHARE * extent
-    a, b, stroke_of = _segments(strokes, touch)
+    a, b, stroke_of = stroke_pieces(strokes, touch)
     if not len(a):
         return np.zeros(0)
     tree = shapely.STRtree(shapely.linestrings(np.stack([a, b], axis=1)))
@@ -66,7 +66,7 @@ def wall_doorway_gaps(walls: list) -> np.ndarray:
     return doorway_gaps(walls, float((points.max(axis=0) - points.min(axis=0)).max()))
 
 
-def _segments(strokes: list, touch: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stroke_pieces(strokes: list, touch: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The straight pieces ``a -> b`` (each (N, 2)) of the ``strokes``,
     those no longer than ``touch`` left out, and the index of the stroke
     each belongs to (N,)."""

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from mapkit.importers.dxf.doorway_gaps import stroke_pieces
 from mapkit.tolerances import GAP_UNITS_NEIGHBOURS, GAP_UNITS_REACH_SHARE, GAP_UNITS_TOUCH_SHARE, WALL_CAP_ANGLE_DEG
 
 
@@ -32,15 +33,8 @@ def wall_thickness(strokes: list) -> float | None:
     """The typical distance between the two lines of the double-line walls
     in the wall ``strokes`` (their own units), or None when the walls are
     not drawn as pairs of lines (see the module docstring)."""
-    pieces = [_pieces(s) for s in strokes if not getattr(s, "filled", False)]
-    pieces = [p for p in pieces if len(p[0])]
-    if not pieces:
-        return None
-    a = np.concatenate([p[0] for p in pieces])
-    b = np.concatenate([p[1] for p in pieces])
+    a, b, _ = stroke_pieces([s for s in strokes if not getattr(s, "filled", False)], 0.0)
     length = np.linalg.norm(b - a, axis=1)
-    keep = length > 0
-    a, b, length = a[keep], b[keep], length[keep]
     if len(a) < 2:
         return None
     points = np.concatenate([a, b])
@@ -52,13 +46,6 @@ def wall_thickness(strokes: list) -> float | None:
     order = np.argsort(apart[paired])
     weight = np.cumsum(length[paired][order])
     return float(apart[paired][order][np.searchsorted(weight, 0.5 * weight[-1])])
-
-
-def _pieces(stroke) -> tuple[np.ndarray, np.ndarray]:
-    xy = np.asarray(stroke.coords, dtype=float)[:, :2]
-    if stroke.closed and len(xy) > 2:
-        xy = np.vstack([xy, xy[:1]])
-    return xy[:-1], xy[1:]
 
 
 def _partner_distance(a: np.ndarray, b: np.ndarray, length: np.ndarray, touch: float, reach: float) -> np.ndarray:
