@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from linemap.geometry import project_segments
-from matcher.stage2.fit import fits_projected, visible
+from matcher.stage2.fit import fit_bound_px, fits_projected, visible
 from matcher.stage2.matches import Matches
 
 
@@ -25,29 +25,23 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
     more lines). All hypotheses' pairs are tested in one batch. Returns
     the pairs to add; ``m`` the matches so far."""
     usable = np.nonzero(image_lines.usable)[0]
-    N = len(segs)
-    hyp, local, line_ids = m.hyp, m.local, m.line
     empty = np.zeros(0, dtype=np.int64)
-    if not len(hyps):
+    if not len(hyps) or not len(usable) or not len(segs):
         return Matches(empty, empty, empty)
-    # Every candidate segment projected once per hypothesis (C, N, 2, 2),
-    # then each (hypothesis, free line, segment) pair looks it up.
+    # Every candidate segment projected once per hypothesis (C, N, 2, 2).
     uv, in_front = project_segments(camera, poses[hyps][:, None, :], np.broadcast_to(segs, (len(hyps),) + segs.shape),
                                     tol.stage2.near_plane_m)
-    ph, pl, ps = [], [], []
+    # The lines each hypothesis left free, and the lines on each of its segments.
+    where = {h: c for c, h in enumerate(hyps.tolist())}
+    free = np.ones((len(hyps), len(image_lines.usable)), dtype=bool)
     matched = {}  # (contender, segment) -> the lines on it
-    for c, h in enumerate(hyps.tolist()):
-        sel = np.nonzero(hyp == h)[0]
-        lines_free = np.ones(len(image_lines.usable), dtype=bool)
-        lines_free[line_ids[sel]] = False
-        fl = usable[lines_free[usable]]
-        ph.append(np.full(len(fl) * N, c))
-        pl.append(np.repeat(fl, N))
-        ps.append(np.tile(np.arange(N), len(fl)))
-        for s_, l_ in zip(local[sel].tolist(), line_ids[sel].tolist()):
-            matched.setdefault((c, s_), []).append(l_)
-    pc, li, si = (np.concatenate(a).astype(np.int64) for a in (ph, pl, ps))
-    if not len(pc):  # no usable line left free
+    mine = np.nonzero(np.isin(m.hyp, hyps))[0]
+    for h_, s_, l_ in zip(m.hyp[mine].tolist(), m.local[mine].tolist(), m.line[mine].tolist()):
+        free[where[h_], l_] = False
+        matched.setdefault((where[h_], s_), []).append(l_)
+    pc, ui, si = np.nonzero(_may_fit(image_lines.lines[usable], uv, in_front, tol) & free[:, usable, None])
+    li = usable[ui]
+    if not len(pc):  # no usable line left free near a segment
         return Matches(empty, empty, empty)
     ph = hyps[pc]
     ok, dist = fits_projected(image_lines, uv[pc, si], in_front[pc, si], li, tol)
@@ -75,6 +69,27 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
         out_s.append(s_)
         out_l.append(l_)
     return Matches(np.array(out_h, dtype=np.int64), np.array(out_s, dtype=np.int64), np.array(out_l, dtype=np.int64))
+
+
+def _may_fit(lines: np.ndarray, uv: np.ndarray, in_front: np.ndarray, tol) -> np.ndarray:
+    """(C, U, N) bool: whether each line (U, 2, 2) may fit each projected
+    segment ``uv`` (C, N, 2, 2) (``in_front`` (C, N)), by two consequences
+    of :func:`~matcher.stage2.fit.fits` that cost one product per pair:
+    both end points within the fit bound of the segment's line, so its
+    middle is too, and the line turned from it by no more than twice the
+    bound over its length allows. Pairs it drops cannot fit; the pairs it
+    keeps get the whole test (most pairs of a view are far apart)."""
+    dl = lines[:, 1] - lines[:, 0]
+    L = np.hypot(dl[:, 0], dl[:, 1])
+    bound = (fit_bound_px(L, tol) + 1e-6)[None, :, None]  # a hair over: rounding never drops a pair that fits
+    mid = 0.5 * (lines[:, 0] + lines[:, 1])
+    d = uv[..., 1, :] - uv[..., 0, :]
+    lq = np.hypot(d[..., 0], d[..., 1])
+    nx, ny = -d[..., 1] / np.maximum(lq, 1e-9), d[..., 0] / np.maximum(lq, 1e-9)  # (C, N) unit normals
+    off = nx * uv[..., 0, 0] + ny * uv[..., 0, 1]
+    across = np.abs(mid[None, :, 0, None] * nx[:, None] + mid[None, :, 1, None] * ny[:, None] - off[:, None])
+    turn = np.abs(dl[None, :, 0, None] * nx[:, None] + dl[None, :, 1, None] * ny[:, None])  # L sin(angle)
+    return (in_front & (lq > 1e-6))[:, None] & (across <= bound) & (turn <= 2.0 * bound)
 
 
 def _spans_along(uv: np.ndarray, lines: np.ndarray) -> np.ndarray:
