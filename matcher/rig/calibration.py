@@ -30,9 +30,12 @@ held out on its own benchmark; ``python tools/bench_calibration.py
 
 from __future__ import annotations
 
+import copy
+import functools
+
 import numpy as np
 
-from matcher.stage2.calibration_check import MatchedLines, blamed_parameters
+from matcher.stage2.calibration_check import MatchedLines, blamed_parameters, fit
 
 
 class RigMatchedLines:
@@ -42,13 +45,19 @@ class RigMatchedLines:
     pose, their derivatives in the robot's pose through each mount, a
     calibration change applied to every camera alike."""
 
-    def __init__(self, per_camera, tol, only: int | None = None) -> None:
+    def __init__(self, per_camera, tol) -> None:
         self.parts = [(MatchedLines(view.camera, lines, segments, tol), view.mount)
                       for view, lines, segments in per_camera]
-        self.only = only
+        self.only = None  # every camera's calibration changes alike (:meth:`only_camera`: one's)
 
     def __len__(self) -> int:
         return sum(len(data) for data, _ in self.parts)
+
+    def only_camera(self, c: int) -> RigMatchedLines:
+        """The same matches with camera ``c``'s calibration alone free."""
+        alone = copy.copy(self)
+        alone.only = c
+        return alone
 
     def weighted(self, pose: np.ndarray, calib: np.ndarray, jacobian: bool = False):
         """(2T,) noise-weighted residuals of every camera at robot ``pose``
@@ -75,7 +84,11 @@ def rig_doubt(per_camera, robot_pose: np.ndarray, tol, px: tuple | None) -> str:
     if not per_camera:
         return ""
     lowest = min((view.camera for view, _, _ in per_camera), key=lambda c: (c.height_m, c.height))
-    alike = blamed_parameters(RigMatchedLines(per_camera, tol), lowest, robot_pose, tol, px)
+    every = RigMatchedLines(per_camera, tol)
+    # With no parameter free the fit is the same whichever camera's may
+    # change: fitted once, when a first check needs it.
+    at_file = functools.cache(lambda: fit(every, robot_pose, None, tol.verdict))
+    alike = blamed_parameters(every, lowest, robot_pose, tol, px, at_file)
     if alike:
         f, name = alike[0], per_camera[0][0].name
         x, y, yaw = f.pose
@@ -88,7 +101,7 @@ def rig_doubt(per_camera, robot_pose: np.ndarray, tol, px: tuple | None) -> str:
     for c, (view, lines, _) in enumerate(per_camera):
         if len(lines) < tol.verdict.calibration_min_lines:  # too few residuals to tell a calibration from noise
             continue
-        alone = blamed_parameters(RigMatchedLines(per_camera, tol, only=c), view.camera, robot_pose, tol, px)
+        alone = blamed_parameters(every.only_camera(c), view.camera, robot_pose, tol, px, at_file)
         if alone:
             blamed.append((view, alone[0]))
     if not blamed:

@@ -243,9 +243,12 @@ def calibration_fits(camera, lines: np.ndarray, segments: np.ndarray, pose, tol,
     return _fits(MatchedLines(camera, lines, segments, tol), pose, [PARAMETERS.index(n) for n in names], tol.verdict)
 
 
-def _fits(data: MatchedLines, pose, free: list, work) -> list:
-    """:func:`calibration_fits` of the parameters ``free`` (indices)."""
-    base, _, rss_file, _ = fit(data, pose, None, work)
+def _fits(data: MatchedLines, pose, free: list, work, at_file=None) -> list:
+    """:func:`calibration_fits` of the parameters ``free`` (indices);
+    ``at_file``, if given, a function giving :func:`fit` of ``data`` with no
+    parameter free (shared by checks whose data differ only in which
+    camera's calibration may change)."""
+    base, _, rss_file, _ = fit(data, pose, None, work) if at_file is None else at_file()
     out = []
     for k in free:
         p, calib, rss, cov = fit(data, base, k, work)
@@ -294,11 +297,12 @@ def miscalibration(camera, lines: np.ndarray, segments: np.ndarray, pose, tol, p
     return blamed_parameters(MatchedLines(camera, lines, segments, tol), camera, pose, tol, prior)
 
 
-def blamed_parameters(data, camera, pose, tol, prior=None) -> list:
+def blamed_parameters(data, camera, pose, tol, prior=None, at_file=None) -> list:
     """:func:`miscalibration` of prepared matches ``data`` (a
     :class:`MatchedLines`, or any object with its ``weighted`` and length:
     a rig's cameras' matches at one robot pose, :mod:`matcher.rig.calibration`)
-    at ``pose``; ``camera`` the model whose bounds :func:`plausible` checks."""
+    at ``pose``; ``camera`` the model whose bounds :func:`plausible` checks;
+    ``at_file`` as :func:`_fits` takes it."""
     work = tol.verdict
     if len(data) < work.calibration_min_lines or not work.calibration_judged:
         return []
@@ -311,7 +315,7 @@ def blamed_parameters(data, camera, pose, tol, prior=None) -> list:
     file = _file_calibration()
     least = dict(focal=work.calibration_min_focal, height=work.calibration_min_height_m,
                  cx=work.calibration_min_centre_px, cy=work.calibration_min_centre_px)
-    blamed = [f for f in _fits(data, pose, worth, work)
+    blamed = [f for f in _fits(data, pose, worth, work, at_file)
               if f.drop >= work.calibration_min_drop and f.ratio >= work.calibration_min_ratio and plausible(f, camera, work)
               and abs(f.value - file[PARAMETERS.index(f.name)]) >= least[f.name] and _inside(f, prior, tol)]
     return sorted(blamed, key=lambda f: -f.drop)
