@@ -56,24 +56,35 @@ def refine_robot(poses: np.ndarray, parts: list[CameraMatches], work: Stage2Cons
     """Robot poses (H, 3) ``(x, y, theta)`` refitted by Gauss-Newton on the
     matches of every camera (``parts``); with ``robust``, Tukey's biweight
     at each match's scale after ``refine_plain_first`` plain iterations, as
-    :func:`matcher.stage2.refine.refine` weighs a single camera's."""
+    :func:`matcher.stage2.refine.refine` weighs a single camera's. Every
+    camera's matches are one batch, each with its mount's offset."""
     params = np.array(poses, dtype=float)
     H = len(params)
+    live = [part for part in parts if part.terms is not None]
+    if not live:
+        return params
+    terms = refine.joined_terms([part.terms for part in live])
+    hyp = np.concatenate([part.hyp for part in live])
+    scale = np.concatenate([part.scale for part in live])
+    mx, my, myaw = (np.concatenate([np.full(len(part.hyp), getattr(part.mount, k)) for part in live])
+                    for k in ("x", "y", "yaw"))
+    each = np.arange(len(hyp))
     diag_at = np.arange(3)
     for it in range(iterations):
+        p = params[hyp]
+        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
+        cam = np.stack([p[:, 0] + c * mx - s * my, p[:, 1] + s * mx + c * my, p[:, 2] + myaw], axis=-1)
+        r, J = refine.residuals(cam, each, terms, jacobian=True)
+        # Through the mount (linemap.rig.Mount.jacobian): the robot's heading
+        # also moves the camera's centre.
+        J[..., 2] += J[..., 0] * (-s * mx - c * my)[:, None] + J[..., 1] * (c * mx - s * my)[:, None]
+        Jw = J
+        if robust and it >= work.refine_plain_first:
+            u = np.clip(np.abs(r) / (2.0 * scale[:, None]), 0.0, 1.0)
+            Jw = J * ((1.0 - u * u) ** 2 + 1e-6)[..., None]
         A, b = np.zeros((H, 3, 3)), np.zeros((H, 3))
-        weigh = robust and it >= work.refine_plain_first
-        for part in parts:
-            if part.terms is None:
-                continue
-            r, J = refine.residuals(part.mount.camera_poses(params), part.hyp, part.terms, jacobian=True)
-            J = np.einsum("tki,tij->tkj", J, part.mount.jacobian(params[part.hyp, 2]))
-            Jw = J
-            if weigh:
-                u = np.clip(np.abs(r) / (2.0 * part.scale[:, None]), 0.0, 1.0)
-                Jw = J * ((1.0 - u * u) ** 2 + 1e-6)[..., None]
-            np.add.at(A, part.hyp, np.einsum("tki,tkj->tij", Jw, J))
-            np.add.at(b, part.hyp, np.einsum("tki,tk->ti", Jw, r))
+        np.add.at(A, hyp, np.einsum("tki,tkj->tij", Jw, J))
+        np.add.at(b, hyp, np.einsum("tki,tk->ti", Jw, r))
         diag = A[:, diag_at, diag_at]
         A[:, diag_at, diag_at] = diag + (1e-9 + 1e-6 * diag.sum(axis=1))[:, None]
         step = np.linalg.solve(A, b[..., None])[..., 0]

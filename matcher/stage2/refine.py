@@ -63,6 +63,15 @@ class MatchTerms:
         self.w_z = w[..., 2]
 
 
+def joined_terms(many: list) -> MatchTerms:
+    """The matches of several :class:`MatchTerms` as one (a rig's cameras:
+    each camera's pitch and height are in its own matches' terms)."""
+    out = MatchTerms.__new__(MatchTerms)
+    for name in ("m0_h", "m0_z", "D", "dz", "idz", "w_h", "w_z"):
+        setattr(out, name, np.concatenate([getattr(t, name) for t in many]))
+    return out
+
+
 def residuals(params, hyp, terms: MatchTerms, jacobian=False):
     """(T, 2) image-side residuals (and with ``jacobian`` their derivatives
     (T, 2, 3) in (x, y, yaw)) of matches t at poses ``params`` (H, 3); ``hyp``
