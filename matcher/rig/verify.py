@@ -4,7 +4,7 @@ For each seed robot pose (:mod:`matcher.rig.seeds`), in rounds
 (``RigConstants.verify_rounds``):
 
 1. in every camera, at that camera's pose, the lines that fit a visible
-   candidate segment (:func:`matcher.stage2.extend.extend_all`, the single
+   candidate segment (:func:`matcher.stage2.extend.extend_cameras`, the single
    camera's fit and visibility tests, each line once, closest first);
 2. one robot pose refitted on all of them (:mod:`matcher.rig.joint_fit`),
    robustly, then plainly after the last round.
@@ -28,7 +28,7 @@ from matcher.prior import within_prior
 from matcher.projection import covered_span
 from matcher.rig.joint_fit import camera_matches, refine_robot
 from matcher.stage2 import refine
-from matcher.stage2.extend import extend_all
+from matcher.stage2.extend import Extension, extend_cameras
 from matcher.stage2.matches import Matches
 from matcher.stage2.rank import reprojection_cost
 
@@ -60,11 +60,11 @@ def verify_seeds(views, cands, seeds: np.ndarray, px: tuple, tol) -> RigRanked:
     poses = np.array(seeds, dtype=float).reshape(-1, 3)
     pairs = [(v, c) for v, c in zip(views, cands) if c is not None]
     for _ in range(tol.rig.verify_rounds):
-        parts = [camera_matches(v, c.segments, m, tol) for (v, c), m in zip(pairs, _match(pairs, poses, tol))]
+        parts = [camera_matches(v, c.segments, m, tol) for (v, c), m in zip(pairs, match_at(pairs, poses, tol))]
         poses = refine_robot(poses, parts, tol.stage2, robust=True, iterations=tol.stage2.refine_iterations)
-    parts = [camera_matches(v, c.segments, m, tol) for (v, c), m in zip(pairs, _match(pairs, poses, tol))]
+    parts = [camera_matches(v, c.segments, m, tol) for (v, c), m in zip(pairs, match_at(pairs, poses, tol))]
     poses = refine_robot(poses, parts, tol.stage2, robust=False, iterations=tol.stage2.refit_iterations)
-    found = _match(pairs, poses, tol)
+    found = match_at(pairs, poses, tol)
     per_view, k = [], 0
     for c in cands:  # back to one entry per camera of the frame
         per_view.append(no_matches() if c is None else found[k])
@@ -89,13 +89,13 @@ def no_matches() -> Matches:
     return Matches(empty, empty, empty)
 
 
-def _match(pairs, poses: np.ndarray, tol) -> list[Matches]:
+def match_at(pairs, poses: np.ndarray, tol) -> list[Matches]:
     """Per camera of ``pairs`` (view, candidates): the lines that fit a
-    visible candidate at its pose for each robot pose (H, 3)."""
+    visible candidate at its pose for each robot pose (H, 3), every
+    camera's tested in one batch."""
     every = np.arange(len(poses))
-    return [extend_all(v.camera, v.lines, c.segments, v.mount.camera_poses(poses), no_matches(), every, tol,
-                       c.walls)
-            for v, c in pairs]
+    return extend_cameras([Extension(v.camera, v.lines, c.segments, v.mount.camera_poses(poses), no_matches(), every,
+                                     c.walls) for v, c in pairs], tol)
 
 
 def _ranked(views, cands, poses: np.ndarray, matches: tuple, px: tuple, tol) -> RigRanked:

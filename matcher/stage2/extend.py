@@ -5,10 +5,12 @@ line in stage 1 gets it back; a line broken in pieces is explained whole).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from linemap.geometry import project_segments
-from matcher.stage2.fit import fit_bound_px, fits_projected, visible
+from matcher.stage2.fit import fit_bound_px, fits_lines, sight_points, visible_points
 from matcher.stage2.matches import Matches
 
 
@@ -24,13 +26,75 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
     wrong pose that spreads the pieces over several segments would explain
     more lines). All hypotheses' pairs are tested in one batch. Returns
     the pairs to add; ``m`` the matches so far."""
+    return extend_cameras([Extension(camera, image_lines, segs, poses, m, hyps, walls)], tol)[0]
+
+
+@dataclass(frozen=True)
+class Extension:
+    """One camera's part of :func:`extend_cameras`: :func:`extend_all`'s
+    arguments."""
+
+    camera: object
+    image_lines: object
+    segs: np.ndarray
+    poses: np.ndarray
+    m: Matches
+    hyps: np.ndarray
+    walls: object
+
+
+def extend_cameras(parts: list[Extension], tol) -> list[Matches]:
+    """:func:`extend_all` of several cameras (a rig's, each at its own
+    poses): the pairs to add, one :class:`Matches` per part. The fit and
+    sight tests of every camera's pairs run as one batch (the cameras of a
+    rig share the map's walls): a rig's verification asks this for all its
+    cameras at once, over and over."""
+    empty = Matches(*(np.zeros(0, dtype=np.int64),) * 3)
+    pairs = [_candidate_pairs(part, tol) for part in parts]
+    live = [k for k, p in enumerate(pairs) if p is not None]
+    if not live:
+        return [empty] * len(parts)
+    lines = [parts[k].image_lines.lines[pairs[k].li] for k in live]
+    ok, dist = fits_lines(np.concatenate(lines), np.concatenate([pairs[k].uv[pairs[k].pc, pairs[k].si] for k in live]),
+                          np.concatenate([pairs[k].in_front[pairs[k].pc, pairs[k].si] for k in live]), tol)
+    bounds = np.cumsum([0] + [len(x) for x in lines])
+    seen = [np.nonzero(ok[a:b])[0] for a, b in zip(bounds[:-1], bounds[1:])]
+    shown = [sight_points(parts[k].camera, parts[k].poses[pairs[k].ph[s]], parts[k].segs[pairs[k].si[s]], x[s],
+                          tol.stage2) for k, s, x in zip(live, seen, lines)]
+    clear = visible_points(shown, [parts[k].walls for k in live], tol.stage2, tol.shared)
+    out = [empty] * len(parts)
+    for k, a, b, s, c in zip(live, bounds[:-1], bounds[1:], seen, clear):
+        keep = ok[a:b]
+        keep[s] = c
+        out[k] = _closest_first(parts[k], pairs[k], keep, dist[a:b], tol)
+    return out
+
+
+@dataclass(frozen=True)
+class _Pairs:
+    """One camera's (hypothesis, free line, segment) pairs that may fit:
+    contender ``pc``, line ``li``, segment ``si`` and hypothesis ``ph``
+    (P,) each; the segments projected, ``uv`` (C, N, 2, 2) and
+    ``in_front`` (C, N); ``matched`` (contender, segment) -> its lines."""
+
+    pc: np.ndarray
+    li: np.ndarray
+    si: np.ndarray
+    ph: np.ndarray
+    uv: np.ndarray
+    in_front: np.ndarray
+    matched: dict
+
+
+def _candidate_pairs(part: Extension, tol) -> _Pairs | None:
+    """The pairs of ``part`` to test (None: none)."""
+    image_lines, segs, hyps, m = part.image_lines, part.segs, part.hyps, part.m
     usable = np.nonzero(image_lines.usable)[0]
-    empty = np.zeros(0, dtype=np.int64)
     if not len(hyps) or not len(usable) or not len(segs):
-        return Matches(empty, empty, empty)
+        return None
     # Every candidate segment projected once per hypothesis (C, N, 2, 2).
-    uv, in_front = project_segments(camera, poses[hyps][:, None, :], np.broadcast_to(segs, (len(hyps),) + segs.shape),
-                                    tol.stage2.near_plane_m)
+    uv, in_front = project_segments(part.camera, part.poses[hyps][:, None, :],
+                                    np.broadcast_to(segs, (len(hyps),) + segs.shape), tol.stage2.near_plane_m)
     # The lines each hypothesis left free, and the lines on each of its segments.
     where = {h: c for c, h in enumerate(hyps.tolist())}
     free = np.ones((len(hyps), len(image_lines.usable)), dtype=bool)
@@ -40,18 +104,18 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
         free[where[h_], l_] = False
         matched.setdefault((where[h_], s_), []).append(l_)
     pc, ui, si = np.nonzero(_may_fit(image_lines.lines[usable], uv, in_front, tol) & free[:, usable, None])
-    li = usable[ui]
     if not len(pc):  # no usable line left free near a segment
-        return Matches(empty, empty, empty)
-    ph = hyps[pc]
-    ok, dist = fits_projected(image_lines, uv[pc, si], in_front[pc, si], li, tol)
-    if ok.any():
-        sel = np.nonzero(ok)[0]
-        ok[sel] = visible(camera, poses[ph[sel]], segs[si[sel]], image_lines.lines[li[sel]], walls, tol.stage2, tol.shared)
+        return None
+    return _Pairs(pc, usable[ui], si, hyps[pc], uv, in_front, matched)
+
+
+def _closest_first(part: Extension, pairs: _Pairs, ok: np.ndarray, dist: np.ndarray, tol) -> Matches:
+    """The pairs of ``pairs`` that fit and are seen (``ok``), closest first
+    within each hypothesis; a line is added once, a segment again only for
+    a part of it not shown yet (:func:`extend_all`)."""
+    pc, li, si, ph, uv, matched = pairs.pc, pairs.li, pairs.si, pairs.ph, pairs.uv, pairs.matched
     out_h, out_l, out_s = [], [], []
     lines_taken = set()  # (hypothesis, line)
-    # Closest first within each hypothesis; a line is added once, a segment
-    # again only for a part of it not shown yet.
     cand = np.nonzero(ok)[0]
     for k in cand[np.lexsort((dist[cand], ph[cand]))].tolist():
         c, h, s_, l_ = int(pc[k]), int(ph[k]), int(si[k]), int(li[k])
@@ -59,7 +123,8 @@ def extend_all(camera, image_lines, segs, poses, m: Matches, hyps, tol, walls) -
             continue
         on_it = matched.setdefault((c, s_), [])
         if on_it:
-            spans = _spans_along(np.broadcast_to(uv[c, s_], (len(on_it) + 1, 2, 2)), image_lines.lines[on_it + [l_]])
+            spans = _spans_along(np.broadcast_to(uv[c, s_], (len(on_it) + 1, 2, 2)),
+                                 part.image_lines.lines[on_it + [l_]])
             overlap = np.minimum(spans[:-1, 1], spans[-1, 1]) - np.maximum(spans[:-1, 0], spans[-1, 0])
             if (overlap > 2.0 * tol.line_end_px).any():
                 continue

@@ -40,7 +40,11 @@ def fits(camera, image_lines, poses, segments, line_ids, tol, end_px=None):
 def fits_projected(image_lines, uv, in_front, line_ids, tol, end_px=None):
     """:func:`fits` on segments already projected
     (:func:`linemap.geometry.project_segments`' ``uv`` (T, 2, 2), ``in_front`` (T,))."""
-    lines = image_lines.lines[line_ids]
+    return fits_lines(image_lines.lines[line_ids], uv, in_front, tol, end_px)
+
+
+def fits_lines(lines, uv, in_front, tol, end_px=None):
+    """:func:`fits_projected` of the pixel lines themselves (T, 2, 2)."""
     L = np.linalg.norm(lines[:, 1] - lines[:, 0], axis=1)
     dist, ov = projected_distance_and_overlap(uv, in_front, lines)
     end_px = 2 * tol.line_end_px + tol.stage2.fit_pose_px if end_px is None else end_px
@@ -66,14 +70,40 @@ def visible(camera, poses, segments, lines, walls, work: Stage2Constants, shared
     ``shared`` sizes the sight-line test's work (``box_filter_edges``)."""
     if walls is None or not len(poses):
         return np.ones(len(poses), dtype=bool)
+    return visible_points([sight_points(camera, poses, segments, lines, work)], [walls], work, shared)[0]
+
+
+def sight_points(camera, poses, segments, lines, work: Stage2Constants) -> tuple:
+    """:func:`visible`'s sight lines: ``(cams (T * n, 2), points (T * n,
+    2))``, ``n`` points spread over the part of each segment its line
+    shows (``refined_sight_array``)."""
+    if not len(poses):
+        return np.zeros((0, 2)), np.zeros((0, 2))
     span = covered_span(camera, poses, segments, lines)  # (T, 2)
     samples = work.refined_sight_array
     t = span[:, :1] + samples[None, :] * (span[:, 1:] - span[:, :1])  # (T, n)
     a, b = segments[:, None, 0, :2], segments[:, None, 1, :2]
     pts = a + t[..., None] * (b - a)
-    cams = np.repeat(poses[:, :2], len(samples), axis=0)
-    clear = sight_clear(cams, pts.reshape(-1, 2), walls, work.refined_sight_end_m, shared)
-    return clear.reshape(len(poses), -1).any(axis=1)
+    return np.repeat(poses[:, :2], len(samples), axis=0), pts.reshape(-1, 2)
+
+
+def visible_points(shown: list, walls: list, work: Stage2Constants, shared: SharedConstants) -> list:
+    """Per :func:`sight_points` of ``shown``: (T,) whether any of each
+    segment's points is in plain sight (:func:`visible`), its ``walls`` as
+    occluders (None: everything is). Parts that share their walls (a rig's
+    cameras on one map) are tested in one batch."""
+    n = len(work.refined_sight_array)
+    out = [np.ones(len(cams) // n, dtype=bool) for cams, _ in shown]
+    for w in {id(w): w for w in walls if w is not None}.values():
+        same = [k for k, x in enumerate(walls) if x is w and len(shown[k][0])]
+        if not same:
+            continue
+        clear = sight_clear(np.concatenate([shown[k][0] for k in same]), np.concatenate([shown[k][1] for k in same]),
+                            w, work.refined_sight_end_m, shared)
+        bounds = np.cumsum([0] + [len(shown[k][0]) for k in same])
+        for k, a, b in zip(same, bounds[:-1], bounds[1:]):
+            out[k] = clear[a:b].reshape(-1, n).any(axis=1)
+    return out
 
 
 def resolve_pieces(camera, poses, label, cls, segs, lines, near_m: float):

@@ -31,8 +31,7 @@ from matcher.result import LocalizeResult, Timings
 from matcher.rig.frame import RigFrame
 from matcher.prior import within_prior
 from matcher.rig.joint_fit import camera_matches, refine_robot
-from matcher.rig.verify import RigRanked, no_matches, verify_seeds
-from matcher.stage2.extend import extend_all
+from matcher.rig.verify import RigRanked, match_at, verify_seeds
 from matcher.search.structure.peaks import Peaks
 from matcher.search.structure.ranking import rank_places
 from matcher.tolerances import Tolerances
@@ -167,9 +166,7 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
     passes = []
     while gate > tol.stage2.fit_pose_px:
         wide = replace(tol, stage2=replace(tol.stage2, fit_pose_px=gate))
-        parts = [camera_matches(v, c.segments, extend_all(v.camera, v.lines, c.segments, v.mount.camera_poses(poses),
-                                                          no_matches(), np.arange(len(poses)), wide, c.walls), wide)
-                 for v, c in pairs]
+        parts = [camera_matches(v, c.segments, m, wide) for (v, c), m in zip(pairs, match_at(pairs, poses, wide))]
         poses = refine_robot(poses, parts, wide.stage2, robust=True, iterations=tol.stage2.refit_iterations)
         passes.append(poses)
         gate /= 2.0
