@@ -537,9 +537,11 @@ class RigConstants(_Constants):
     #: on all of them): the seed's pose comes from one narrow view, the first
     #: refit on all cameras moves it by centimetres, the second settles it.
     verify_rounds: int = 2
-    #: The best verified pose must explain this many times the lines of the
-    #: best pose elsewhere (farther than ``VerdictConstants.ambiguous_m`` or
-    #: ``ambiguous_deg``): the lines a wrong place explains by chance,
+    #: The best verified pose must explain this many times the lines of
+    #: every pose elsewhere (farther than ``VerdictConstants.ambiguous_m`` or
+    #: ``ambiguous_deg``), counting only the lines one explains and the other
+    #: does not (``matcher.ambiguity.telling_lines``; since 2026-11-28, the
+    #: choice below was made on the totals): the lines a wrong place explains by chance,
     #: measured on the frame itself (the other seeds' verified poses), in
     #: place of the share of the searched lines a single view needs
     #: (``chance_fit_share``). Chosen on 4-camera rigs cut from the 32
@@ -550,16 +552,6 @@ class RigConstants(_Constants):
     #: (1.3 and 1.7 gave the same on both). The benchmark after it
     #: (docs/benchmarks/real-rigs.md): 0 wrong in 224 rig and panorama calls.
     clear_ratio: float = 1.5
-    #: The acceptance threshold of the paper's score E for a rig's pose, in
-    #: place of ``Tolerances.e_accept`` (2e-3, the paper's, set on one
-    #: synthetic camera). Over many real cameras E grows with the map's and
-    #: the annotations' centimetre offsets, which a rig's coverage and
-    #: clear-ratio tests do not mistake for another place. Chosen on 4-camera
-    #: rigs cut from the ZInD sample tour at PEQ 3, seeds 0 and 1: right best
-    #: poses refused for E alone scored 2.0e-3 to 2.9e-3, wrong ones 4e-4 to
-    #: 6.4e-3 (E does not tell them apart), each wrong one refused by the
-    #: coverage or the clear ratio at any threshold up to 4.6e-3.
-    e_accept: float = 3e-3
     #: The best pose must explain this share of the frame's searched lines
     #: (every camera's longest, ``search_lines`` each), whatever the other
     #: places: where the verification found no pose elsewhere, the
