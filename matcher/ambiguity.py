@@ -48,27 +48,9 @@ def rival_apart(answers: list[tuple], work: VerdictConstants, spread: tuple[floa
     that explains the most lines at a pose apart from the best's (apart as
     :func:`rivals` says: ``ambiguous_m``, ``ambiguous_deg``, and the
     ``spread``), or None when every other answer is the same place."""
-    apart = answers_apart(answers, work, spread)
-    return max(apart, key=lambda a: a[1]) if apart else None
-
-
-def answers_apart(answers: list[tuple], work: VerdictConstants,
-                  spread: tuple[float, float, float] | None = None) -> list:
-    """Every answer of ``answers`` but the first at a pose apart from the
-    first's (as :func:`rival_apart` says), in order."""
     reach_m, reach_deg = _reach(work, spread)
-    return [a for a in answers[1:] if _apart(a[0], answers[0][0], reach_m, reach_deg)]
-
-
-def telling_lines(best: tuple, other: tuple) -> tuple[int, int]:
-    """``(lines best explains that other does not, the reverse)`` for two
-    answers whose fifth item is the set of lines each explains (a rig's
-    verified poses); their counts of lines when either set is not known.
-    A line both explain is evidence for neither: a pose half a metre off
-    along a wall explains that wall's lines too."""
-    if len(best) > 4 and len(other) > 4 and best[4] is not None and other[4] is not None:
-        return len(best[4] - other[4]), len(other[4] - best[4])
-    return int(best[1]), int(other[1])
+    apart = [a for a in answers[1:] if _apart(a[0], answers[0][0], reach_m, reach_deg)]
+    return max(apart, key=lambda a: a[1]) if apart else None
 
 
 def _reach(work: VerdictConstants, spread) -> tuple[float, float]:

@@ -537,11 +537,9 @@ class RigConstants(_Constants):
     #: on all of them): the seed's pose comes from one narrow view, the first
     #: refit on all cameras moves it by centimetres, the second settles it.
     verify_rounds: int = 2
-    #: The best verified pose must explain this many times the lines of
-    #: every pose elsewhere (farther than ``VerdictConstants.ambiguous_m`` or
-    #: ``ambiguous_deg``), counting only the lines one explains and the other
-    #: does not (``matcher.ambiguity.telling_lines``; since 2026-11-28, the
-    #: choice below was made on the totals): the lines a wrong place explains by chance,
+    #: The best verified pose must explain this many times the lines of the
+    #: best pose elsewhere (farther than ``VerdictConstants.ambiguous_m`` or
+    #: ``ambiguous_deg``): the lines a wrong place explains by chance,
     #: measured on the frame itself (the other seeds' verified poses), in
     #: place of the share of the searched lines a single view needs
     #: (``chance_fit_share``). Chosen on 4-camera rigs cut from the 32

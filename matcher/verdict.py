@@ -115,10 +115,8 @@ class Evidence:
     ``cut``: how the search was cut short (:data:`UNCUT`, :data:`BY_TIME`,
     :data:`BY_SEARCH_BUDGET`).
     ``clear_ratio``: when set (a rig, whose verification scores answers at
-    many places), the best must explain this many times the lines of every
-    answer at another place (:func:`matcher.ambiguity.answers_apart`;
-    counting only the lines one explains and the other does not when the
-    answers carry a fifth item, the set of lines each explains):
+    many places), the best must explain this many times the lines of the
+    best answer at another place (:func:`matcher.ambiguity.rival_apart`):
     how many lines a wrong place explains by chance, measured on the frame
     itself instead of a share fixed in advance.
     ``e_accept``: when set (a rig), the acceptance threshold of E in place
@@ -225,37 +223,17 @@ def _refused(ev: Evidence, tol: Tolerances, cut: str) -> Verdict | None:
             return Verdict(NOT_LOCALISED, f"the best pose predicts {predicted} map segments in view and the image "
                                           f"shows {seen} of them: the lines do not look like the map there")
     if ev.clear_ratio is not None and ev.answers:
-        refused = _unclear(ev, work, tol.min_matches)
-        if refused is not None:
-            return refused
+        rival = ambiguity.rival_apart(list(ev.answers), work, None if ev.spread is None else ev.spread.get())
+        if rival is None or (ev.runner_up is not None and ev.runner_up[1] > rival[1]):
+            rival = ev.runner_up
+        if rival is not None and ev.answers[0][1] < ev.clear_ratio * rival[1]:
+            return Verdict(NOT_LOCALISED, f"the best pose explains {ev.answers[0][1]} lines and a pose elsewhere "
+                                          f"{rival[1]}: not {ev.clear_ratio:g} times as many, too few to tell them "
+                                          "apart; the candidates name both",
+                           tuple(ambiguity.candidates_of([ev.answers[0], rival])), score=ev.score)
     if ev.explained is not None and ev.explained < ev.needed:
         return Verdict(NOT_LOCALISED, f"the best pose explains {ev.explained} of the {ev.searched} longest lines, "
                                       f"fewer than the {ev.needed} that clutter makes needed")
-    return None
-
-
-def _unclear(ev: Evidence, work, fewest: int) -> Verdict | None:
-    """Test 5's rivals: the best must explain ``ev.clear_ratio`` times the
-    lines of every answer apart from it and of the runner-up, counting
-    only the lines that tell the two apart where the answers carry the
-    lines they explain (:func:`matcher.ambiguity.telling_lines`), and at
-    least ``fewest`` (``min_matches``: fewer lines do not fix a pose, so
-    cannot set it apart from another; a twin pose of a symmetric room
-    explains the very same lines); the refusal names the first rival that
-    it does not."""
-    best = ev.answers[0]
-    others = ambiguity.answers_apart(list(ev.answers), work, None if ev.spread is None else ev.spread.get())
-    for rival in others + ([ev.runner_up] if ev.runner_up is not None else []):
-        mine, theirs = ambiguity.telling_lines(best, rival)
-        if mine < max(ev.clear_ratio * theirs, fewest):
-            if (mine, theirs) == (best[1], rival[1]):
-                counts = f"{mine} lines and a pose elsewhere {theirs}"
-            else:
-                counts = (f"{mine} lines that a pose elsewhere does not, and that pose {theirs} that the best does not "
-                          f"({best[1]} and {rival[1]} in all)")
-            return Verdict(NOT_LOCALISED, f"the best pose explains {counts}: not {ev.clear_ratio:g} times as many, "
-                                          "too few to tell them apart; the candidates name both",
-                           tuple(ambiguity.candidates_of([best, rival])), score=ev.score)
     return None
 
 

@@ -108,24 +108,3 @@ def test_lost_mode_keeps_its_best_answers_own_verdict_and_says_what_it_searched(
     assert v.reason == ("no region gave an accepted hypothesis (4 voted places and 3 of 10 regions tried; the time "
                         "budget of 30000 ms ran out)")
 
-
-def test_a_rigs_rival_is_weighed_by_the_lines_that_tell_the_two_apart():
-    """Answers that carry the lines they explain (a rig's verified poses)
-    are compared on the lines one explains and the other does not: a pose
-    half a metre off along a wall explains that wall's lines too, which say
-    nothing about which of the two is right."""
-    wall = frozenset((0, k) for k in range(20))
-    best = ((1.0, 2.0, 30.0), 35, 1e-3, 1.0, wall | {(1, k) for k in range(15)})
-    shifted = ((1.6, 2.0, 30.0), 24, 1e-3, 1.0, wall | {(2, k) for k in range(4)})
-    ev = _good(answers=(best, shifted), clear_ratio=1.5, spread=None)
-    assert decide(ev, TOL)  # 15 lines against 4 (35 against 24 in all: refused before)
-    # The same counts without the lines: the totals, as before.
-    assert not decide(_good(answers=(best[:4], shifted[:4]), clear_ratio=1.5, spread=None), TOL)
-    # A twin pose that explains the very same lines is never told apart.
-    twin = ((5.0, 2.0, 210.0), 35, 1e-3, 1.0, best[4])
-    v = decide(_good(answers=(best, twin), clear_ratio=1.5, spread=None), TOL)
-    assert v.status == NOT_LOCALISED and len(v.candidates) == 2
-    assert v.reason.startswith("the best pose explains 0 lines that a pose elsewhere does not")
-    # A rival with more lines of its own refuses the best.
-    other = ((5.0, 2.0, 30.0), 30, 1e-3, 1.0, frozenset((3, k) for k in range(30)))
-    assert not decide(_good(answers=(best, other), clear_ratio=1.5, spread=None), TOL)

@@ -32,7 +32,7 @@ from matcher.rig.calibration import rig_doubt
 from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
-from matcher.rig.verify import RigRanked, explained_lines, merged, verify_seeds
+from matcher.rig.verify import RigRanked, merged, verify_seeds
 from matcher.search import default_search, search_of
 from matcher.search.structure.localize import localize_frame
 from matcher.stage2.fit import coverage_in_sight
@@ -234,8 +234,7 @@ def _evidence(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, 
     E, order = ranked.score, ranked.order
     best = int(order[0]) if len(order) else None
     finite = [int(h) for h in order if np.isfinite(E[h])]
-    answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(E[h]), float(ranked.cost[h]),
-                explained_lines(ranked, h)) for h in finite]
+    answers = [(_pose_deg(ranked.poses[h]), int(ranked.n[h]), float(E[h]), float(ranked.cost[h])) for h in finite]
     if rivals and answers:  # the best stays first; the others by the ranking's keys
         rest = sorted([a for a in rivals if a[0] != answers[0][0]] + answers[1:], key=lambda a: (-a[1], a[3], a[2]))
         answers = answers[:1] + rest

@@ -94,12 +94,6 @@ def merged(views, cands, a: RigRanked | None, b: RigRanked, px: tuple, tol) -> R
     return _ranked(views, cands, np.concatenate([a.poses, b.poses]), matches, px, tol)
 
 
-def explained_lines(ranked: RigRanked, h: int) -> frozenset:
-    """The lines pose ``h`` of ``ranked`` explains, as ``(camera, line)``
-    pairs (camera: its place in the frame's views)."""
-    return frozenset((k, int(line)) for k, m in enumerate(ranked.matches) for line in m.line[m.hyp == h])
-
-
 def no_matches() -> Matches:
     """No match at all."""
     empty = np.zeros(0, np.int64)

@@ -31,7 +31,7 @@ from matcher.result import LocalizeResult, Timings
 from matcher.rig.frame import RigFrame
 from matcher.prior import within_prior
 from matcher.rig.joint_fit import camera_matches, refine_robot
-from matcher.rig.verify import RigRanked, explained_lines, no_matches, verify_seeds
+from matcher.rig.verify import RigRanked, no_matches, verify_seeds
 from matcher.stage2.extend import extend_all
 from matcher.search.structure.peaks import Peaks
 from matcher.search.structure.ranking import rank_places
@@ -86,7 +86,7 @@ def localize_frame(linemap, frame: RigFrame, px: tuple | None, tol: Tolerances, 
 def _runner_up(peaks: Peaks, verified: list, of_peak: dict, ranked: RigRanked, tol: Tolerances) -> tuple | None:
     """The ranking's best pose elsewhere than the best verified pose (farther
     than ``VerdictConstants.ambiguous_m`` or ``ambiguous_deg``) as an answer
-    ``(pose_deg, lines, E, cost[, lines explained])``: its peak's verified answer when that
+    ``(pose_deg, lines, E, cost)``: its peak's verified answer when that
     stayed elsewhere, else the peak itself, no line verified there (0, inf,
     inf); None when every peak is the best's place."""
     if not len(ranked.order) or not np.isfinite(ranked.score[int(ranked.order[0])]):
@@ -185,8 +185,7 @@ def _best_key(ranked: RigRanked) -> tuple:
 
 
 def _answers(ranked: RigRanked) -> list:
-    """``(pose_deg, matches, E, cost, lines)`` of every verified pose of
-    ``ranked`` (lines: :func:`matcher.rig.verify.explained_lines`)."""
+    """``(pose_deg, matches, E, cost)`` of every verified pose of ``ranked``."""
     out = []
     for h in ranked.order:
         h = int(h)
@@ -194,7 +193,7 @@ def _answers(ranked: RigRanked) -> list:
             p = ranked.poses[h]
             yaw = math.degrees(math.remainder(float(p[2]), 2 * math.pi))
             out.append(((float(p[0]), float(p[1]), yaw), int(ranked.n[h]), float(ranked.score[h]),
-                        float(ranked.cost[h]), explained_lines(ranked, h)))
+                        float(ranked.cost[h])))
     return out
 
 
