@@ -550,16 +550,6 @@ class RigConstants(_Constants):
     #: (1.3 and 1.7 gave the same on both). The benchmark after it
     #: (docs/benchmarks/real-rigs.md): 0 wrong in 224 rig and panorama calls.
     clear_ratio: float = 1.5
-    #: The acceptance threshold of the paper's score E for a rig's pose, in
-    #: place of ``Tolerances.e_accept`` (2e-3, the paper's, set on one
-    #: synthetic camera). Over many real cameras E grows with the map's and
-    #: the annotations' centimetre offsets, which a rig's coverage and
-    #: clear-ratio tests do not mistake for another place. Chosen on 4-camera
-    #: rigs cut from the ZInD sample tour at PEQ 3, seeds 0 and 1: right best
-    #: poses refused for E alone scored 2.0e-3 to 2.9e-3, wrong ones 4e-4 to
-    #: 6.4e-3 (E does not tell them apart), each wrong one refused by the
-    #: coverage or the clear ratio at any threshold up to 4.6e-3.
-    e_accept: float = 3e-3
     #: The best pose must explain this share of the frame's searched lines
     #: (every camera's longest, ``search_lines`` each), whatever the other
     #: places: where the verification found no pose elsewhere, the

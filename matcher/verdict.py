@@ -120,7 +120,8 @@ class Evidence:
     how many lines a wrong place explains by chance, measured on the frame
     itself instead of a share fixed in advance.
     ``e_accept``: when set (a rig), the acceptance threshold of E in place
-    of ``Tolerances.e_accept`` (``RigConstants.e_accept``).
+    of ``Tolerances.e_accept``: the E the best pose's own matches may reach
+    within their noise (:func:`matcher.rig.verify.e_limit`).
     ``calibration``: why the best pose's matched lines say the camera
     file's calibration is wrong ("" when they do not), worked out when read
     (:func:`matcher.stage2.calibration_check.doubt`).

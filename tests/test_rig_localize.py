@@ -136,7 +136,7 @@ def _ranked(poses, score, n):
 
     poses, score, n = np.array(poses, float), np.array(score, float), np.array(n)
     order = np.lexsort((score, -n * np.isfinite(score)))
-    return RigRanked(poses, (), n, n, score, np.zeros(len(n)), order, "")
+    return RigRanked(poses, (), n, n, score, np.zeros(len(n)), order, "", np.full(len(n), np.inf))
 
 
 def test_confirmed_by_counts_the_cameras_whose_seeds_reached_the_best_pose():

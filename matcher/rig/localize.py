@@ -246,7 +246,7 @@ def _evidence(frame: RigFrame, cands: list, ranked: RigRanked, tol: Tolerances, 
                     explained=int(ranked.explained[best]), searched=frame.searched,
                     needed=rig_lines_needed(frame.searched, tol),
                     answers=answers, spread=Deferred(lambda: ambiguity.spread_of(pose_std.get())), cut=cut,
-                    clear_ratio=tol.rig.clear_ratio, e_accept=tol.rig.e_accept,
+                    clear_ratio=tol.rig.clear_ratio, e_accept=float(ranked.e_limit[best]),
                     calibration=Deferred(lambda: _calibration(frame, cands, ranked, best, tol, px)) if calibration
                     else None), pose_std
 

@@ -15,6 +15,14 @@ when it lies in the prior and the map's free space, its matches number
 with the paper's E over all its matches (each camera's at its own pose)
 and ranked, as a single camera's hypotheses are, by lines explained, then
 reprojection cost, then E.
+
+Its E is judged against the E the camera's noise model allows its own
+matches (:func:`e_limit`: each match with both end points at its fit bound,
+:func:`matcher.stage2.fit.fit_bound_px`, from ``line_px``, ``line_deg``, the
+pose's ``fit_pose_px`` and the map's ``model_m``), not a threshold fitted to
+one data set: the position term of E grows with the distance of the walls
+seen (a pose in a large room scores more than one in a corridor for the
+same pixel residuals), which a fixed threshold takes for a bad fit.
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ from matcher.projection import covered_span
 from matcher.rig.joint_fit import camera_matches, refine_robot
 from matcher.stage2 import refine
 from matcher.stage2.extend import Extension, extend_cameras
+from matcher.stage2.fit import fit_bound_px
 from matcher.stage2.matches import Matches
 from matcher.stage2.rank import reprojection_cost
 
@@ -40,7 +49,8 @@ class RigRanked:
     matches over all cameras, ``explained`` (H,) the searched lines among
     them, ``score`` (H,) E (inf when dropped), ``cost`` (H,) the
     reprojection cost, ``order`` (H,) best first; ``why`` the reason when
-    none is left."""
+    none is left; ``e_limit`` (H,) the E the noise model allows each pose's
+    matches (:func:`e_limit`, the verdict's acceptance threshold)."""
 
     poses: np.ndarray
     matches: tuple
@@ -50,6 +60,7 @@ class RigRanked:
     cost: np.ndarray
     order: np.ndarray
     why: str
+    e_limit: np.ndarray
 
 
 def verify_seeds(views, cands, seeds: np.ndarray, px: tuple, tol) -> RigRanked:
@@ -103,7 +114,7 @@ def _ranked(views, cands, poses: np.ndarray, matches: tuple, px: tuple, tol) -> 
     (one :class:`Matches` per camera): the module docstring's tests."""
     H = len(poses)
     n, fixed, explained = np.zeros(H, int), np.zeros(H), np.zeros(H, int)
-    e_sum, cost = np.zeros(H), np.zeros(H)
+    e_sum, lim_sum, cost = np.zeros(H), np.zeros(H), np.zeros(H)
     for v, c, m in zip(views, cands, matches):
         if c is None or not len(m):
             continue
@@ -113,6 +124,7 @@ def _ranked(views, cands, poses: np.ndarray, matches: tuple, px: tuple, tol) -> 
         explained += np.bincount(m.hyp[v.lines.searched[m.line]], minlength=H)
         q = v.mount.camera_poses(poses)
         e_sum += _score(v, c.segments, q, m) * np.bincount(m.hyp, minlength=H)
+        lim_sum += e_limit(v, c.segments, q, m, tol) * np.bincount(m.hyp, minlength=H)
         cost += reprojection_cost(v.camera, v.lines, q, m, c.segments, tol, H)
     free = next((c.free for c in cands if c is not None), None)
     alive = (n >= tol.min_matches) & (fixed > 3) & within_prior(poses, px, free, tol)
@@ -126,7 +138,7 @@ def _ranked(views, cands, poses: np.ndarray, matches: tuple, px: tuple, tol) -> 
         keys.setdefault(key, h)
     order = np.lexsort((E, cost, -n * np.isfinite(E)))
     why = "" if np.isfinite(E).any() else _why_none(n, fixed, tol)
-    return RigRanked(poses, matches, n, explained, E, cost, order, why)
+    return RigRanked(poses, matches, n, explained, E, cost, order, why, lim_sum / np.maximum(n, 1))
 
 
 def _score(view, segments: np.ndarray, cam_poses: np.ndarray, m: Matches) -> np.ndarray:
@@ -138,6 +150,48 @@ def _score(view, segments: np.ndarray, cam_poses: np.ndarray, m: Matches) -> np.
     mid = segments[m.local, 0] + span.mean(axis=1)[:, None] * (segments[m.local, 1] - segments[m.local, 0])
     return refine.score_e(cam_poses, m.hyp, view.lines.normals[m.line], segments[m.local, 0], segments[m.local, 1],
                           view.camera.pitch, view.camera.height_m, mid=mid)
+
+
+def e_limit(view, segments: np.ndarray, cam_poses: np.ndarray, m: Matches, tol) -> np.ndarray:
+    """(H,) the largest E (:func:`_score`) that one camera's matches ``m``
+    at its poses (H, 3) reach when each image line's end points lie at its
+    fit bound ``b`` (:func:`matcher.stage2.fit.fit_bound_px`, pixels) from
+    the projected segment, and the segment is off by the map's ``model_m``.
+
+    An end point ``b`` pixels off, across the line, turns its sight ray out
+    of the model segment's plane by the angle ``a_i`` between the line's
+    plane and the ray of the end point moved so, so the shown part's end
+    points, at distances ``d1``, ``d2`` (metres), lie within ``delta_i =
+    sin(a_i) d_i + model_m`` of the line's plane. E's terms are, to first order, the
+    middle's distance to the plane ``(delta_1 + delta_2) / 2`` and the
+    direction's ``(delta_2 - delta_1) / l`` (``l`` the shown part's
+    length; a sine, at most 1): their sum of squares is largest with both
+    end points at their bound, on one side of the plane (an offset) or on
+    opposite sides (a turn). The larger of the two, averaged per pose as
+    E's terms are.
+    """
+    H = len(cam_poses)
+    if not len(m):
+        return np.zeros(H)
+    lines = view.lines.lines[m.line]
+    q, seg = cam_poses[m.hyp], segments[m.local]
+    span = covered_span(view.camera, q, seg, lines)
+    ends = seg[:, None, 0] + span[..., None] * (seg[:, None, 1] - seg[:, None, 0])  # (T, 2, 3)
+    centre = np.stack([q[:, 0], q[:, 1], np.full(len(q), view.camera.height_m)], axis=1)
+    d = np.linalg.norm(ends - centre[:, None], axis=2)  # (T, 2)
+    shown = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
+    along = lines[:, 1] - lines[:, 0]
+    length = np.maximum(np.linalg.norm(along, axis=1), 1e-9)
+    across = np.stack([-along[:, 1], along[:, 0]], axis=1) / length[:, None]
+    moved = lines + (fit_bound_px(length, tol)[:, None] * across)[:, None, :]  # (T, 2, 2)
+    rays = view.camera.pixel_rays(moved.reshape(-1, 2)).reshape(-1, 2, 3)
+    rays /= np.linalg.norm(rays, axis=2, keepdims=True)
+    sin_a = np.abs(np.einsum("ti,tki->tk", view.lines.normals[m.line], rays))  # (T, 2)
+    delta = sin_a * d + tol.model_m  # (T, 2)
+    shown = np.maximum(shown, 1e-9)
+    offset = (0.5 * delta.sum(axis=1)) ** 2 + np.minimum(1.0, np.abs(delta[:, 1] - delta[:, 0]) / shown) ** 2
+    turn = (0.5 * (delta[:, 1] - delta[:, 0])) ** 2 + np.minimum(1.0, delta.sum(axis=1) / shown) ** 2
+    return np.bincount(m.hyp, np.maximum(offset, turn), minlength=H) / np.maximum(np.bincount(m.hyp, minlength=H), 1)
 
 
 def _why_none(n: np.ndarray, fixed: np.ndarray, tol) -> str:
