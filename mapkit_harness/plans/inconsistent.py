@@ -186,4 +186,26 @@ def tiled_podium(path: str | Path) -> Path:
     return Path(path)
 
 
-__all__ = ["doors_across_passages", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms", "tiled_podium"]
+def storeys_in_a_frame(path: str | Path, storeys: int = 2, gap: float = 6.0) -> Path:
+    """``storeys`` copies of :func:`row_of_rooms` (4 rooms, 16 x 6 m) side
+    by side, ``gap`` metres apart, and around them all a frame drawn on
+    the window layer 'A-GLAZ' 2 m out (proxy_escaldes' sheet of storeys,
+    framed by a polyline on a window layer: read with the first storey, its
+    building spans the sheet)."""
+    row_of_rooms(path, n=4)
+    doc = ezdxf.readfile(path)
+    msp = doc.modelspace()
+    first = list(msp)
+    for k in range(1, storeys):
+        for e in first:
+            twin = e.copy()
+            msp.add_entity(twin)
+            twin.translate(k * (16.0 + gap), 0, 0)
+    x1 = storeys * 16.0 + (storeys - 1) * gap
+    msp.add_lwpolyline([(-2, -2), (x1 + 2, -2), (x1 + 2, 8), (-2, 8)], close=True, dxfattribs={"layer": "A-GLAZ"})
+    doc.saveas(path)
+    return Path(path)
+
+
+__all__ = ["doors_across_passages", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms", "storeys_in_a_frame",
+           "tiled_podium"]
