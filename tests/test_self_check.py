@@ -19,8 +19,8 @@ from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, Mapki
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
-from mapkit_harness.plans.inconsistent import (doors_across_passages, plan_beside_elevation, room_outline_on_layer_0,
-                                                row_of_rooms, tiled_podium)
+from mapkit_harness.plans.inconsistent import (doors_across_passages, leaf_across_its_arc, plan_beside_elevation,
+                                                room_outline_on_layer_0, row_of_rooms, storeys_in_a_frame, tiled_podium)
 
 
 def test_a_consistent_plan_passes_without_a_word(tmp_path):
@@ -173,3 +173,52 @@ def test_a_door_line_at_one_wall_gives_no_passage_and_no_error():
     assert passage_opening(MultiLineString([[(0.0, 0.0), (1.0, 0.0)]]), walls) is None
     assert passage_opening(MultiLineString([[(0.0, 0.0), (1.0, 0.0)]]), walls.union(box(2.0, -5.0, 2.2, 5.0))) \
         is not None  # the line reaches half way to the next wall: a door across the passage
+
+
+def test_a_frame_around_a_sheet_of_storeys_belongs_to_no_storey(tmp_path):
+    # proxy_escaldes: a polyline on a window layer frames the whole sheet; given
+    # to the first storey, its building spanned the sheet and the map was refused.
+    scene = load_scene(storeys_in_a_frame(tmp_path / "sheet.dxf"))
+    assert scene.info["counts"]["doors"] == 4 and len(polygon_parts(scene.free_space)) == 1
+    assert 60.0 < scene.free_space.area < 80.0  # one storey, 16 x 6 m less the walls and the robot's margin
+
+
+def test_a_door_that_opens_into_one_room_only_does_not_spare_it():
+    # proxy_escaldes' stair lobby: its door's opening was put along the open
+    # leaf, inside the lobby, joining it to nothing; the lobby is cut off.
+    from shapely.geometry import MultiPolygon, box
+
+    from mapkit.importers.dxf.self_check import _rooms_cut_off
+    from mapkit.scene import Opening, Scene
+
+    walls = MultiPolygon([box(-0.1, -0.1, 8.1, 0.0), box(-0.1, 4.0, 8.1, 4.1), box(-0.1, 0, 0, 4),
+                          box(8, 0, 8.1, 4), box(4.95, 0, 5.05, 4)])
+    free = MultiPolygon([box(0.2, 0.2, 4.75, 3.8), box(5.25, 0.2, 7.8, 3.8)])
+
+    def cut_off(door):
+        scene = Scene(walls=walls, openings=[Opening(door, "door", 0.0, 2.0)], free_space=free, wall_height=2.5)
+        return _rooms_cut_off(scene, 0.2)
+
+    assert cut_off(box(5.1, 0.05, 6.0, 0.3))  # beside the doorway, in the east room only: not a door to it
+    assert not cut_off(box(4.95, 1.0, 5.05, 1.9))  # in the partition, a door too narrow for the robot
+    assert not cut_off(box(7.95, 1.0, 8.1, 1.9))  # in the outer wall: the east room's entrance
+
+
+def test_a_swing_whose_leaf_cuts_its_arc_opens_where_the_leaf_closes(tmp_path):
+    # proxy_escaldes: the open leaf's second line runs past the arc's end; the
+    # drawing's lines, noded, cut the arc in two and the swing was not read.
+    from pathlib import Path
+
+    from mapkit.importers.dxf import load_drawing
+    from mapkit.importers.dxf.closed_leaf import closed_leaf_opening
+    from mapkit.importers.dxf.openings import drawing_items
+    from mapkit.importers.dxf.walls import build_walls
+
+    drawing, _ = load_drawing(Path(leaf_across_its_arc(tmp_path / "leaf.dxf")), BuildOptions())
+    walls = build_walls(drawing.role("walls"), 0.6).walls
+    swing = max(drawing_items(drawing.role("doors")), key=lambda item: len(item.geoms))
+    assert len(swing.geoms) > 2  # the leaf's lines and the arc's pieces
+    cut = closed_leaf_opening(swing, walls, 0.6)
+    assert cut is not None
+    x0, y0, x1, y1 = cut.bounds  # across the partition, from the hinge (5.13, 0.27) to the latch (5.51, 1.09)
+    assert 5.0 < x0 < 5.2 and 5.45 < x1 < 5.6 and 0.2 < y0 < 0.35 and 1.0 < y1 < 1.15

@@ -186,4 +186,59 @@ def tiled_podium(path: str | Path) -> Path:
     return Path(path)
 
 
-__all__ = ["doors_across_passages", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms", "tiled_podium"]
+def storeys_in_a_frame(path: str | Path, storeys: int = 2, gap: float = 6.0) -> Path:
+    """``storeys`` copies of :func:`row_of_rooms` (4 rooms, 16 x 6 m) side
+    by side, ``gap`` metres apart, and around them all a frame drawn on
+    the window layer 'A-GLAZ' 2 m out (proxy_escaldes' sheet of storeys,
+    framed by a polyline on a window layer: read with the first storey, its
+    building spans the sheet)."""
+    row_of_rooms(path, n=4)
+    doc = ezdxf.readfile(path)
+    msp = doc.modelspace()
+    first = list(msp)
+    for k in range(1, storeys):
+        for e in first:
+            twin = e.copy()
+            msp.add_entity(twin)
+            twin.translate(k * (16.0 + gap), 0, 0)
+    x1 = storeys * 16.0 + (storeys - 1) * gap
+    msp.add_lwpolyline([(-2, -2), (x1 + 2, -2), (x1 + 2, 8), (-2, 8)], close=True, dxfattribs={"layer": "A-GLAZ"})
+    doc.saveas(path)
+    return Path(path)
+
+
+
+def leaf_across_its_arc(path: str | Path) -> Path:
+    """Two rooms, 5 x 4 and 3 x 4 m, in an 8 x 4 m outline on 'Walls'
+    (single lines; the west room's entrance a 1 m door in a gap of the west
+    wall), parted by a partition leaning 25 degrees east from x = 5 whose
+    doorway, 0.3 to 1.2 m up it, has a line drawn across it (the whole
+    partition again); on 'Doors' its 0.9 m door hinged at the doorway's
+    lower jamb, the open leaf drawn as two lines along the south wall, the
+    second running past the arc's end and cutting it (proxy_escaldes'
+    stair lobby doors)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, door = {"layer": "Walls"}, {"layer": "Doors"}
+    msp.add_lwpolyline([(0, 1.5), (0, 0), (8, 0), (8, 4), (0, 4), (0, 2.5)], dxfattribs=wall)
+    msp.add_line((0, 1.5), (1, 1.5), dxfattribs=door)
+    msp.add_arc((0, 1.5), 1.0, 0, 90, dxfattribs=door)
+    u = (0.4226, 0.9063)  # the partition's direction, 25 degrees off north
+
+    def along(t: float) -> tuple[float, float]:
+        return 5 + t * u[0], t * u[1]
+
+    msp.add_line(along(0), along(0.3), dxfattribs=wall)
+    msp.add_line(along(1.2), along(4 / u[1]), dxfattribs=wall)
+    msp.add_line(along(0), along(4 / u[1]), dxfattribs=wall)
+    hx, hy = along(0.3)
+    msp.add_line((hx, hy), (hx + 0.9, hy), dxfattribs=door)
+    msp.add_line((hx, hy + 0.04), (hx + 0.95, hy + 0.04), dxfattribs=door)
+    msp.add_arc((hx, hy), 0.9, 0, 65, dxfattribs=door)
+    doc.saveas(path)
+    return Path(path)
+
+
+__all__ = ["doors_across_passages", "leaf_across_its_arc", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms", "storeys_in_a_frame",
+           "tiled_podium"]

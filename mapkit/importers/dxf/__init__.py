@@ -34,7 +34,7 @@ from mapkit.importers.dxf.self_check import enforce
 from mapkit.importers.dxf.entities import SILENT, check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
 from mapkit.importers.dxf.read import model_space, read_dxf
-from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan
+from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan, plans_met
 from mapkit.importers.dxf.openings import drawing_items
 from mapkit.importers.dxf.doorway_gaps import wall_doorway_gaps
 from mapkit.importers.dxf.swing_layer import adopt_swing_layer
@@ -195,8 +195,11 @@ def _one_plan(strokes: list, swing_strokes: list, roles: dict, choice: int | Non
 
     def ours(s) -> bool:
         n = plan_of.get(id(s))
-        return (n if n is not None else nearest_plan(plans, (*s.coords.min(axis=0), *s.coords.max(axis=0)))) \
-            == chosen.number
+        if n is None:
+            box = (*s.coords.min(axis=0), *s.coords.max(axis=0))
+            # A stroke across two plans (a sheet's frame, a grid line) is no one plan's.
+            n = 0 if len(plans_met(plans, box)) > 1 else nearest_plan(plans, box)
+        return n == chosen.number
 
     note(f"the drawing holds {len(plans)} separate plans: " + "; ".join(p.describe() for p in plans)
          + f"; building #{chosen.number}" + ("" if choice else " (the largest); choose another with --plan N"))

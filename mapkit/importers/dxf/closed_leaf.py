@@ -93,11 +93,16 @@ def _closed_leaf(item: MultiLineString) -> tuple[np.ndarray, np.ndarray, np.ndar
     """``(hinge, latch, tip)`` of a swing drawing (the open leaf's tip): one arc (a polyline of at least
     three points on a circle of a door's radius) and one straight leaf from
     its centre (within ``DOOR_SWING_TIP_SHARE`` of the radius); the latch
-    is the arc's end farther from the leaf's tip. None for anything else."""
+    is the arc's end farther from the leaf's tip. None for anything else.
+
+    The lines of a drawing are noded where they cross (:func:`.openings.drawing_items`):
+    a leaf drawn across its arc's end cuts the arc in pieces, joined here again."""
     curves, straights = [], []
     for part in item.geoms:
         pts = np.asarray(part.coords)[:, :2]
         (curves if len(pts) >= 3 else straights).append(pts)
+    if len(curves) > 1:
+        curves = [np.asarray(g.coords)[:, :2] for g in shapely.get_parts(shapely.line_merge(MultiLineString(curves)))]
     if len(curves) != 1 or not straights:
         return None
     arc = curves[0]

@@ -46,6 +46,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from scipy import ndimage
 
 from mapkit.errors import InconsistentDrawingError
@@ -257,14 +258,30 @@ def _swing_arc(coords) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]
 def _rooms_cut_off(scene: Scene, robot_radius: float) -> list[float]:
     """Areas (m2, largest first) of the free space's parts beyond its
     largest that are more than a sliver (``ROOM_PART_MIN_AREA``) and that
-    no door opening touches (within ``robot_radius`` plus
-    ``DOOR_REACH_SLACK``): rooms whose doors were not found. A part a door
-    touches is a room behind a door too narrow for the robot, not a lost one."""
-    parts = sorted(polygon_parts(scene.free_space), key=lambda p: -p.area)[1:]
+    no door joins to anything: rooms whose doors were not found.
+
+    A door joins a part when its opening comes within ``robot_radius`` plus
+    ``DOOR_REACH_SLACK`` of it and also of another part (a door too narrow
+    for the robot) or reaches the building's outside (an entrance). A door
+    that touches one part only opens nothing: its opening was put beside
+    the doorway (along the open leaf), and the room behind it is lost."""
+    parts = sorted(polygon_parts(scene.free_space), key=lambda p: -p.area)
     doors = [o.footprint for o in scene.openings if o.kind == "door"]
     reach = robot_radius + DOOR_REACH_SLACK
-    return [float(p.area) for p in parts
-            if p.area >= ROOM_PART_MIN_AREA and not any(p.distance(d) <= reach for d in doors)]
+    outside = _outside(scene, reach)
+    joining = [d for d in doors
+               if d.distance(outside) <= DOOR_REACH_SLACK or sum(p.distance(d) <= reach for p in parts) >= 2]
+    return [float(p.area) for p in parts[1:]
+            if p.area >= ROOM_PART_MIN_AREA and not any(p.distance(d) <= reach for d in joining)]
+
+
+def _outside(scene: Scene, reach: float):
+    """The building's outer boundary (lines): the rim of its walls,
+    openings and free space (grown back by ``reach``), holes filled."""
+    drawn = shapely.union_all([scene.walls, scene.free_space.buffer(reach),
+                               *(o.footprint for o in scene.openings)])
+    shells = [shapely.Polygon(p.exterior) for p in polygon_parts(drawn)]
+    return shapely.union_all(shells).boundary
 
 
 def enforce(scene: Scene, drawing: PlanDrawing, robot_radius: float, accept: bool, warn) -> None:

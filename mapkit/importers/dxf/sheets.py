@@ -73,6 +73,12 @@ def nearest_plan(plans: list[SheetPlan], box) -> int:
     return min(plans, key=lambda p: shapely.box(*p.bounds).distance(b)).number
 
 
+def plans_met(plans: list[SheetPlan], box) -> list[int]:
+    """Numbers of the plans whose bounding box ``box`` (x0, y0, x1, y1) overlaps."""
+    b = shapely.box(*box)
+    return [p.number for p in plans if shapely.box(*p.bounds).intersects(b)]
+
+
 def choose_plan(plans: list[SheetPlan], choice: int | None) -> SheetPlan:
     """The plan to build: ``choice`` (``--plan N``) or the largest."""
     if choice is None:
