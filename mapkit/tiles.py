@@ -116,15 +116,44 @@ class Floor:
 
 @dataclass
 class TileRegions:
-    """One tile's regions: ``polygons``, ``lists`` (global segment ids),
-    ``keys`` (R,) uint64 the Morton key of each region's first cell, and
-    the tile's ``stats`` (counts)."""
+    """One tile's regions in compact form, a few flat arrays (what a tile
+    hands back, across processes too, and what is held until the join):
+    ``wkb`` (B,) uint8 the R outlines' WKB one after the other, ``wkb_ends``
+    (R,) int64 where each ends; ``ids`` (L,) int64 the lists (global segment
+    ids) one after the other, ``list_ends`` (R,) int64; ``keys`` (R,) uint64
+    the Morton key of each region's first cell; the tile's ``stats`` (counts).
+
+    Held as shapely geometries and one array per list, the tiles' results
+    were hundreds of thousands of small blocks spread over the heap, each
+    keeping its page from being handed back between tiles; WKB keeps every
+    coordinate bit for bit."""
 
     index: int
-    polygons: list
-    lists: list
+    wkb: np.ndarray
+    wkb_ends: np.ndarray
+    ids: np.ndarray
+    list_ends: np.ndarray
     keys: np.ndarray
     stats: dict = field(default_factory=dict)
+
+    @classmethod
+    def pack(cls, index: int, polygons: list, lists: list, keys: np.ndarray, stats: dict) -> TileRegions:
+        """The compact form of ``polygons`` (R shapely) and ``lists`` (R int arrays)."""
+        wkb = [bytes(b) for b in shapely.to_wkb(np.array(polygons + [None], dtype=object)[:-1])]
+        ends = np.cumsum([len(b) for b in wkb], dtype=np.int64)
+        ids = np.concatenate([np.asarray(x, dtype=np.int64) for x in lists] + [np.zeros(0, dtype=np.int64)])
+        list_ends = np.cumsum([len(x) for x in lists], dtype=np.int64)
+        return cls(index, np.frombuffer(b"".join(wkb), dtype=np.uint8), ends, ids, list_ends,
+                   np.asarray(keys, dtype=np.uint64), stats)
+
+    def polygons(self) -> list:
+        """The R outlines as shapely geometries."""
+        starts = np.concatenate([[0], self.wkb_ends[:-1]]).astype(np.int64)
+        return list(shapely.from_wkb([self.wkb[a:b].tobytes() for a, b in zip(starts, self.wkb_ends)]))
+
+    def lists(self) -> list:
+        """The R lists, (K,) int64 arrays of global segment ids."""
+        return np.split(self.ids, self.list_ends[:-1]) if len(self.list_ends) else []
 
 
 def reach(settings: RegionSettings) -> float:
@@ -256,7 +285,7 @@ def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> Ti
     settings = floor.settings
     ids = tile_segments(floor.segments, tile.bounds, settings)
     if not len(ids):
-        return TileRegions(tile.index, [], [], np.zeros(0, dtype=np.uint64), {"segments": 0, "quadtree_leaves": 0})
+        return TileRegions.pack(tile.index, [], [], np.zeros(0, dtype=np.uint64), {"segments": 0, "quadtree_leaves": 0})
     camera = Camera.from_dict(floor.camera)
     sight = Sight(camera.height_m, camera.elevation_range(), settings.max_range, float(settings.min_visible_length))
     occ = _edges_near(Occluders.from_geometry(floor.occluders), floor.segments[ids], settings)
@@ -270,15 +299,15 @@ def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> Ti
     groups, bits = merge_leaves(leaves, settings.merge_growth)
     polygons, lists, keys = region_geometry(leaves, groups, bits, floor.free_space, len(ids), workers)
     stats = {"segments": int(len(ids)), "quadtree_leaves": int(len(leaves.level))}
-    return TileRegions(tile.index, polygons, [ids[x] for x in lists], keys, stats)
+    return TileRegions.pack(tile.index, polygons, [ids[x] for x in lists], keys, stats)
 
 
 def join_tiles(results: list, floor: Floor, plan: TilePlan) -> RegionPartition:
     """The tiles' regions as one partition, numbered along the Morton curve
     of their first cells (as the one-piece build numbers them)."""
     results = sorted(results, key=lambda r: r.index)
-    polygons = [p for r in results for p in r.polygons]
-    lists = [x for r in results for x in r.lists]
+    polygons = [p for r in results for p in r.polygons()]
+    lists = [x for r in results for x in r.lists()]
     keys = np.concatenate([r.keys for r in results] + [np.zeros(0, dtype=np.uint64)])
     order = np.argsort(keys, kind="stable")
     polygons, lists = [polygons[k] for k in order], [lists[k] for k in order]
