@@ -156,12 +156,32 @@ class TileRegions:
         return np.split(self.ids, self.list_ends[:-1]) if len(self.list_ends) else []
 
 
+def _growth(settings: RegionSettings) -> float:
+    """How far, metres, the growth by ``eps`` moves a region's outline (its
+    circumscribed buffer, :func:`mapkit.vir.grow_regions`), plus ``TILE_REACH_SLACK``."""
+    return (settings.eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS)) + TILE_REACH_SLACK
+
+
 def reach(settings: RegionSettings) -> float:
     """How far from a segment, metres (horizontally), its grown region can
     reach: the sight range's circumscribed polygon, then the growth by
-    ``eps`` (its circumscribed buffer), plus ``TILE_REACH_SLACK``."""
-    grow = (settings.eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS))
-    return settings.max_range / math.cos(math.pi / CIRCLE_SIDES) + grow + TILE_REACH_SLACK
+    ``eps`` (:func:`_growth`)."""
+    return settings.max_range / math.cos(math.pi / CIRCLE_SIDES) + _growth(settings)
+
+
+def free_space_near(free_space, bounds: tuple, settings: RegionSettings):
+    """The free space within the growth by ``eps`` of a tile's square
+    ``bounds``: all of a region ``R_S`` that the tile's cells can see
+    through ``R_S^eps = (R_S & free space) + eps`` lies in it.
+
+    A tile computes its segments' regions ``within`` it
+    (:func:`mapkit.visibility.segment_regions_within`, which keeps
+    ``R_S & within`` and skips the sample points walled off from it and the
+    pieces whose visibility polygons stay away from it): a segment near the
+    tile but facing away from it costs the sweep of its points, no more."""
+    g = _growth(settings)
+    x0, y0, x1, y1 = bounds
+    return shapely.clip_by_rect(free_space, x0 - g, y0 - g, x1 + g, y1 + g)
 
 
 def predicted_peak_mb(free_area_m2: float) -> float:
@@ -289,7 +309,8 @@ def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> Ti
     camera = Camera.from_dict(floor.camera)
     sight = Sight(camera.height_m, camera.elevation_range(), settings.max_range, float(settings.min_visible_length))
     occ = _edges_near(Occluders.from_geometry(floor.occluders), floor.segments[ids], settings)
-    sr = segment_regions_within(floor.segments[ids], occ, sight, floor.free_space, workers=workers)
+    near = free_space_near(floor.free_space, tile.bounds, settings)
+    sr = segment_regions_within(floor.segments[ids], occ, sight, near, workers=workers)
     grown = grow_regions(sr.regions, floor.free_space, settings.eps, workers)
     del sr
     release_memory()
@@ -367,5 +388,5 @@ class TileFailed(RuntimeError):
 
 
 __all__ = ["Floor", "Tile", "TileFailed", "TilePlan", "TileRegions", "build_regions_in_tiles", "build_tile",
-           "join_tiles", "plan_tiles", "predicted_peak_mb", "reach", "tile_error", "tile_segments",
+           "free_space_near", "join_tiles", "plan_tiles", "predicted_peak_mb", "reach", "tile_error", "tile_segments",
            "tile_side_for_budget"]
