@@ -244,12 +244,6 @@ def encode(m: LineMap) -> bytes:
     n, r = m.n_segments, m.n_regions
     dq = _quantize_deltas(m.ring_points)
     dw = _quantize_deltas(m.wall_points)
-    bits = _lists_to_bitsets(m.list_offsets, m.list_indices, n)
-    # XOR each region's bitset with the previous one: neighbouring regions see
-    # nearly the same segments, so the stream is mostly zeros.
-    xbits = bits.copy()
-    if len(xbits) > 1:
-        xbits[1:] ^= bits[:-1]
     meta = dict(m.meta)
     meta["counts"] = {
         "segments": n,
@@ -275,7 +269,7 @@ def encode(m: LineMap) -> bytes:
         (b"RREG", np.asarray(m.ring_region, dtype="<u4").tobytes(), _ZLIB),
         (b"RHOL", np.asarray(m.ring_is_hole, dtype="u1").tobytes(), _ZLIB),
         (b"RPTS", dq.astype("<i4").reshape(-1).tobytes(), _ZLIB),
-        (b"VLST", xbits.tobytes(), _ZLIB),
+        (b"VLST", _xor_bitsets(m.list_offsets, m.list_indices, n), _ZLIB),
         (b"GOFF", np.asarray(m.grid_offsets, dtype="<u4").tobytes(), _ZLIB),
         (b"GREG", np.asarray(m.grid_regions, dtype="<u4").tobytes(), _ZLIB),
         (b"WOFF", np.asarray(m.wall_offsets, dtype="<u4").tobytes(), _ZLIB),
@@ -294,12 +288,29 @@ def write_chunks(chunks, raw_sizes: dict | None = None) -> bytes:
     header["n_chunks"] = len(chunks)
     out = [header.tobytes()]
     for tag, codec, raw in chunks:
-        stored = zlib.compress(raw, 9) if codec == _ZLIB else raw
+        stored, size = _stored(raw, codec)
         ch = np.zeros((), dtype=_CHUNK)
-        ch["tag"], ch["codec"], ch["raw_size"] = tag, codec, (raw_sizes or {}).get(tag, len(raw))
+        ch["tag"], ch["codec"], ch["raw_size"] = tag, codec, (raw_sizes or {}).get(tag, size)
         ch["stored_size"], ch["crc32"] = len(stored), zlib.crc32(stored)
         out += [ch.tobytes(), stored]
     return b"".join(out)
+
+
+def _stored(raw, codec: int) -> tuple[bytes, int]:
+    """A chunk's stored payload and its raw size; ``raw`` is bytes or an
+    iterator of byte blocks (compressed as they come: the same bytes as
+    compressing them joined, without holding them joined)."""
+    if isinstance(raw, (bytes, bytearray, memoryview)):
+        return (zlib.compress(raw, 9) if codec == _ZLIB else bytes(raw)), len(raw)
+    if codec != _ZLIB:
+        raw = b"".join(raw)
+        return raw, len(raw)
+    z, out, size = zlib.compressobj(9), [], 0
+    for block in raw:
+        out.append(z.compress(block))
+        size += len(block)
+    out.append(z.flush())
+    return b"".join(out), size
 
 
 def read_chunks(data: bytes) -> list[list]:
@@ -337,6 +348,27 @@ def _lists_to_bitsets(offsets: np.ndarray, indices: np.ndarray, n: int) -> np.nd
     rows = np.repeat(np.arange(r), np.diff(offsets))
     dense[rows, np.asarray(indices, dtype=np.int64)] = True
     return np.packbits(dense[:, :n] if n else dense[:, :0], axis=1, bitorder="little")
+
+
+def _xor_bitsets(offsets: np.ndarray, indices: np.ndarray, n: int):
+    """The VLST payload, a block of rows at a time (bytes blocks): each
+    region's packed bitset (:func:`_lists_to_bitsets`) XOR-ed with the
+    previous region's; neighbouring regions see nearly the same segments,
+    so the stream is mostly zeros. Blocks of about 4 MB of dense rows: the
+    whole (R, N) table of a large floor (80,000 regions of 40,000 segments)
+    would take gigabytes."""
+    offsets = np.asarray(offsets, dtype=np.int64)
+    r = len(offsets) - 1
+    block = max(1, (1 << 22) // max(n, 1))
+    prev = np.zeros((1, (n + 7) // 8), dtype=np.uint8)
+    for r0 in range(0, r, block):
+        r1 = min(r, r0 + block)
+        bits = _lists_to_bitsets(offsets[r0:r1 + 1] - offsets[r0], indices[offsets[r0]:offsets[r1]], n)
+        x = bits.copy()
+        x[0] ^= prev[0]
+        x[1:] ^= bits[:-1]
+        prev = bits[-1:]
+        yield x.tobytes()
 
 
 # --------------------------------------------------------------------------

@@ -139,8 +139,11 @@ def build_map_of_scene(scene, plan: str | Path, options: BuildOptions | None = N
 def _build_regions(segments: np.ndarray, scene, camera, options: BuildOptions, progress: bool, runner):
     """The region stage: in one piece (:func:`mapkit.vir.build_regions`), or
     in tiles (:mod:`mapkit.tiles`) when ``options.tile_side`` is set or the
-    floor's predicted peak memory is past ``options.memory_budget``."""
-    from mapkit.tiles import Floor, build_regions_in_tiles, plan_tiles, tile_side_for_budget
+    floor's predicted peak memory is past ``options.memory_budget``; in the
+    latter case, unless ``runner`` says otherwise, each tile in a process of
+    its own (:class:`mapkit.tile_runner.ChildTiles`)."""
+    from mapkit.tile_runner import ChildTiles
+    from mapkit.tiles import Floor, build_regions_in_tiles, plan_tiles, predicted_peak_mb, tile_side_for_budget
     from mapkit.vir import RegionSettings, build_regions
 
     settings = RegionSettings.from_options(options)
@@ -153,6 +156,8 @@ def _build_regions(segments: np.ndarray, scene, camera, options: BuildOptions, p
     plan = plan_tiles(scene.free_space, settings, side)
     log.info("region stage in %d tiles of %.1f m", len(plan.tiles), plan.side)
     floor = Floor(np.asarray(segments, dtype=float), scene.walls, scene.free_space, camera.to_dict(), settings)
+    if runner is None and predicted_peak_mb(scene.free_space.area) > options.memory_budget:
+        runner = ChildTiles(options.jobs)
     return build_regions_in_tiles(floor, plan, runner, progress, options.jobs)
 
 

@@ -1,4 +1,14 @@
-"""The tiles of one floor (:mod:`mapkit.tiles`) as Dask tasks:
+"""Where the tiles of one floor (:mod:`mapkit.tiles`) run, other than one
+after the other in the build's own process.
+
+:class:`ChildTiles`: one after the other, each in a fresh process of its
+own (what ``mapkit build`` does when the floor is past
+``--memory-budget``): a tile's heap is handed back whole when it ends, so
+no tile's peak adds to the next one's, and the build's own process holds
+only the floor and the tiles' compact results
+(:class:`mapkit.tiles.TileRegions`).
+
+:class:`DaskTiles`: the tiles as Dask tasks,
 ``mapkit build PLAN -o OUT.lmap --workers N`` (a local cluster of N
 processes) or ``--scheduler ADDRESS`` (a running cluster), the options of
 the batch builds (:mod:`mapkit.batch`).
@@ -16,6 +26,37 @@ from __future__ import annotations
 
 import uuid
 from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class ChildTiles:
+    """Each tile built in a fresh process of its own (``spawn``: a new
+    interpreter, nothing inherited of this one's heap), one after the other,
+    with ``threads`` threads (:mod:`mapkit.parallel`)."""
+
+    threads: int = 1
+
+    def run(self, floor, plan, progress: bool = False) -> list:
+        """Every tile of ``plan``: their :class:`~mapkit.tiles.TileRegions`,
+        in tile order; a bar over the tiles with ``progress``. MapkitError
+        (bad input) or :class:`~mapkit.tiles.TileFailed` naming the first
+        tile that failed (a child that died too: e.g. out of memory)."""
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        from tqdm import tqdm
+
+        from mapkit.tiles import build_tile, tile_error
+
+        context = multiprocessing.get_context("spawn")
+        out = []
+        for tile in tqdm(plan.tiles, desc="tiles", unit="tile", disable=not progress, leave=False):
+            try:
+                with ProcessPoolExecutor(1, mp_context=context) as child:
+                    out.append(child.submit(build_tile, floor, plan, tile, self.threads).result())
+            except Exception as exc:
+                raise tile_error(tile, len(plan.tiles), exc) from exc
+        return out
 
 
 @dataclass(frozen=True)
@@ -65,4 +106,4 @@ class DaskTiles:
         return results
 
 
-__all__ = ["DaskTiles"]
+__all__ = ["ChildTiles", "DaskTiles"]

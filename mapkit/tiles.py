@@ -116,23 +116,72 @@ class Floor:
 
 @dataclass
 class TileRegions:
-    """One tile's regions: ``polygons``, ``lists`` (global segment ids),
-    ``keys`` (R,) uint64 the Morton key of each region's first cell, and
-    the tile's ``stats`` (counts)."""
+    """One tile's regions in compact form, a few flat arrays (what a tile
+    hands back, across processes too, and what is held until the join):
+    ``wkb`` (B,) uint8 the R outlines' WKB one after the other, ``wkb_ends``
+    (R,) int64 where each ends; ``ids`` (L,) int64 the lists (global segment
+    ids) one after the other, ``list_ends`` (R,) int64; ``keys`` (R,) uint64
+    the Morton key of each region's first cell; the tile's ``stats`` (counts).
+
+    Held as shapely geometries and one array per list, the tiles' results
+    were hundreds of thousands of small blocks spread over the heap, each
+    keeping its page from being handed back between tiles; WKB keeps every
+    coordinate bit for bit."""
 
     index: int
-    polygons: list
-    lists: list
+    wkb: np.ndarray
+    wkb_ends: np.ndarray
+    ids: np.ndarray
+    list_ends: np.ndarray
     keys: np.ndarray
     stats: dict = field(default_factory=dict)
+
+    @classmethod
+    def pack(cls, index: int, polygons: list, lists: list, keys: np.ndarray, stats: dict) -> TileRegions:
+        """The compact form of ``polygons`` (R shapely) and ``lists`` (R int arrays)."""
+        wkb = [bytes(b) for b in shapely.to_wkb(np.array(polygons + [None], dtype=object)[:-1])]
+        ends = np.cumsum([len(b) for b in wkb], dtype=np.int64)
+        ids = np.concatenate([np.asarray(x, dtype=np.int64) for x in lists] + [np.zeros(0, dtype=np.int64)])
+        list_ends = np.cumsum([len(x) for x in lists], dtype=np.int64)
+        return cls(index, np.frombuffer(b"".join(wkb), dtype=np.uint8), ends, ids, list_ends,
+                   np.asarray(keys, dtype=np.uint64), stats)
+
+    def polygons(self) -> list:
+        """The R outlines as shapely geometries."""
+        starts = np.concatenate([[0], self.wkb_ends[:-1]]).astype(np.int64)
+        return list(shapely.from_wkb([self.wkb[a:b].tobytes() for a, b in zip(starts, self.wkb_ends)]))
+
+    def lists(self) -> list:
+        """The R lists, (K,) int64 arrays of global segment ids."""
+        return np.split(self.ids, self.list_ends[:-1]) if len(self.list_ends) else []
+
+
+def _growth(settings: RegionSettings) -> float:
+    """How far, metres, the growth by ``eps`` moves a region's outline (its
+    circumscribed buffer, :func:`mapkit.vir.grow_regions`), plus ``TILE_REACH_SLACK``."""
+    return (settings.eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS)) + TILE_REACH_SLACK
 
 
 def reach(settings: RegionSettings) -> float:
     """How far from a segment, metres (horizontally), its grown region can
     reach: the sight range's circumscribed polygon, then the growth by
-    ``eps`` (its circumscribed buffer), plus ``TILE_REACH_SLACK``."""
-    grow = (settings.eps + VIR_EPS_SLACK) / math.cos(math.pi / (4 * VIR_QUAD_SEGS))
-    return settings.max_range / math.cos(math.pi / CIRCLE_SIDES) + grow + TILE_REACH_SLACK
+    ``eps`` (:func:`_growth`)."""
+    return settings.max_range / math.cos(math.pi / CIRCLE_SIDES) + _growth(settings)
+
+
+def free_space_near(free_space, bounds: tuple, settings: RegionSettings):
+    """The free space within the growth by ``eps`` of a tile's square
+    ``bounds``: all of a region ``R_S`` that the tile's cells can see
+    through ``R_S^eps = (R_S & free space) + eps`` lies in it.
+
+    A tile computes its segments' regions ``within`` it
+    (:func:`mapkit.visibility.segment_regions_within`, which keeps
+    ``R_S & within`` and skips the sample points walled off from it and the
+    pieces whose visibility polygons stay away from it): a segment near the
+    tile but facing away from it costs the sweep of its points, no more."""
+    g = _growth(settings)
+    x0, y0, x1, y1 = bounds
+    return shapely.clip_by_rect(free_space, x0 - g, y0 - g, x1 + g, y1 + g)
 
 
 def predicted_peak_mb(free_area_m2: float) -> float:
@@ -256,11 +305,12 @@ def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> Ti
     settings = floor.settings
     ids = tile_segments(floor.segments, tile.bounds, settings)
     if not len(ids):
-        return TileRegions(tile.index, [], [], np.zeros(0, dtype=np.uint64), {"segments": 0, "quadtree_leaves": 0})
+        return TileRegions.pack(tile.index, [], [], np.zeros(0, dtype=np.uint64), {"segments": 0, "quadtree_leaves": 0})
     camera = Camera.from_dict(floor.camera)
     sight = Sight(camera.height_m, camera.elevation_range(), settings.max_range, float(settings.min_visible_length))
     occ = _edges_near(Occluders.from_geometry(floor.occluders), floor.segments[ids], settings)
-    sr = segment_regions_within(floor.segments[ids], occ, sight, floor.free_space, workers=workers)
+    near = free_space_near(floor.free_space, tile.bounds, settings)
+    sr = segment_regions_within(floor.segments[ids], occ, sight, near, workers=workers)
     grown = grow_regions(sr.regions, floor.free_space, settings.eps, workers)
     del sr
     release_memory()
@@ -270,15 +320,15 @@ def build_tile(floor: Floor, plan: TilePlan, tile: Tile, workers: int = 1) -> Ti
     groups, bits = merge_leaves(leaves, settings.merge_growth)
     polygons, lists, keys = region_geometry(leaves, groups, bits, floor.free_space, len(ids), workers)
     stats = {"segments": int(len(ids)), "quadtree_leaves": int(len(leaves.level))}
-    return TileRegions(tile.index, polygons, [ids[x] for x in lists], keys, stats)
+    return TileRegions.pack(tile.index, polygons, [ids[x] for x in lists], keys, stats)
 
 
 def join_tiles(results: list, floor: Floor, plan: TilePlan) -> RegionPartition:
     """The tiles' regions as one partition, numbered along the Morton curve
     of their first cells (as the one-piece build numbers them)."""
     results = sorted(results, key=lambda r: r.index)
-    polygons = [p for r in results for p in r.polygons]
-    lists = [x for r in results for x in r.lists]
+    polygons = [p for r in results for p in r.polygons()]
+    lists = [x for r in results for x in r.lists()]
     keys = np.concatenate([r.keys for r in results] + [np.zeros(0, dtype=np.uint64)])
     order = np.argsort(keys, kind="stable")
     polygons, lists = [polygons[k] for k in order], [lists[k] for k in order]
@@ -338,5 +388,5 @@ class TileFailed(RuntimeError):
 
 
 __all__ = ["Floor", "Tile", "TileFailed", "TilePlan", "TileRegions", "build_regions_in_tiles", "build_tile",
-           "join_tiles", "plan_tiles", "predicted_peak_mb", "reach", "tile_error", "tile_segments",
+           "free_space_near", "join_tiles", "plan_tiles", "predicted_peak_mb", "reach", "tile_error", "tile_segments",
            "tile_side_for_budget"]

@@ -346,3 +346,24 @@ def test_saved_map_has_ordinary_file_mode(tmp_path):
     mask = os.umask(0)
     os.umask(mask)
     assert path.stat().st_mode & 0o777 == 0o666 & ~mask
+
+
+def test_the_lists_are_encoded_a_block_of_rows_at_a_time_as_the_whole_table_would_be():
+    """VLST of a map too large for a dense table of its lists (3 blocks of
+    rows here): the bytes of the whole table XOR-ed row to row, compressed
+    the same."""
+    import zlib
+
+    from linemap.lmap import _lists_to_bitsets, _stored, _xor_bitsets
+
+    n, r = 1000, 9000
+    # Runs of equal lists, as neighbouring regions have: the XOR-ed stream is mostly zeros.
+    rows, indices = np.nonzero(np.repeat(np.random.default_rng(46).random((r // 100, n)) < 0.03, 100, axis=0))
+    offsets = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=r))])
+    bits = _lists_to_bitsets(offsets, indices, n)
+    xbits = bits.copy()
+    xbits[1:] ^= bits[:-1]
+    blocks = list(_xor_bitsets(offsets, indices, n))
+    assert len(blocks) == 3 and b"".join(blocks) == xbits.tobytes()
+    stored, size = _stored(iter(blocks), 1)
+    assert size == xbits.nbytes and stored == zlib.compress(xbits.tobytes(), 9)

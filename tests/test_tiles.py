@@ -131,3 +131,24 @@ def test_the_memory_budget_chooses_one_piece_or_the_tile_side():
     assert tile_side_for_budget(box(0, 0, 200, 200), settings, 500.0) < side
     with pytest.raises(MapkitError, match="--memory-budget 150 MB is too small .* give at least"):
         tile_side_for_budget(box(0, 0, 200, 200), settings, 150.0)
+
+
+def test_a_tile_in_a_process_of_its_own_gives_the_tile_built_here(office):
+    """ChildTiles (a floor past --memory-budget) builds the tile in a fresh
+    process: the same compact result, array for array; the outlines and
+    lists come back as built."""
+    from dataclasses import replace
+
+    from mapkit.tile_runner import ChildTiles
+    from mapkit.tiles import build_tile
+
+    floor = office[0.0]
+    plan = plan_tiles(floor.free_space, floor.settings, TILE_SIDE)
+    one = replace(plan, tiles=plan.tiles[:1])
+    here = build_tile(floor, one, one.tiles[0])
+    (child,) = ChildTiles(1).run(floor, one)
+    assert len(here.keys) > 10 and here.stats == child.stats
+    for name in ("wkb", "wkb_ends", "ids", "list_ends", "keys"):
+        assert np.array_equal(getattr(here, name), getattr(child, name)), name
+    assert all(p.equals_exact(q, 0.0) for p, q in zip(here.polygons(), child.polygons()))
+    assert [len(x) for x in here.lists()] == [int(n) for n in np.diff(here.list_ends, prepend=0)]

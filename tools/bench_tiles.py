@@ -4,8 +4,10 @@ generated offices of n x n rooms of 5 m (``mapkit_harness.plans.office_grid``).
 
 Each row is one ``mapkit build`` in a fresh process: wall and processor
 seconds (the build's process and its worker processes), peak resident
-memory of the build's own process and of its largest worker (a local Dask
-cluster's, with ``--workers``), tiles, regions, file size. A row names
+memory of the build's own process and of its largest child (a tile's own
+process, or a local Dask cluster's worker with ``--workers``), tiles, the
+segments whose regions the tiles computed (a segment near a tile border is
+computed by each tile it reaches), regions, file size. A row names
 the build options it adds. Never ask for a one-piece build of 40 x 40 rooms
 or more on a machine of 24 GB: it takes more than that (issue 46).
 
@@ -65,6 +67,7 @@ def child(plan: Path, options: list[str]) -> dict:
                 "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                 "worker_peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
                 "free_m2": stats["free_space_area"], "tiles": stats.get("tiles", 1),
+                "segments": stats["segments"], "computed": stats.get("tile_segments", stats["segments"]),
                 "regions": len(m.list_offsets) - 1,
                 "kib": out.stat().st_size / 1024, "mean_list": stats["mean_list_length"]}
 
@@ -90,8 +93,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def run(args) -> int:
     rows = [(int(r.split(":", 1)[0]), r.split(":", 1)[1]) for r in args.rows] if args.rows else ROWS
-    table = Table("office", "free m2", "options", "tiles", "wall s", "cpu s", "peak MB", "worker peak MB",
-                  "regions", "mean list", "KiB")
+    table = Table("office", "free m2", "options", "tiles", "wall s", "cpu s", "peak MB", "child peak MB",
+                  "segments (computed)", "regions", "mean list", "KiB")
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:
         plans: dict[int, Path] = {}
@@ -107,12 +110,13 @@ def run(args) -> int:
             try:
                 r = run_row(plans[n], options)
             except Exception as exc:  # a benchmark reports every row, even a failing one
-                table.row(case, "-", options or "(defaults)", f"failed: {exc}", *["-"] * 7)
+                table.row(case, "-", options or "(defaults)", f"failed: {exc}", *["-"] * 8)
                 failed += 1
                 continue
             table.row(case, f"{r['free_m2']:.0f}", options or "(defaults)", r["tiles"], f"{r['wall_s']:.0f}",
                       f"{r['cpu_s']:.0f}", f"{r['peak_mb']:.0f}",
-                      f"{r['worker_peak_mb']:.0f}" if "--workers" in options else "-", r["regions"],
+                      f"{r['worker_peak_mb']:.0f}" if r["worker_peak_mb"] > 0 else "-",
+                      f"{r['segments']} ({r['computed']})", r["regions"],
                       f"{r['mean_list']:.1f}", f"{r['kib']:.0f}")
     return 1 if failed else 0
 
