@@ -147,8 +147,9 @@ def _build_regions(segments: np.ndarray, scene, camera, options: BuildOptions, p
     from mapkit.vir import RegionSettings, build_regions
 
     settings = RegionSettings.from_options(options)
+    past_budget = predicted_peak_mb(scene.free_space.area) > options.memory_budget
     side = options.tile_side
-    if side is None:
+    if side is None and past_budget:
         side = tile_side_for_budget(scene.free_space, settings, options.memory_budget)
     if side is None:
         return build_regions(segments, scene.walls, scene.free_space, camera, settings, progress=progress,
@@ -156,7 +157,7 @@ def _build_regions(segments: np.ndarray, scene, camera, options: BuildOptions, p
     plan = plan_tiles(scene.free_space, settings, side)
     log.info("region stage in %d tiles of %.1f m", len(plan.tiles), plan.side)
     floor = Floor(np.asarray(segments, dtype=float), scene.walls, scene.free_space, camera.to_dict(), settings)
-    if runner is None and predicted_peak_mb(scene.free_space.area) > options.memory_budget:
+    if runner is None and past_budget:
         runner = ChildTiles(options.jobs)
     return build_regions_in_tiles(floor, plan, runner, progress, options.jobs)
 
