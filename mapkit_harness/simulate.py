@@ -65,44 +65,59 @@ class Frame:
         return sorted([int(s), j] for j, s in enumerate(self.truth) if s >= 0)
 
 
-def _clip_to_frustum(seg: np.ndarray, camera: Camera, R: np.ndarray, C: np.ndarray) -> np.ndarray | None:
-    """Part of a segment (2, 3) in front of the camera and inside the image
-    pyramid; ``R`` (3, 3) world-to-camera rotation, ``C`` (3,) the camera
-    centre, metres."""
-    p = (seg - C) @ R.T  # camera coords
+def _clip_to_frustum(segs: np.ndarray, camera: Camera, R: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The parts of segments ``segs`` (N, 2, 3) in front of the camera and
+    inside the image pyramid: ``(ids (K,), parts (K, 2, 3))`` of the
+    segments with a part; ``R`` (3, 3) world-to-camera rotation, ``C`` (3,)
+    the camera centre, metres. Each segment clipped against the pyramid's
+    half-spaces and the near plane in turn (Liang-Barsky), all at once."""
+    p = (segs - C) @ R.T  # camera coords
     w, h = camera.width, camera.height
-    # Half-spaces n . X >= 0 of the view pyramid, and the near plane.
+    # Half-spaces n . X + off >= 0 of the view pyramid, and the near plane.
     planes = [
-        np.array([camera.fx, 0.0, camera.cx]),  # u >= 0
-        np.array([-camera.fx, 0.0, w - camera.cx]),  # u <= w
-        np.array([0.0, camera.fy, camera.cy]),  # v >= 0
-        np.array([0.0, -camera.fy, h - camera.cy]),  # v <= h
+        (np.array([camera.fx, 0.0, camera.cx]), 0.0),  # u >= 0
+        (np.array([-camera.fx, 0.0, w - camera.cx]), 0.0),  # u <= w
+        (np.array([0.0, camera.fy, camera.cy]), 0.0),  # v >= 0
+        (np.array([0.0, -camera.fy, h - camera.cy]), 0.0),  # v <= h
+        (np.array([0.0, 0.0, 1.0]), -0.05),  # 5 cm in front
     ]
-    t0, t1 = 0.0, 1.0
-    a, b = p[0], p[1]
-    for n, off in [(pl, 0.0) for pl in planes] + [(np.array([0.0, 0.0, 1.0]), -0.05)]:
-        fa, fb = n @ a + off, n @ b + off
-        if fa < 0 and fb < 0:
-            return None
-        if fa < 0:
-            t0 = max(t0, fa / (fa - fb))
-        elif fb < 0:
-            t1 = min(t1, fa / (fa - fb))
-    if t1 - t0 < 1e-6:
-        return None
-    return np.array([seg[0] + t0 * (seg[1] - seg[0]), seg[0] + t1 * (seg[1] - seg[0])])
+    t0, t1 = np.zeros(len(segs)), np.ones(len(segs))
+    inside = np.ones(len(segs), dtype=bool)
+    for n, off in planes:
+        fa, fb = (p[:, 0] * n).sum(axis=1) + off, (p[:, 1] * n).sum(axis=1) + off
+        inside &= (fa >= 0) | (fb >= 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cut = fa / (fa - fb)
+        t0 = np.where(fa < 0, np.maximum(t0, cut), t0)
+        t1 = np.where((fa >= 0) & (fb < 0), np.minimum(t1, cut), t1)
+    ids = np.flatnonzero(inside & (t1 - t0 >= 1e-6))
+    a, d = segs[ids, 0], segs[ids, 1] - segs[ids, 0]
+    return ids, np.stack([a + t0[ids, None] * d, a + t1[ids, None] * d], axis=1)
 
 
-def _edges_near(c: np.ndarray, part: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The wall edges ``ea -> eb`` (E, 2) whose bounding boxes meet that of
-    the triangle of sight lines from ``c`` (2,) to ``part`` (2, 3): the only
-    ones a sight line to the part can cross (a millimetre of margin keeps
-    the cut clear of rounding), so the sight test is the same against far
-    fewer edges."""
-    lo = np.minimum(c, part[:, :2].min(axis=0)) - 1e-3
-    hi = np.maximum(c, part[:, :2].max(axis=0)) + 1e-3
-    near = (np.minimum(ea, eb) <= hi).all(axis=1) & (np.maximum(ea, eb) >= lo).all(axis=1)
-    return ea[near], eb[near]
+def _seen_samples(c: np.ndarray, pts: np.ndarray, parts: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """(K, S) bool: which of the samples ``pts`` (K, S, 2) along the parts
+    ``parts`` (K, 2, 3) the point ``c`` (2,) sees past the wall edges
+    ``ea -> eb`` (E, 2) (:func:`sight_blocked`'s test). A part is tested
+    only against the edges whose bounding boxes meet that of its triangle
+    of sight lines: the only ones a sight line to it can cross (a
+    millimetre of margin keeps the cut clear of rounding), so the test is
+    the same against far fewer edges."""
+    lo = np.minimum(c, parts[:, :, :2].min(axis=1)) - 1e-3  # (K, 2)
+    hi = np.maximum(c, parts[:, :, :2].max(axis=1)) + 1e-3
+    near = (np.minimum(ea, eb)[None] <= hi[:, None]).all(axis=2) & (np.maximum(ea, eb)[None] >= lo[:, None]).all(axis=2)
+    seen = np.ones(pts.shape[:2], dtype=bool)
+    for k in np.flatnonzero(near.any(axis=1)):
+        seen[k] = ~sight_blocked(c, pts[k], ea[near[k]], eb[near[k]])
+    return seen
+
+
+def _longest_run(flags: np.ndarray) -> tuple[int, int]:
+    """First and last index of the first longest run of True in ``flags`` (S,) (one True at least)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))
+    starts, ends = edges[0::2], edges[1::2]
+    k = int(np.argmax(ends - starts))
+    return int(starts[k]), int(ends[k]) - 1
 
 
 def map_range(linemap) -> float:
@@ -132,34 +147,23 @@ def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: 
     centre = camera.centre(x, y)
     max_range = map_range(linemap)
     R = camera.world2cam(yaw)
-    parts = [(i, _clip_to_frustum(seg, camera, R, centre)) for i, seg in enumerate(linemap.segments)]
-    parts = [(i, part) for i, part in parts if part is not None]
+    ids, parts = _clip_to_frustum(linemap.segments, camera, R, centre)
     t = np.linspace(0.0, 1.0, samples)
-    out, ids = [], []
-    for i, part in parts:
-        pts = part[0] + t[:, None] * (part[1] - part[0])
-        vis = ~sight_blocked(c, pts[:, :2], *_edges_near(c, part, ea, eb)) \
-            & (np.linalg.norm(pts - centre, axis=1) <= max_range)
+    pts = parts[:, 0, None] + t[None, :, None] * (parts[:, 1, None] - parts[:, 0, None])  # (K, S, 3)
+    visible = _seen_samples(c, pts[..., :2], parts, ea, eb) & (np.linalg.norm(pts - centre, axis=2) <= max_range)
+    out, kept = [], []
+    for i, vis, samples_of in zip(ids, visible, pts):
         if not vis.any():
             continue
-        # Longest run of visible samples.
-        best, start, best_rng = 0, None, None
-        for k, ok in enumerate(np.append(vis, False)):
-            if ok and start is None:
-                start = k
-            elif not ok and start is not None:
-                if k - start > best:
-                    best, best_rng = k - start, (start, k - 1)
-                start = None
-        p3 = pts[[best_rng[0], best_rng[1]]]
+        p3 = samples_of[list(_longest_run(vis))]
         uv, z = camera.project(p3, x, y, yaw)
         if (z <= 0).any() or np.linalg.norm(uv[1] - uv[0]) < min_px:
             continue
         out.append(uv)
-        ids.append(i)
+        kept.append(i)
     if not out:
         return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
-    return np.array(out), np.array(ids, dtype=np.int64)
+    return np.array(out), np.array(kept, dtype=np.int64)
 
 
 def add_noise(lines: np.ndarray, rng, px: float, deg: float, end_px: float, camera: Camera) -> np.ndarray:
