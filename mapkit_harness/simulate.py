@@ -95,20 +95,14 @@ def _clip_to_frustum(segs: np.ndarray, camera: Camera, R: np.ndarray, C: np.ndar
     return ids, np.stack([a + t0[ids, None] * d, a + t1[ids, None] * d], axis=1)
 
 
-def _seen_samples(c: np.ndarray, pts: np.ndarray, parts: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
-    """(K, S) bool: which of the samples ``pts`` (K, S, 2) along the parts
-    ``parts`` (K, 2, 3) the point ``c`` (2,) sees past the wall edges
-    ``ea -> eb`` (E, 2) (:func:`sight_blocked`'s test). A part is tested
-    only against the edges whose bounding boxes meet that of its triangle
-    of sight lines: the only ones a sight line to it can cross (a
-    millimetre of margin keeps the cut clear of rounding), so the test is
-    the same against far fewer edges."""
-    lo = np.minimum(c, parts[:, :, :2].min(axis=1)) - 1e-3  # (K, 2)
-    hi = np.maximum(c, parts[:, :, :2].max(axis=1)) + 1e-3
-    near = (np.minimum(ea, eb)[None] <= hi[:, None]).all(axis=2) & (np.maximum(ea, eb)[None] >= lo[:, None]).all(axis=2)
+def _seen_samples(c: np.ndarray, pts: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """(K, S) bool: which of the samples ``pts`` (K, S, 2) along K parts
+    the point ``c`` (2,) sees past the wall edges ``ea -> eb`` (E, 2)
+    (:func:`sight_blocked`'s test, a part at a time: its samples' sight
+    lines are tested against only the edges near them)."""
     seen = np.ones(pts.shape[:2], dtype=bool)
-    for k in np.flatnonzero(near.any(axis=1)):
-        seen[k] = ~sight_blocked(c, pts[k], ea[near[k]], eb[near[k]])
+    for k in range(len(pts)):
+        seen[k] = ~sight_blocked(c, pts[k], ea, eb)
     return seen
 
 
@@ -150,7 +144,7 @@ def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: 
     ids, parts = _clip_to_frustum(linemap.segments, camera, R, centre)
     t = np.linspace(0.0, 1.0, samples)
     pts = parts[:, 0, None] + t[None, :, None] * (parts[:, 1, None] - parts[:, 0, None])  # (K, S, 3)
-    visible = _seen_samples(c, pts[..., :2], parts, ea, eb) & (np.linalg.norm(pts - centre, axis=2) <= max_range)
+    visible = _seen_samples(c, pts[..., :2], ea, eb) & (np.linalg.norm(pts - centre, axis=2) <= max_range)
     out, kept = [], []
     for i, vis, samples_of in zip(ids, visible, pts):
         if not vis.any():
