@@ -158,32 +158,42 @@ def shade_column_blocks(linemap, xy, h: float, rays_of, shape: tuple[int, int], 
     for cols in np.array_split(np.arange(W), max(1, min(blocks, W))):
         rays = rays_of(cols)
         near = surfaces
-        level = np.hypot(rays[:, 0], rays[:, 1])
+        # The block's bearings reach their extremes on its outline: a
+        # bearing is an angle about the image of the vertical through the
+        # camera, a point outside the block (else the outline's bearings go
+        # all the way round and nothing is cut).
+        grid = rays.reshape(H, len(cols), 3)
+        outline = np.concatenate([grid[0], grid[-1], grid[:, 0], grid[:, -1]])
+        level = np.hypot(outline[:, 0], outline[:, 1])
         if level.min() > 1e-6:  # (a ray straight up or down has no bearing: that block meets everything)
-            azimuth = np.arctan2(rays[:, 1], rays[:, 0])
+            azimuth = np.arctan2(outline[:, 1], outline[:, 0])
             mid = math.atan2(np.sin(azimuth).sum(), np.cos(azimuth).sum())
             half = float(np.abs(np.angle(np.exp(1j * (azimuth - mid)))).max())
             if half < math.pi / 2:
                 near = surfaces.subset(*surfaces.bearing_masks(sliver, (xy[0], xy[1], mid), half))
-        out.append(shade_directions(linemap, xy, h, rays, near).reshape(H, len(cols)))
+        out.append(shade_directions(linemap, xy, h, rays, near, len(cols)).reshape(H, len(cols)))
     return np.hstack(out)
 
 
-def shade_directions(linemap, xy, h: float, rays: np.ndarray, surfaces: "VisibleSurfaces") -> np.ndarray:
+def shade_directions(linemap, xy, h: float, rays: np.ndarray, surfaces: "VisibleSurfaces", columns: int = 0
+                     ) -> np.ndarray:
     """(P,) float32 grey level seen along world directions ``rays`` (P, 3)
-    from the point ``xy`` (2,) at height ``h`` metres, among ``surfaces``."""
+    from the point ``xy`` (2,) at height ``h`` metres, among ``surfaces``;
+    ``columns``: the rays are rows of that many columns (see
+    :meth:`VisibleSurfaces.first_panel`)."""
     top = float(linemap.meta.get("wall_height", 2.5))
     free = free_space(linemap)
     origin = np.array([float(xy[0]), float(xy[1])])
     out = np.empty(len(rays), dtype=np.float32)
-    for i0 in range(0, len(rays), _CHUNK):
-        d = rays[i0:i0 + _CHUNK]
+    chunk = _CHUNK // columns * columns if 0 < columns <= _CHUNK else _CHUNK  # whole rows
+    for i0 in range(0, len(rays), chunk):
+        d = rays[i0:i0 + chunk]
         # Floor or ceiling, whichever the ray meets (rays along the horizon
         # meet neither).
         with np.errstate(divide="ignore"):
             s_plane = np.where(d[:, 2] < 0, -h / d[:, 2], np.where(d[:, 2] > 0, (top - h) / d[:, 2], np.inf))
         grey = np.where(d[:, 2] < 0, FLOOR_GREY, CEILING_GREY).astype(np.float32)
-        s_panel, panel = surfaces.first_panel(origin, h, d)
+        s_panel, panel = surfaces.first_panel(origin, h, d, columns)
         s_slab, slab = surfaces.first_slab(origin, h, d)
         hit = (s_panel < s_plane) & (s_panel <= s_slab)
         grey[hit] = surfaces.panel_grey[panel[hit]]
@@ -198,8 +208,14 @@ def shade_directions(linemap, xy, h: float, rays: np.ndarray, surfaces: "Visible
             at = origin + s_plane[out_of][finite, None] * d[out_of][finite, :2]
             reach[finite] = free.distance(at)
             grey[out_of] = np.where(reach <= _FLOOR_REACH_M, grey[out_of], OUTSIDE_GREY)
-        out[i0:i0 + _CHUNK] = grey
+        out[i0:i0 + chunk] = grey
     return out
+
+
+def _nearest(s: np.ndarray, which: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's least value of ``s`` (P, n) and the entry of ``which`` (n,) it is in (the first of equals)."""
+    i = s.argmin(axis=1)
+    return s[np.arange(len(s)), i], which[i]
 
 
 class VisibleSurfaces:
@@ -254,22 +270,50 @@ class VisibleSurfaces:
         out.quads, out.slab_z, out.slab_grey = self.quads[slabs], self.slab_z[slabs], self.slab_grey[slabs]
         return out
 
-    def first_panel(self, origin: np.ndarray, h: float, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def first_panel(self, origin: np.ndarray, h: float, d: np.ndarray, columns: int = 0
+                    ) -> tuple[np.ndarray, np.ndarray]:
         """For rays ``(origin, h) + s d`` (d (P, 3)): the smallest s > 0 at
         which each meets a panel within its heights (inf if none), and that
-        panel's index."""
+        panel's index (0 if none).
+
+        ``columns``: the rays are rows of that many columns (row-major). When
+        every column's rays share their level direction exactly (a level
+        pinhole camera's columns), a wall of the full height is met at the
+        same s by a whole column, so walls are cast once a column and only
+        the openings' panels once a ray: the same values, a fraction of the
+        work."""
         if not len(self.a):
             return np.full(len(d), np.inf), np.zeros(len(d), dtype=np.int64)
-        e = self.b - self.a  # (E, 2)
-        w = self.a - origin
+        full = np.isinf(self.zlo) & np.isinf(self.zhi)
+        if columns and len(d) % columns == 0 and full.any():
+            level = d[:, :2].reshape(-1, columns, 2)
+            if (level == level[:1]).all():
+                return self._first_panel_by_column(origin, h, d, columns, full)
+        return _nearest(self._panel_hits(origin, h, d, np.arange(len(self.a))), np.arange(len(self.a)))
+
+    def _first_panel_by_column(self, origin, h, d, columns: int, full: np.ndarray):
+        walls, openings = np.flatnonzero(full), np.flatnonzero(~full)
+        s_wall, i_wall = _nearest(self._panel_hits(origin, h, d[:columns], walls), walls)
+        s, i = np.tile(s_wall, len(d) // columns), np.tile(i_wall, len(d) // columns)
+        if len(openings):
+            s_open, i_open = _nearest(self._panel_hits(origin, h, d, openings), openings)
+            # The first of equal values in the panels' order, as one argmin over all of them picks.
+            nearer = (s_open < s) | ((s_open == s) & (i_open < i))
+            s, i = np.where(nearer, s_open, s), np.where(nearer, i_open, i)
+        return s, np.where(np.isinf(s), 0, i)
+
+    def _panel_hits(self, origin: np.ndarray, h: float, d: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """(P, len(which)): the s > 0 at which each ray meets each of the
+        panels ``which`` within its heights, inf where it does not."""
+        a, b, zlo, zhi = self.a[which], self.b[which], self.zlo[which], self.zhi[which]
+        e = b - a  # (E, 2)
+        w = a - origin
         den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]  # (P, E)
         with np.errstate(divide="ignore", invalid="ignore"):
             s = (w[None, :, 0] * e[None, :, 1] - w[None, :, 1] * e[None, :, 0]) / den
             t = (w[None, :, 0] * d[:, None, 1] - w[None, :, 1] * d[:, None, 0]) / den
         z = h + s * d[:, None, 2]
-        s = np.where((den != 0) & (s > 1e-9) & (t >= 0) & (t <= 1) & (z >= self.zlo) & (z <= self.zhi), s, np.inf)
-        i = s.argmin(axis=1)
-        return s[np.arange(len(s)), i], i
+        return np.where((den != 0) & (s > 1e-9) & (t >= 0) & (t <= 1) & (z >= zlo) & (z <= zhi), s, np.inf)
 
     def first_slab(self, origin: np.ndarray, h: float, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`first_panel` for the slabs."""
