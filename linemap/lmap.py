@@ -419,7 +419,7 @@ def decode(data: bytes, name: str = "<bytes>") -> LineMap:
         label = tag.decode("ascii", "replace")
         if pos + size > len(data):
             raise LmapError(f"{name} is truncated (chunk {label} cut short); rebuild or re-copy it")
-        stored = data[pos : pos + size]
+        stored = memoryview(data)[pos : pos + size]
         pos += size
         if zlib.crc32(stored) != int(ch["crc32"]):
             raise LmapError(f"{name} is corrupt: checksum mismatch in chunk {label}; rebuild or re-copy it")
@@ -428,25 +428,59 @@ def decode(data: bytes, name: str = "<bytes>") -> LineMap:
             raise LmapError(f"{name} is corrupt: chunk {label} claims {raw_size} bytes, more than a map of "
                             f"{len(data)} bytes can hold; rebuild or re-copy it")
         budget -= raw_size
-        if int(ch["codec"]) == _ZLIB:
-            # At most one byte past the size the header states: a corrupt or
-            # hostile chunk cannot inflate to gigabytes before it is rejected.
-            inflate = zlib.decompressobj()
-            try:
-                payload = inflate.decompress(stored, raw_size + 1)
-            except zlib.error as exc:
-                raise LmapError(f"{name} is corrupt: chunk {label} does not decompress ({exc})") from None
-            complete = inflate.eof
-        elif int(ch["codec"]) == _RAW:
-            payload, complete = stored, True
-        else:
-            raise LmapError(f"{name} uses unknown codec {int(ch['codec'])} in chunk {label}")
-        if len(payload) != raw_size or not complete:
-            raise LmapError(f"{name} is corrupt: chunk {label} has the wrong size")
-        raw[tag] = payload
+        chunk = _Chunk(stored, int(ch["codec"]), raw_size, name, label)
+        if chunk.codec not in (_ZLIB, _RAW):
+            raise LmapError(f"{name} uses unknown codec {chunk.codec} in chunk {label}")
+        # The visible lists are read a block of rows at a time as they are
+        # inflated (_lists_from_bitsets): whole, they are regions x segments
+        # / 8 bytes (416 MB for an office of 40 x 40 rooms).
+        raw[tag] = chunk if tag == b"VLST" else b"".join(chunk.blocks(raw_size))
     if pos != len(data):
         raise LmapError(f"{name} has {len(data) - pos} unexpected trailing bytes; re-copy it")
     return _from_chunks(raw, name, (major, minor))
+
+
+class _Chunk:
+    """A chunk's stored payload (checksum checked), inflated on demand a
+    block at a time; ``name`` (the file) and ``label`` (the tag) are for errors."""
+
+    def __init__(self, stored: memoryview, codec: int, raw_size: int, name: str, label: str):
+        self.stored, self.codec, self.raw_size = stored, codec, raw_size
+        self.name, self.label = name, label
+
+    def __len__(self) -> int:
+        return self.raw_size
+
+    def blocks(self, block_bytes: int):
+        """The raw payload as ``bytes`` blocks of ``block_bytes`` (the last
+        shorter). Never inflates more than a block plus one byte past the
+        size the header states: a corrupt or hostile chunk cannot inflate to
+        gigabytes before it is rejected."""
+        if self.codec == _RAW:
+            if len(self.stored) != self.raw_size:
+                raise LmapError(f"{self.name} is corrupt: chunk {self.label} has the wrong size")
+            for p in range(0, self.raw_size, max(block_bytes, 1)):
+                yield bytes(self.stored[p:p + block_bytes])
+            return
+        inflate, tail, left = zlib.decompressobj(), self.stored, self.raw_size
+        wrong_size = LmapError(f"{self.name} is corrupt: chunk {self.label} has the wrong size")
+        try:
+            while left:
+                want = min(block_bytes, left)
+                out = inflate.decompress(tail, want)
+                tail = inflate.unconsumed_tail
+                while len(out) < want and tail:
+                    out += inflate.decompress(tail, want - len(out))
+                    tail = inflate.unconsumed_tail
+                if len(out) != want:  # the stream ended early
+                    raise wrong_size
+                left -= want
+                yield out
+            extra = inflate.decompress(tail, 1)
+        except zlib.error as exc:
+            raise LmapError(f"{self.name} is corrupt: chunk {self.label} does not decompress ({exc})") from None
+        if extra or not inflate.eof:
+            raise wrong_size
 
 
 def _need(raw: dict[bytes, bytes], tag: bytes, name: str) -> bytes:
@@ -497,8 +531,10 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
     dq = _array(raw, b"RPTS", "<i4", p, name, 2).astype(np.int64).reshape(p, 2)
     ring_points = np.cumsum(dq, axis=0).astype(np.float64) * quantum
     nbytes = (n + 7) // 8
-    xbits = _array(raw, b"VLST", "u1", r, name, nbytes).reshape(r, nbytes)
-    list_offsets, list_indices = _lists_from_bitsets(xbits, n, n_list, name)
+    vlst = _need(raw, b"VLST", name)
+    if len(vlst) != r * nbytes:
+        raise LmapError(f"{name} is inconsistent: chunk VLST holds {len(vlst)} values, expected {r * nbytes}")
+    list_offsets, list_indices = _lists_from_bitsets(vlst, r, n, n_list, name)
     grid_offsets = _array(raw, b"GOFF", "<u4", ny * nx + 1, name).astype(np.int64)
     grid_regions = _array(raw, b"GREG", "<u4", n_grid, name).astype(np.int64)
     wall_offsets = _array(raw, b"WOFF", "<u4", n_wall_rings + 1, name).astype(np.int64)
@@ -517,31 +553,48 @@ def _from_chunks(raw: dict[bytes, bytes], name: str, version: tuple[int, int]) -
     return m
 
 
-def _lists_from_bitsets(xbits: np.ndarray, n: int, n_list: int, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """``(offsets (R+1,), indices (n_list,))`` of the visible lists from their
-    XOR-ed bitsets (R, ceil(n / 8)), a block of rows at a time (memory stays
-    near the output's), refusing more entries than META's ``n_list``."""
-    r = len(xbits)
+def _lists_from_bitsets(vlst: _Chunk, r: int, n: int, n_list: int, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(offsets (R+1,), indices (<= n_list,))`` of the visible lists from
+    the VLST chunk (``r`` XOR-ed bitsets of ``n`` bits), inflated and
+    expanded a block of rows at a time: memory stays near the output's
+    (``n_list`` int64, plus the blocks' int32 before they are joined), not
+    the table's (``r x n / 8`` bytes); more entries than META's ``n_list``
+    are refused before they are stored (nothing is allocated from META's
+    word: a crafted count could ask for gigabytes)."""
+    nbytes = (n + 7) // 8
     counts = np.zeros(r, dtype=np.int64)
-    parts, prev, total = [], None, 0
-    block = max(1, (1 << 22) // max(n, 1))
-    for r0 in range(0, r, block):
-        chunk = xbits[r0:r0 + block]
+    parts, prev, total, r0 = [], None, 0, 0
+    block = max(1, (1 << 22) // max(n, 1))  # rows of about 4 M bits: 4 MB once unpacked
+    for raw in vlst.blocks(block * nbytes):
+        chunk = np.frombuffer(raw, dtype=np.uint8).reshape(-1, nbytes)
         if prev is not None:
             chunk = chunk.copy()
             chunk[0] ^= prev
         bits = np.bitwise_xor.accumulate(chunk, axis=0)
         prev = bits[-1]
-        rows, cols = np.nonzero(np.unpackbits(bits, axis=1, count=n, bitorder="little"))
-        total += len(cols)
-        if total > n_list:
+        rows, cols = _set_bits(bits, n)
+        if total + len(cols) > n_list:
             raise LmapError(f"{name} is inconsistent: its visible lists hold more than the {n_list} entries META "
                             "says; rebuild it with 'mapkit build'")
+        parts.append(cols.astype(np.int32 if n < 2**31 else np.int64))  # half the memory until joined
+        total += len(cols)
         counts[r0:r0 + len(chunk)] = np.bincount(rows, minlength=len(chunk))
-        parts.append(cols.astype(np.int64))
+        r0 += len(chunk)
     offsets = np.zeros(r + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
-    return offsets, (np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64))
+    return offsets, (np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, dtype=np.int64))
+
+
+def _set_bits(bits: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(rows, cols)`` of the set bits among the first ``n`` of each row of
+    ``bits`` (rows, ceil(n / 8)) uint8 little-bit-order bitsets, row by row
+    in ascending column order. Only the non-zero bytes are unpacked: a list
+    names a few dozen of tens of thousands of segments."""
+    r_idx, b_idx = np.nonzero(bits)
+    k, bit = np.nonzero(np.unpackbits(bits[r_idx, b_idx][:, None], axis=1, bitorder="little"))
+    rows, cols = r_idx[k], b_idx[k] * 8 + bit
+    keep = cols < n  # the padding bits of the last byte are not segments
+    return rows[keep], cols[keep]
 
 
 def _json_depth(text: bytes) -> int:

@@ -468,15 +468,18 @@ def _samples(segs: np.ndarray, vertical: np.ndarray, sight: Sight) -> _Samples:
 
 
 def _sample_polygons(xy: np.ndarray, occ: Occluders, max_range: float, progress: bool, workers: int,
-                     within=None) -> np.ndarray:
+                     within=None, used=None) -> np.ndarray:
     """(P,) the visibility polygon of each point of ``xy`` (P, 2) within
     ``max_range``, collinear vertices dropped, empty for a point buried in a
     wall, and empty for a point that cannot see anything of ``within``
-    (:func:`_cut_off`; None: every point is swept)."""
+    (:func:`_cut_off`; None: every point is swept) or that no overlay uses
+    (``used`` (P,) bool False; None: all are used)."""
     box = max_range / math.cos(math.pi / CIRCLE_SIDES) + 0.01
     from mapkit.visibility_batch import polygons_of, visibility_polygons
 
-    swept = np.arange(len(xy)) if within is None else np.nonzero(~_cut_off(xy, occ, box, within))[0]
+    swept = np.arange(len(xy)) if used is None else np.nonzero(used)[0]
+    if within is not None:
+        swept = swept[~_cut_off(xy[swept], occ, box, within)]
     with step("visibility polygons", progress):
         coords, owner = visibility_polygons(xy[swept], occ, box, workers)
         raw = polygons_of(coords, swept[owner], len(xy))
@@ -515,6 +518,26 @@ def _cut_off(xy: np.ndarray, occ: Occluders, box: float, within) -> np.ndarray:
     apart = shapely.multipolygons(apart)
     shapely.prepare(apart)
     return shapely.contains_xy(apart, xy[:, 0], xy[:, 1])
+
+
+def _samples_reaching(samples: _Samples, sight: Sight, within) -> tuple[_Samples, np.ndarray]:
+    """``samples`` without the pairs whose annulus (its outer circle
+    circumscribed, as :func:`annuli` makes it) and the vertical segments
+    whose sight range stays ``VIS_WITHIN_MARGIN`` away from ``within``: their
+    pieces lie in those disks, so they cannot meet it (a tile's segments near
+    its border, computed again by the next tile: their samples beyond the
+    sight range of the tile are not swept). Also (P,) bool, the points of
+    ``samples.xy`` the rest use."""
+    grow = 1.0 / math.cos(math.pi / CIRCLE_SIDES)
+    shapely.prepare(within)
+    k = shapely.distance(within, shapely.points(samples.pair_mid)) <= samples.pair_rout * grow + VIS_WITHIN_MARGIN
+    v = (shapely.distance(within, shapely.points(samples.xy[samples.vert_keys]))
+         <= sight.max_range * grow + VIS_WITHIN_MARGIN)
+    kept = _Samples(samples.xy, samples.vert_ids[v], samples.vert_keys[v], samples.pair_seg[k], samples.pair_a[k],
+                    samples.pair_b[k], samples.pair_mid[k], samples.pair_rin[k], samples.pair_rout[k])
+    used = np.zeros(len(samples.xy), dtype=bool)
+    used[kept.vert_keys] = used[kept.pair_a] = used[kept.pair_b] = True
+    return kept, used
 
 
 def _samples_seeing(samples: _Samples, vp: np.ndarray, within) -> _Samples:
@@ -643,10 +666,13 @@ def segment_regions_within(segments: np.ndarray, occ: Occluders, sight: Sight, w
     samples = _samples(segs, vertical, sight)
     t_sample = time.perf_counter()
 
-    vp = _sample_polygons(samples.xy, occ, sight.max_range, progress, workers, within)
+    sample_pairs = len(samples.pair_seg)  # all of them, whether overlaid or not
+    used = None
+    if within is not None:
+        samples, used = _samples_reaching(samples, sight, within)
+    vp = _sample_polygons(samples.xy, occ, sight.max_range, progress, workers, within, used)
     t_vis = time.perf_counter()
 
-    sample_pairs = len(samples.pair_seg)  # all of them, whether overlaid or not
     if within is not None:
         samples = _samples_seeing(samples, vp, within)
     regions = np.array([Polygon()] * n, dtype=object)

@@ -367,3 +367,53 @@ def test_the_lists_are_encoded_a_block_of_rows_at_a_time_as_the_whole_table_woul
     assert len(blocks) == 3 and b"".join(blocks) == xbits.tobytes()
     stored, size = _stored(iter(blocks), 1)
     assert size == xbits.nbytes and stored == zlib.compress(xbits.tobytes(), 9)
+
+
+def _wide_map(n_segments: int, n_regions: int, run: int, per_list: int, seed: int = 46):
+    """A map of many segments and regions, as a large floor's: one triangle
+    per region, runs of ``run`` neighbouring regions seeing the same
+    ``per_list`` random segments (VLST: ``n_regions x n_segments / 8`` bytes
+    inflated, mostly zeros once XOR-ed)."""
+    from linemap.lmap import LineMap
+
+    rng = np.random.default_rng(seed)
+    segs = np.zeros((n_segments, 2, 3))
+    segs[:, 0, 0] = np.arange(n_segments) * 0.01
+    segs[:, 1, 0] = segs[:, 0, 0] + 0.005
+    segs[:, 1, 2] = 3.0
+    tri = np.array([[0.0, 0.0], [0.4, 0.0], [0.0, 0.4]])
+    corner = 0.5 * np.stack([np.arange(n_regions) % 200, np.arange(n_regions) // 200], axis=1)
+    ring_points = (tri[None] + corner[:, None, :]).reshape(-1, 2)
+    lists = np.sort(np.concatenate([rng.choice(n_segments, per_list, replace=False)
+                                    for _ in range(n_regions // run)]).reshape(-1, per_list), axis=1)
+    list_indices = np.repeat(lists, run, axis=0).reshape(-1)
+    m = LineMap(segments=segs, kinds=np.zeros(n_segments, np.uint8), ring_points=ring_points,
+                ring_offsets=np.arange(n_regions + 1) * 3, ring_region=np.arange(n_regions),
+                ring_is_hole=np.zeros(n_regions, bool), list_offsets=np.arange(n_regions + 1) * per_list,
+                list_indices=list_indices, grid_origin=np.zeros(2), grid_cell=1000.0,
+                grid_shape=(1, 1), grid_offsets=np.array([0, n_regions]), grid_regions=np.arange(n_regions),
+                wall_points=tri * 2, wall_offsets=np.array([0, 3]), wall_is_hole=np.zeros(1, bool),
+                meta={"units": "m"})
+    return m
+
+
+@pytest.mark.slow
+def test_the_lists_are_decoded_a_block_of_rows_at_a_time():
+    """Decoding a map whose lists inflate to 120 MB (24,000 regions of
+    40,000 segments: hundreds of blocks of rows) gives back the same lists
+    and never holds the inflated table: peak memory (tracemalloc, which sees
+    numpy's buffers and zlib's output) a small part of it."""
+    import tracemalloc
+
+    m = _wide_map(n_segments=40_000, n_regions=24_000, run=40, per_list=30)
+    blob = encode(m)
+    inflated = m.n_regions * ((m.n_segments + 7) // 8)
+    tracemalloc.start()
+    try:
+        m2 = decode(blob)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    np.testing.assert_array_equal(m2.list_offsets, m.list_offsets)
+    np.testing.assert_array_equal(m2.list_indices, m.list_indices)
+    assert peak < inflated / 4, (peak, inflated)

@@ -69,3 +69,32 @@ def test_points_walled_off_from_the_free_space_are_not_swept():
     assert not _cut_off(xy, occ, box, scene.free_space)[:2].any()
     res = _regions(scene.segments, scene, within=outside)
     assert all(g.is_empty for g in res.regions)
+
+
+def test_pairs_whose_annulus_stays_away_are_left_out_and_their_points_not_swept():
+    """A 24 x 24 m room, the free space asked for a 2 m square in a corner
+    (a tile's, say): the pairs whose annulus (the sight range around the
+    pair, as ``annuli`` draws it) stays 1 mm away from it are left out, the
+    points only they use are not swept, and every region is unchanged over
+    the square."""
+    from shapely.geometry import box
+
+    from mapkit.tolerances import VIS_WITHIN_MARGIN, VIS_VERTICAL_XY
+    from mapkit.visibility import _samples, _samples_reaching, annuli
+
+    scene = single_room(24.0, 24.0)
+    within = box(0.0, 0.0, 2.0, 2.0)
+    sight = Sight(CAMERA.height_m, CAMERA.elevation_range(), RANGE, MIN_LEN)
+    segs = np.asarray(scene.segments, dtype=float)
+    samples = _samples(segs, np.linalg.norm(segs[:, 1, :2] - segs[:, 0, :2], axis=1) <= VIS_VERTICAL_XY, sight)
+    kept, used = _samples_reaching(samples, sight, within)
+    assert 0 < len(kept.pair_seg) < len(samples.pair_seg) and 0 < used.sum() < len(samples.xy)
+    left = set(zip(kept.pair_seg.tolist(), kept.pair_a.tolist(), kept.pair_b.tolist()))
+    dropped = np.array([p not in left for p in zip(samples.pair_seg.tolist(), samples.pair_a.tolist(),
+                                                     samples.pair_b.tolist())])
+    far = annuli(samples.pair_mid[dropped], samples.pair_rin[dropped], samples.pair_rout[dropped])
+    assert (shapely.distance(within, far) > VIS_WITHIN_MARGIN).all()
+    assert set(np.nonzero(used)[0]) == set(kept.pair_a) | set(kept.pair_b) | set(kept.vert_keys)
+    everywhere, near = _regions(segs, scene), _regions(segs, scene, within=within)
+    for a, b in zip(everywhere.regions, near.regions):
+        assert shapely.symmetric_difference(a.intersection(within), b.intersection(within)).area < 1e-9

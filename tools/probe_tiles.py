@@ -15,6 +15,12 @@ the regions, lists and outlines are the same bit for bit.
     python tools/probe_tiles.py memory --rooms 10 --tile-side 13
     python tools/probe_tiles.py memory --rooms 10 --tile-side 13 --here
     python tools/probe_tiles.py within --rooms 20 --tile-side 26 --tiles 8
+
+``profile``: one tile (the middle one, or ``--tiles``) built under
+cProfile, one thread: the functions that took the most time, cumulative
+(wall-clock seconds as cProfile counts them: read the shares).
+
+    python tools/probe_tiles.py profile --rooms 20 --tile-side 26
 """
 
 from __future__ import annotations
@@ -130,15 +136,33 @@ def within(args) -> None:
               f"lists the same: {lists}; outlines the same: {outlines}", flush=True)
 
 
+def profile(args) -> None:
+    import cProfile
+    import pstats
+
+    from mapkit import tiles
+
+    floor, _, _ = _floor(args.rooms)
+    plan = tiles.plan_tiles(floor.free_space, floor.settings, args.tile_side)
+    for i in args.tiles or [len(plan.tiles) // 2]:
+        tile = plan.tiles[i]
+        prof = cProfile.Profile()
+        t = time.process_time()
+        built = prof.runcall(tiles.build_tile, floor, plan, tile, 1)
+        print(f"tile {i} ({tile.place()}), {built.stats['segments']} segments, {len(built.keys)} regions: "
+              f"{time.process_time() - t:.1f} processor s under the profiler", flush=True)
+        pstats.Stats(prof).sort_stats("cumulative").print_stats(30)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("what", choices=["memory", "within"])
+    ap.add_argument("what", choices=["memory", "within", "profile"])
     ap.add_argument("--rooms", type=int, default=10)
     ap.add_argument("--tile-side", type=float, default=13.0)
     ap.add_argument("--here", action="store_true", help="memory: the tiles in this process, one after the other")
-    ap.add_argument("--tiles", type=int, nargs="*", help="within: these tiles (default: the middle one)")
+    ap.add_argument("--tiles", type=int, nargs="*", help="within, profile: these tiles (default: the middle one)")
     args = ap.parse_args(argv)
-    (memory if args.what == "memory" else within)(args)
+    {"memory": memory, "within": within, "profile": profile}[args.what](args)
     return 0
 
 
