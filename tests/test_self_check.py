@@ -233,3 +233,13 @@ def test_solid_walls_under_a_header_in_mm_are_read_in_the_unit_their_thickness_s
     assert len(polygon_parts(scene.free_space)) == 2 and 40.0 < scene.free_space.area < 45.0
     with pytest.raises(MapkitError, match="--units says mm"):  # --units is the user's word, never overruled
         load_scene(tmp_path / "house.dxf", BuildOptions(units="mm"))
+
+
+def test_a_plan_drawn_at_a_fraction_of_its_size_is_refused_naming_the_scale_its_doors_say(tmp_path):
+    # proxy_sansebastian: a 100 m building drawn 10 units across, its doors a fifth of a door's width as read.
+    path = row_of_rooms(tmp_path / "small.dxf", n=8, insunits=6, unit_per_m=0.2)
+    with pytest.raises(InconsistentDrawingError, match=r"its 8 door drawings are a median 0\.18 m wide, .* "
+                                                       r"fix with --scale 5 or "):
+        load_scene(path)
+    scene = load_scene(path, BuildOptions(scale=5))
+    assert scene.info["counts"]["doors"] == 8 and len(polygon_parts(scene.free_space)) == 1
