@@ -380,7 +380,12 @@ TYPICAL_DOOR_WIDTH = 0.9
 #: this, metres, in log scale (:func:`mapkit.importers.dxf.units.units_from_evidence`):
 #: interior partitions of 0.1 m to outer walls of 0.4 m. Two independent
 #: signs tell centimetres from inches (a factor of 2.54) where either alone
-#: may not.
+#: may not. A plan whose header's unit makes it no building and that draws
+#: no doors and no doorways is read in the unit of the header's system that
+#: puts its extent and its walls' thickness closest to ``TYPICAL_EXTENT`` and
+#: this (:func:`mapkit.importers.dxf.units.units_from_size_and_doors`): a
+#: plan of 23 m with 0.6 m stone walls in metres is 2.3 m with 6 cm walls in
+#: decimetres.
 TYPICAL_WALL_THICKNESS = 0.2
 
 #: Doorway gaps in the wall lines tell the units of a plan that draws no

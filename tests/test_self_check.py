@@ -20,7 +20,8 @@ from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
 from mapkit_harness.plans.inconsistent import (doors_across_passages, leaf_across_its_arc, plan_beside_elevation,
-                                                room_outline_on_layer_0, row_of_rooms, storeys_in_a_frame, tiled_podium)
+                                                room_outline_on_layer_0, row_of_rooms,
+                                                solid_walls_in_metres, storeys_in_a_frame, tiled_podium)
 
 
 def test_a_consistent_plan_passes_without_a_word(tmp_path):
@@ -222,3 +223,23 @@ def test_a_swing_whose_leaf_cuts_its_arc_opens_where_the_leaf_closes(tmp_path):
     assert cut is not None
     x0, y0, x1, y1 = cut.bounds  # across the partition, from the hinge (5.13, 0.27) to the latch (5.51, 1.09)
     assert 5.0 < x0 < 5.2 and 5.45 < x1 < 5.6 and 0.2 < y0 < 0.35 and 1.0 < y1 < 1.15
+
+
+def test_solid_walls_under_a_header_in_mm_are_read_in_the_unit_their_thickness_says(tmp_path):
+    # plotpreview: no door and no doorway drawn; the size alone fits m, dm and ft, the walls' 0.4 m only m.
+    scene = load_scene(solid_walls_in_metres(tmp_path / "house.dxf"))
+    assert scene.info["units"] == "m"
+    assert any("walls 0.40 m thick" in w and "--units" in w for w in scene.info["warnings"])
+    assert len(polygon_parts(scene.free_space)) == 2 and 40.0 < scene.free_space.area < 45.0
+    with pytest.raises(MapkitError, match="--units says mm"):  # --units is the user's word, never overruled
+        load_scene(tmp_path / "house.dxf", BuildOptions(units="mm"))
+
+
+def test_a_plan_drawn_at_a_fraction_of_its_size_is_refused_naming_the_scale_its_doors_say(tmp_path):
+    # proxy_sansebastian: a 100 m building drawn 10 units across, its doors a fifth of a door's width as read.
+    path = row_of_rooms(tmp_path / "small.dxf", n=8, insunits=6, unit_per_m=0.2)
+    with pytest.raises(InconsistentDrawingError, match=r"its 8 door drawings are a median 0\.18 m wide, .* "
+                                                       r"fix with --scale 5 or "):
+        load_scene(path)
+    scene = load_scene(path, BuildOptions(scale=5))
+    assert scene.info["counts"]["doors"] == 8 and len(polygon_parts(scene.free_space)) == 1

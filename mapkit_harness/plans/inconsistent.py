@@ -7,7 +7,9 @@ room's corridor wall) with its walls on a layer named for windows, its
 door drawings off their walls, its header in the wrong units;
 :func:`room_outline_on_layer_0` (a room outlined on layer 0, one closet of
 partitions on the wall layer); :func:`plan_beside_elevation` (a plan with
-an elevation of its facade and its framing plan beside it on the same layer).
+an elevation of its facade and its framing plan beside it on the same layer);
+:func:`solid_walls_in_metres` (thick double-line walls, no opening drawn,
+a header in mm).
 """
 
 from __future__ import annotations
@@ -240,5 +242,26 @@ def leaf_across_its_arc(path: str | Path) -> Path:
     return Path(path)
 
 
-__all__ = ["doors_across_passages", "leaf_across_its_arc", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms", "storeys_in_a_frame",
+def solid_walls_in_metres(path: str | Path, insunits: int = 4, thickness: float = 0.4) -> Path:
+    """A house of 9 x 7 m drawn in metres under the header code
+    ``insunits`` (4: mm), its outer walls ``thickness`` m thick as two
+    closed outlines on 'muratura' and a partition of the same thickness as
+    two lines parting it in two rooms; no door and no opening drawn
+    (plotpreview: walls hatched on 'muratura', openings on a layer of no
+    role)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = insunits
+    msp = doc.modelspace()
+    wall = {"layer": "muratura"}
+    t = thickness
+    msp.add_lwpolyline([(0, 0), (9, 0), (9, 7), (0, 7)], close=True, dxfattribs=wall)
+    msp.add_lwpolyline([(t, t), (9 - t, t), (9 - t, 7 - t), (t, 7 - t)], close=True, dxfattribs=wall)
+    msp.add_line((5, t), (5, 7 - t), dxfattribs=wall)
+    msp.add_line((5 + t, t), (5 + t, 7 - t), dxfattribs=wall)
+    doc.saveas(path)
+    return Path(path)
+
+
+__all__ = ["doors_across_passages", "leaf_across_its_arc", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms",
+           "solid_walls_in_metres", "storeys_in_a_frame",
            "tiled_podium"]

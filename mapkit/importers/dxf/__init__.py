@@ -297,13 +297,14 @@ def _units(msp, roles: dict, far: list, extent: float, header, options: BuildOpt
 
 def _unit_by_size_and_doors(msp, roles: dict, far: list, extent: float, stated: str) -> tuple[str, str] | None:
     """:func:`.units.units_from_size_and_doors` of the drawing: its door
-    drawings' and doorway gaps' widths measured in drawing units (the
-    wall and door layers flattened as drawn)."""
+    drawings' and doorway gaps' widths and its walls' thickness measured in
+    drawing units (the wall and door layers flattened as drawn)."""
     far_ids = {id(e) for e in far}
     entities = [e for e in msp if roles.get(_layer(e)) in ("walls", "doors") and id(e) not in far_ids]
     strokes, _ = flatten_entities(entities, 1.0, CURVE_SAGITTA, lambda layer: True)
     walls = [s for s in strokes if roles.get(s.layer) == "walls"]
-    return units_from_size_and_doors(extent, door_widths(strokes, roles), wall_doorway_gaps(walls), stated)
+    return units_from_size_and_doors(extent, door_widths(strokes, roles), wall_doorway_gaps(walls), stated,
+                                     wall_thickness(walls))
 
 
 def door_widths(strokes: list, roles: dict) -> list[float]:

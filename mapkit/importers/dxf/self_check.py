@@ -28,6 +28,10 @@ result that contradicts it is built wrong:
   (between half of ``DOOR_SWING_MAX_SWEEP_DEG`` and all of it), its leaf
   drawn from its centre to one of its ends, on a layer read as furniture
   or of no role is a door swing the map left out.
+- **the doors' size**: where anything here contradicts the drawing and
+  its door drawings are a median width no door has, the drawing is at a
+  fraction of its size (no unit mends it): the refusal names the
+  ``--scale`` that makes them doors' width first.
 - **the rooms are reachable**: where the plan's doors were found and the
   drawing says where its rooms are (walls enclosing them, room outlines,
   room polygons), no part
@@ -53,13 +57,14 @@ from mapkit.errors import InconsistentDrawingError
 from mapkit.importers.dxf.layer_roles import guess_role, is_zone_layer
 from mapkit.importers.dxf.openings import door_strokes, drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
+from mapkit.importers.dxf.units import scale_from_gaps
 from mapkit.scene import Scene
 from mapkit.shapes import polygon_parts
 from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_SWING_MAX_SWEEP_DEG, DOOR_SWING_RADIUS, DOOR_SWING_SNAP,
                                DOOR_SWING_TIP_SHARE,
                                DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
                                SELF_CHECK_CELL_M, SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
-                               SELF_CHECK_WALL_SHARE, ZERO)
+                               SELF_CHECK_WALL_SHARE, TYPICAL_DOOR_WIDTH, ZERO)
 
 #: Roles whose layers are building geometry (the rest is annotation).
 _DRAWN_ROLES = ("walls", "doors", "windows", "floor", None)
@@ -208,7 +213,31 @@ def check_against_drawing(scene: Scene, drawing: PlanDrawing, robot_radius: floa
             f"{len(cut_off)} room(s) of {ROOM_PART_MIN_AREA:g} m2 or more ({', '.join(f'{a:.0f}' for a in cut_off[:4])}"
             f"{' ...' if len(cut_off) > 4 else ''} m2) are cut off from the rest with no door found at them, though "
             "the plan's other doors were found", ("--doors LAYER",)))
+    scale = door_scale(drawing) if found else None
+    if scale is not None:
+        # The doors say the whole drawing is at a fraction of its size: no layer choice mends that.
+        count, median, times = scale
+        found.insert(0, Inconsistency(
+            f"its {count} door drawings are a median {median:.2g} m wide, no door's width: if they are doors about "
+            f"{TYPICAL_DOOR_WIDTH:g} m wide, it is drawn at about 1/{times:g} of its size", (f"--scale {times:g}",)))
     return found
+
+
+def door_scale(drawing: PlanDrawing) -> tuple[int, float, float] | None:
+    """``(count, median width m, scale)`` of the plan's door drawings when
+    their median width is no door's width (``DOOR_WIDTH_PLAUSIBLE``; judged
+    from ``DOOR_UNITS_MIN_DOORS`` drawings): the scale that makes it
+    ``TYPICAL_DOOR_WIDTH`` (:func:`.units.scale_from_gaps`: an estimate, so
+    named in a refusal, never applied). Each drawing's width is the longer
+    side of its minimum rotated rectangle (a leaf and its swing, a line, a
+    block)."""
+    doors, _ = door_strokes(drawing.role("doors"))
+    widths = []
+    for item in drawing_items(doors) if doors else []:
+        box = shapely.minimum_rotated_rectangle(item)
+        xy = np.asarray(box.exterior.coords if box.geom_type == "Polygon" else box.coords, dtype=float)
+        widths.append(float(np.hypot(*np.diff(xy, axis=0).T).max()) if len(xy) > 1 else 0.0)
+    return scale_from_gaps(widths)
 
 
 def _swings_elsewhere(drawing: PlanDrawing) -> dict[str, int]:

@@ -152,7 +152,8 @@ def units_from_evidence(door_widths_m, gap_widths_m, thickness_m: float | None, 
                   f"plan {_fmt(extent_m * ratio(best))} across); pass --units to override")
 
 
-def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: str) -> tuple[str, str] | None:
+def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: str,
+                              thickness: float | None = None) -> tuple[str, str] | None:
     """The one unit that makes a drawing both a building's size and its
     doors a door's width, when its header's ``stated`` unit makes it no
     building (:class:`~mapkit.errors.ImplausibleUnitsError`): ``extent``
@@ -160,14 +161,22 @@ def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: st
     ``gap_widths`` of its doorway gaps, all in drawing units. The doors
     judge when any are drawn, else the gaps (``DOOR_UNITS_MIN_DOORS`` or
     more). Returns ``(unit, warning naming --units)``, or None when no unit
-    or several fit (a 2 m door is a door in metres and in feet)."""
+    or several fit (a 2 m door is a door in metres and in feet).
+
+    A plan that draws neither (openings left out, walls hatched solid) is
+    judged by its walls' ``thickness`` (drawing units,
+    :func:`.wall_thickness.wall_thickness`; None: not drawn as pairs of
+    lines): of the units of the header's own system (metric or imperial: a
+    metric template's mm over a plan drawn in metres) that make it a
+    building's size, the one that puts its extent and its walls' thickness
+    together closest to ``TYPICAL_EXTENT`` and ``TYPICAL_WALL_THICKNESS``."""
     widths = [float(w) for w in door_widths if w > 0]
     what = f"{len(widths)} door drawing(s)"
     if not widths:
         widths = [float(w) for w in gap_widths if w > 0]
         what = f"{len(widths)} doorways (gaps in its walls)"
         if len(widths) < DOOR_UNITS_MIN_DOORS:
-            return None
+            return _unit_by_size_and_walls(extent, thickness, stated)
     median = float(np.median(widths))
     lo, hi = DOOR_WIDTH_PLAUSIBLE
     fits = [u for u in _DRAWING_UNITS
@@ -179,6 +188,26 @@ def units_from_size_and_doors(extent: float, door_widths, gap_widths, stated: st
                   f"across; only {unit} makes it a building ({_fmt(extent * UNIT_METRES[unit])} across) and its {what} "
                   f"a door's width (a median {median * UNIT_METRES[unit]:.2f} m): read in {unit}; pass --units to "
                   "override")
+
+
+def _unit_by_size_and_walls(extent: float, thickness: float | None, stated: str) -> tuple[str, str] | None:
+    """:func:`units_from_size_and_doors` of a plan that draws no doors and
+    no doorway gaps: the unit its size and walls' ``thickness`` say (see
+    there), or None without double-line walls or when no unit of the
+    header's system makes it a building."""
+    if thickness is None or thickness <= 0:
+        return None
+    system = _GAP_UNITS["imperial" if stated in _IMPERIAL_UNITS else "metric"]
+    fits = [u for u in system if _plausible(extent * UNIT_METRES[u])]
+    if not fits:
+        return None
+    unit = min(fits, key=lambda u: _off_typical(extent * UNIT_METRES[u])
+               + abs(math.log10(thickness * UNIT_METRES[u] / TYPICAL_WALL_THICKNESS)))
+    return unit, (f"the drawing says its units are {stated} but then the plan is {_fmt(extent * UNIT_METRES[stated])} "
+                  f"across; it draws no doors, and {unit} makes it a building ({_fmt(extent * UNIT_METRES[unit])} "
+                  f"across) with walls {thickness * UNIT_METRES[unit]:.2f} m thick, closest of the "
+                  f"{'imperial' if stated in _IMPERIAL_UNITS else 'metric'} units to a building's: read in {unit}; "
+                  "pass --units to override")
 
 
 #: Units of each system a plan's doorway gaps may tell apart: each a
