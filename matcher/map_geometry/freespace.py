@@ -19,6 +19,9 @@ map's own error ``model_m`` beyond, is still floor, only nearer a wall than
 that robot keeps. A camera carried otherwise (a tripod in a doorway, beside
 a jamb: the ZInD sample tour's panoramas) stands there; the true pose was
 refused as "outside the map's free space" before, and a look-alike won.
+Stage 2 asks this (:func:`matcher.prior.within_prior`); the tree's pruning
+of sets keeps ``free_space_m`` (its loose-set test samples the free space,
+and the walls' margin in it let a corridor's wrong-jamb sets through).
 """
 
 from __future__ import annotations

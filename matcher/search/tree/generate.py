@@ -87,7 +87,6 @@ def generate(cands: Candidates, camera: Camera, image_lines: ImageLines, prior, 
     seg_k, line_k = corr.seg_k, corr.line_k
     inp = TreeInput(corr.quad, corr.mask, corr.yaws, compat, segments[seg_k], corr.centre, dt, corr.forward,
                     cands.walls, vertical=corr.is_v, line=line_k, free=cands.free, free_m=tol.free_space_m,
-                    model_m=tol.model_m,
                     front_c=corr.front_c, front_b=corr.front_b, single_fit=corr.single_fit, sight=sight,
                     shown=ShownSpans(camera, segments[seg_k], image_lines.lines[line_k]), deadlines=deadlines)
     sets, init, truncated, nodes, found = search(inp, tol)

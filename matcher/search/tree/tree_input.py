@@ -26,8 +26,7 @@ class TreeInput:
     segments (explored last: each fixes only a bearing, so they are compatible
     with much and prune little); ``line`` (K,) the image line of each
     correspondence; ``free`` the map's :class:`~matcher.map_geometry.freespace.FreeSpace`
-    (or None), ``free_m`` how far outside it the camera may stand and
-    ``model_m`` the map's error (:meth:`~matcher.map_geometry.freespace.FreeSpace.allows`);
+    (or None) and ``free_m`` how far outside it the camera may stand;
     ``front_c`` (K, Y, 2) and ``front_b`` (K, Y) half-planes ``c . z <= b`` on
     the camera position relative to the centre that keep a vertical edge ahead
     of the camera (c = 0, b = inf for the others), or None; ``single_fit`` (K,)
@@ -57,7 +56,6 @@ class TreeInput:
     line: np.ndarray | None = None
     free: object | None = None
     free_m: float = 0.0
-    model_m: float = 0.0
     front_c: np.ndarray | None = None
     front_b: np.ndarray | None = None
     single_fit: np.ndarray | None = None
@@ -69,10 +67,8 @@ class TreeInput:
         self.seg_length = np.maximum(np.linalg.norm(self.segments[:, 1] - self.segments[:, 0], axis=1), 1e-9)
 
     def in_free_space(self, xy: np.ndarray) -> np.ndarray:
-        """(...) bool: camera positions ``xy`` (..., 2) where a camera may
-        stand, ``free_m`` of the map's regions or the floor the map left
-        between them and the walls
-        (:meth:`matcher.map_geometry.freespace.FreeSpace.allows`); all True without a map."""
+        """(...) bool: camera positions ``xy`` (..., 2) within ``free_m`` of
+        the map's regions (:mod:`matcher.map_geometry.freespace`); all True without a map."""
         if self.free is None:
             return np.ones(np.shape(xy)[:-1], dtype=bool)
-        return self.free.allows(xy, self.free_m, self.model_m)
+        return self.free.distance(xy) <= self.free_m
