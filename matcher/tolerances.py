@@ -396,7 +396,11 @@ class VerdictConstants(_Constants):
     #: answer is a local optimum of the pose and the focal length together:
     #: the fit with the focal length free from there estimates it 1 to 4 %
     #: off when it is 10 to 25 % off; from the scale whose verification
-    #: explains the most lines the fit starts in the right basin.
+    #: explains the most lines the fit starts in the right basin. Asked
+    #: only when the answer's lines reject the focal length to first order
+    #: (``calibration_screen_share``), trusted only when that scale explains
+    #: ``RigConstants.clear_ratio`` times the files' lines (no new threshold:
+    #: a rival calibration is judged as a rival place is).
     calibration_focal_grid: tuple = (0.683, 0.751, 0.826, 0.909, 1.1, 1.21, 1.331, 1.464)
 
 
