@@ -389,6 +389,19 @@ class VerdictConstants(_Constants):
     #: A focal scale estimated beyond this factor either way is no estimate:
     #: the lines do not fix the focal length and the fit ran off.
     calibration_max_focal: float = 4.0
+    #: A rig's focal lengths profiled (matcher/rig/calibration.py): the
+    #: accepted pose verified again (lines matched anew, the pose refitted)
+    #: with every camera's focal length scaled by each of these (a ratio of
+    #: 1.1 from one to the next, 0.68 to 1.46). A wrong focal length's
+    #: answer is a local optimum of the pose and the focal length together:
+    #: the fit with the focal length free from there estimates it 1 to 4 %
+    #: off when it is 10 to 25 % off; from the scale whose verification
+    #: explains the most lines the fit starts in the right basin. Asked
+    #: only when the answer's lines reject the focal length to first order
+    #: (``calibration_screen_share``), trusted only when that scale explains
+    #: ``RigConstants.clear_ratio`` times the files' lines (no new threshold:
+    #: a rival calibration is judged as a rival place is).
+    calibration_focal_grid: tuple = (0.683, 0.751, 0.826, 0.909, 1.1, 1.21, 1.331, 1.464)
 
 
 @dataclass(frozen=True)

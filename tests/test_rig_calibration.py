@@ -53,3 +53,25 @@ def test_a_right_rig_is_not_blamed(flat):
     res = localize_rig(flat, truth, f.lines, f.prior, f.dt, f.dyaw)
     assert res, res.reason
     assert pose_error(res.pose, f.pose)[0] < 0.01
+
+
+def test_a_focal_length_10_percent_off_is_refused_where_the_fit_from_the_answer_finds_it_2_percent_off(flat):
+    # Every camera file's focal length 10 % long: the structure search's
+    # answer to this frame is accepted 28 cm off without the check. There
+    # the fit with the focal length free, from the answer, stays in the
+    # answer's basin (its estimate 2 % off, under calibration_min_focal);
+    # the focal profile (matcher.rig.calibration.focal_profile) verifies the
+    # answer again at scale 0.909, which explains the most lines, and the
+    # fit from there finds the focal length 0.91 x the file's.
+    truth = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
+    wrong = _scaled(truth, 1.1)
+    f = make_rig_frame(flat, truth, np.random.default_rng([0, 2]), 2)
+    unchecked = replace(DEFAULT, verdict=replace(DEFAULT.verdict, calibration_judged=()))
+    before = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw, unchecked)
+    assert before and pose_error(before.pose, f.pose)[0] > 0.2  # the case the check is for
+    res = localize_rig(flat, wrong, f.lines, f.prior, f.dt, f.dyaw, DEFAULT)
+    assert not res, res.pose
+    assert "camera calibration" in res.reason and "focal length 0.9" in res.reason, res.reason
+    # The true files are not blamed on the same frame.
+    res = localize_rig(flat, truth, f.lines, f.prior, f.dt, f.dyaw, DEFAULT)
+    assert res and pose_error(res.pose, f.pose)[0] < 0.05, res.reason

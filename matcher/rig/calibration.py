@@ -23,6 +23,21 @@ of a rig twice, on the robot's best pose:
    file's, at a camera pose metres away; pinned by the others, a right
    camera's lines have nothing left over for the focal length to explain.
 
+Both are asked at the accepted pose and, when it differs, at the pose of
+the rig's **focal profile** (:func:`focal_profile`): the accepted pose
+verified again with every camera's focal length scaled by each of
+``calibration_focal_grid`` (lines matched anew, the pose refitted, as
+:mod:`matcher.rig.verify` does), the scale whose verification explains
+the most lines (then the least reprojection cost) kept. A wrong focal
+length's answer is a local optimum of the pose and the focal length
+together: at it the lines reject the file strongly (chi-square drops of
+35 to 223) but the fit with the focal length free stays in the answer's
+basin and estimates the focal length 1 to 4 % off when it is 10 % off,
+under ``calibration_min_focal``; re-matching there does not leave the
+basin. The profile's scales start the fit in the other basins. The scale must explain ``RigConstants.clear_ratio``
+times the lines the files' does (a rival calibration judged as a rival
+place is), or the checks are not asked again.
+
 The thresholds are the single camera's (``VerdictConstants``), chosen and
 held out on its own benchmark; ``python tools/bench_calibration.py
 --cameras 4`` measures the rig's. Run on the accepted answer only.
@@ -32,10 +47,14 @@ from __future__ import annotations
 
 import copy
 import functools
+from dataclasses import replace
 
 import numpy as np
 
-from matcher.stage2.calibration_check import MatchedLines, blamed_parameters, fit
+from matcher.frame import prepare_lines
+from matcher.rig.frame import CameraView
+from matcher.rig.verify import verify_seeds
+from matcher.stage2.calibration_check import PARAMETERS, MatchedLines, blamed_parameters, fit, screened
 
 
 class RigMatchedLines:
@@ -111,3 +130,74 @@ def rig_doubt(per_camera, robot_pose: np.ndarray, tol, px: tuple | None) -> str:
     return (f"camera {view.name}: the matched lines fit the map far better with {f.off_by(view.camera)} "
             f"for that camera alone (the robot's pose would be {x:.2f}, {y:.2f}, {yaw:.1f} deg) than with its camera "
             f"file's calibration: check the camera calibration{others}")
+
+
+def focal_profile(views, cands, pose: np.ndarray, prior: tuple, tol, per_camera=()):
+    """The rig's focal profile about the accepted robot ``pose`` (3,): for
+    each scale of ``calibration_focal_grid`` (and 1, the files'), every
+    camera's focal length scaled by it, ``pose`` verified again on every
+    camera (:func:`matcher.rig.verify.verify_seeds`: lines matched anew, the
+    pose refitted; seeded at ``pose`` and, given the answer's matches
+    ``per_camera`` as :func:`rig_doubt` takes them, where they put the robot
+    at that scale) within ``prior`` ``(xe, ye, yaw_e, dt, dyaw)`` (radians).
+    ``views`` the frame's :class:`~matcher.rig.frame.CameraView`, ``cands``
+    each one's candidates (None: none). Returns ``(scale, pose (3,),
+    per_camera)`` of the scale whose verification explains the most lines
+    (then has the least reprojection cost), its ``per_camera`` matches as
+    :func:`rig_doubt` takes them (the files' views: the lines and segments
+    are the same whatever the scale); the files' scale (1, the pose, no
+    matches) unless that scale explains ``RigConstants.clear_ratio`` times
+    the lines the files' does: a rival calibration must be clearly better,
+    as a rival place must (on ZInD panoramas, whose cut views' focal
+    lengths are exact, the map's error lets a scale 0.91 or 1.1 explain up
+    to 1.1 times the files' lines; a file 10 % off explains 0.67 times
+    the lines the true scale does)."""
+    best, at_file = None, 0
+    for scale in (1.0, *(float(s) for s in tol.verdict.calibration_focal_grid)):
+        scaled = [_scaled(v, scale, tol) for v in views]
+        seeds = [pose]
+        if per_camera and scale != 1.0:  # the answer's matches refitted at that scale: where they put the robot
+            at = RigMatchedLines([(_scaled(v, scale, tol), lines, segs) for v, lines, segs in per_camera], tol)
+            seeds.append(fit(at, pose, None, tol.verdict)[0])
+        ranked = verify_seeds(scaled, cands, np.array(seeds), prior, tol)
+        h = int(ranked.order[0])
+        if not np.isfinite(ranked.score[h]):
+            continue
+        key = (-int(ranked.n[h]), float(ranked.cost[h]))
+        if scale == 1.0:
+            at_file = int(ranked.n[h])
+        if best is None or key < best[0]:
+            best = (key, scale, ranked, h)
+    if best is None or -best[0][0] < tol.rig.clear_ratio * at_file:
+        return 1.0, np.asarray(pose, dtype=float), []
+    _, scale, ranked, h = best
+    per_camera = []
+    for v, c, m in zip(views, cands, ranked.matches):
+        sel = m.hyp == h
+        if c is not None and sel.any():
+            per_camera.append((v, v.lines.lines[m.line[sel]], c.segments[m.local[sel]]))
+    return scale, ranked.poses[h], per_camera
+
+
+def _scaled(view: CameraView, scale: float, tol) -> CameraView:
+    """``view`` with its camera's focal length (fx and fy) scaled by ``scale``,
+    its lines prepared again for that camera."""
+    if scale == 1.0:
+        return view
+    camera = replace(view.camera, fx=view.camera.fx * scale, fy=view.camera.fy * scale)
+    return CameraView(view.name, camera, view.mount, prepare_lines(camera, view.lines.lines, tol), view.offset)
+
+
+def focal_doubted(per_camera, robot_pose: np.ndarray, tol) -> bool:
+    """Do the answer's matches (``per_camera`` as :func:`rig_doubt` takes
+    them) at ``robot_pose`` (3,) reject the files' focal length, to first
+    order (:func:`~matcher.stage2.calibration_check.screened`, every
+    camera's alike), by the share of the least drop that earns a full fit
+    (``calibration_screen_share``)? Only then is the focal profile worth
+    its verifications: a right file's lines rarely do."""
+    work = tol.verdict
+    focal = PARAMETERS.index("focal")
+    if not per_camera or focal not in tuple(int(k) for k in work.calibration_judged):
+        return False
+    drop = screened(RigMatchedLines(per_camera, tol), np.asarray(robot_pose, dtype=float), [focal], work)[0]
+    return bool(drop >= work.calibration_screen_share * work.calibration_min_drop)

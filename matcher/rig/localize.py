@@ -28,7 +28,7 @@ from matcher.input_validation import check_prior
 from matcher.lost import _localize_global, localize_global
 from matcher.projection import projected_end_distances
 from matcher.result import Deferred, LocalizeResult, SearchStats, Timings
-from matcher.rig.calibration import rig_doubt
+from matcher.rig.calibration import focal_doubted, focal_profile, rig_doubt
 from matcher.rig.frame import RigFrame, check_rig, prepare_rig_frame
 from matcher.rig.joint_fit import robot_information
 from matcher.rig.seeds import camera_seeds, new_poses, search_camera, search_counts
@@ -329,7 +329,14 @@ def _calibration(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: T
         sel = m.hyp == h
         if c is not None and sel.any():
             per_camera.append((v, v.lines.lines[m.line[sel]], c.segments[m.local[sel]]))
-    return rig_doubt(per_camera, ranked.poses[h], tol, px)
+    why = rig_doubt(per_camera, ranked.poses[h], tol, px)
+    if why or len(frame.views) == 1 or not focal_doubted(per_camera, ranked.poses[h], tol):
+        return why
+    # The focal profile (matcher.rig.calibration): the same checks where the
+    # scale that explains the most lines puts the pose, when not the files'.
+    around = px if px is not None else (*ranked.poses[h], tol.shared.lost_seed_m, math.radians(tol.shared.lost_seed_deg))
+    scale, pose, at_scale = focal_profile(frame.views, cands, ranked.poses[h], around, tol, per_camera)
+    return "" if scale == 1.0 else rig_doubt(at_scale, pose, tol, px)
 
 
 def _pose_std(frame: RigFrame, cands: list, ranked: RigRanked, h: int, tol: Tolerances):
