@@ -77,13 +77,4 @@ class MapIndex:
 
     def free(self, work: MapIndexConstants = DEFAULT.map_index) -> FreeSpace:
         """Distance from a floor point to the map's regions."""
-        return self._part("free", work, lambda: FreeSpace(self.linemap.ring_points, self.linemap.ring_offsets, work,
-                                                          _robot_radius(self.linemap)))
-
-
-def _robot_radius(linemap: LineMap) -> float:
-    """How far in from the walls the map's builder drew its regions (its
-    recorded ``robot_radius`` option), metres; 0 when the map does not say."""
-    build = linemap.meta.get("build") if isinstance(linemap.meta, dict) else None
-    r = build.get("robot_radius") if isinstance(build, dict) else None
-    return float(r) if isinstance(r, (int, float)) and not isinstance(r, bool) and 0.0 <= r < 10.0 else 0.0
+        return self._part("free", work, lambda: FreeSpace(self.linemap.ring_points, self.linemap.ring_offsets, work))

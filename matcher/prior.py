@@ -19,9 +19,8 @@ def within_prior(poses, prior, free, tol, spread=None) -> np.ndarray:
     dyaw)`` (plus noise slack: ``prior_slack_m`` and ``prior_slack_deg``, or
     ``prior_slack_sigmas`` times the pose's standard deviations ``spread``
     (H, 2) (metres, radians; :func:`~matcher.stage2.covariance.pose_spread`)
-    where more) and, with ``free``, where a camera may stand on the map
-    (:meth:`~matcher.map_geometry.freespace.FreeSpace.allows`; looked up
-    only for the poses inside the prior)."""
+    where more) and, with ``free``, within ``free_space_m`` of the map's
+    regions (looked up only for the poses inside the prior)."""
     xe, ye, yaw_e, dt, dyaw = prior
     work = tol.shared
     slack_m, slack_yaw = work.prior_slack_m, math.radians(work.prior_slack_deg)
@@ -32,5 +31,5 @@ def within_prior(poses, prior, free, tol, spread=None) -> np.ndarray:
     ok &= np.abs(wrap(poses[:, 2] - yaw_e)) <= dyaw + slack_yaw
     if free is not None and ok.any():
         at = np.nonzero(ok)[0]
-        ok[at] = free.allows(poses[at, :2], tol.free_space_m, tol.model_m)
+        ok[at] = free.distance(poses[at, :2]) <= tol.free_space_m
     return ok

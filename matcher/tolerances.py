@@ -695,16 +695,11 @@ class Tolerances:
     #: the lines leave the pose undetermined (looking along a wall), and the
     #: number of sets found is reported with the result's diagnostics.
     max_hypotheses: int = 25
-    #: How far outside the map's regions the camera may stand, metres, on a
-    #: map that does not record how far in from the walls its regions were
-    #: drawn (a map that does, ``meta["build"]["robot_radius"]``, allows
-    #: that far, plus ``model_m``, in stage 2: the floor between its regions
-    #: and the walls; ``FreeSpace.allows``; the tree's pruning of sets keeps
-    #: this value). The regions are the floor the robot's
-    #: centre can reach (the builder's robot radius from the walls, 0.2 m
-    #: by default); a camera mounted off the centre may be up to that
-    #: offset outside them. Poses farther out (inside a wall, behind the
-    #: building) are rejected in both stages.
+    #: How far outside the map's regions the camera may stand, metres. The
+    #: regions are the floor the robot's centre can reach (the builder's
+    #: robot radius from the walls, 0.2 m by default); a camera mounted off
+    #: the centre may be up to that offset outside them. Poses farther out
+    #: (inside a wall, behind the building) are rejected in both stages.
     free_space_m: float = 0.1
     #: Lines shorter than this many pixels are ignored: their orientation is
     #: too uncertain to constrain anything.

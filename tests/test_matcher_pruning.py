@@ -77,23 +77,6 @@ def test_free_space_rejects_a_camera_inside_a_wall(flat):
     assert fs.distance(np.array([6.08, 4.5])) == 0.0
 
 
-def test_free_space_allows_the_floor_between_the_regions_and_the_walls(flat):
-    """A camera may stand outside the regions as far as the map says its
-    regions were drawn in from the walls (its builder's robot radius, 0.2 m
-    for the example map), not inside the wall itself; a map that does not
-    say allows ``free_space_m``."""
-    fs = free_space(flat)
-    assert fs.margin_m == pytest.approx(flat.meta["build"]["robot_radius"]) == pytest.approx(0.2)
-    in_wall, beside = np.array([6.08, 5.05]), np.array([7.6, 0.6])  # in the wall; 5 cm from a wall's face
-    assert DEFAULT.free_space_m < fs.distance(beside) <= 0.2
-    assert fs.allows(beside, DEFAULT.free_space_m, DEFAULT.model_m)
-    assert not fs.allows(in_wall, DEFAULT.free_space_m, DEFAULT.model_m)
-    ring = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
-    out = np.array([[2.15, 1.0], [2.35, 1.0]])
-    assert FreeSpace(ring, np.array([0, 4]), margin_m=0.2).allows(out, 0.1, 0.01).tolist() == [True, False]
-    assert FreeSpace(ring, np.array([0, 4])).allows(out, 0.1, 0.01).tolist() == [False, False]
-
-
 def test_free_space_of_a_square():
     ring = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
     fs = FreeSpace(ring, np.array([0, 4]))

@@ -216,21 +216,3 @@ def test_a_right_rig_on_a_drawing_a_few_centimetres_off_is_not_blamed_on_its_fil
         res = matcher.localize_rig(flat, rig, f.lines, f.prior, f.dt, f.dyaw, STRUCTURE)
         assert res, res.reason
         assert pose_error(res.pose, f.pose)[0] < 0.2
-
-
-def test_a_camera_nearer_a_wall_than_the_maps_robot_radius_is_localised(flat, ring):
-    """A camera 5 cm from a wall's face, 0.15 to 0.2 m outside the map's
-    regions (drawn 0.2 m in from the walls, the builder's robot radius): a
-    tripod in a doorway beside its jamb, as the ZInD sample tour's
-    panoramas stand. Its true pose was refused as outside the map's free
-    space; it is the floor the map left between its regions and the walls."""
-    from mapkit_harness.simulate import add_noise, camera_pose
-
-    rng = np.random.default_rng(0)
-    pose = (7.6, 0.6, 20.0)
-    lines = []
-    for rc in ring:
-        ideal, _ = visible_lines(flat, rc.camera, camera_pose(rc.mount, pose))
-        lines.append(add_noise(ideal, rng, 0.5, 0.3, 2.0, rc.camera))
-    res = matcher.localize_rig(flat, ring, lines, (7.9, 0.4, 30.0), 0.6, 30.0, tolerances=STRUCTURE)
-    assert res and pose_error(res.pose, pose)[0] < 0.02, res.reason

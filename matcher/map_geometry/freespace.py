@@ -10,18 +10,6 @@ meet all along that direction, walls included.
 The raster is built once per map (cached on it): even-odd scanlines over
 all region rings mark the cells inside a region, then a Euclidean distance
 transform gives every cell its distance to the nearest inside cell.
-
-How far outside the regions a camera may stand (:meth:`FreeSpace.allows`)
-is what the map itself says lies between them and the walls: the builder
-drew the regions its robot radius in from the walls (recorded in the map's
-``meta["build"]["robot_radius"]``), so a point up to that far out, and the
-map's own error ``model_m`` beyond, is still floor, only nearer a wall than
-that robot keeps. A camera carried otherwise (a tripod in a doorway, beside
-a jamb: the ZInD sample tour's panoramas) stands there; the true pose was
-refused as "outside the map's free space" before, and a look-alike won.
-Stage 2 asks this (:func:`matcher.prior.within_prior`); the tree's pruning
-of sets keeps ``free_space_m`` (its loose-set test samples the free space,
-and the walls' margin in it let a corridor's wrong-jamb sets through).
 """
 
 from __future__ import annotations
@@ -35,16 +23,12 @@ from matcher.tolerances import DEFAULT, MapIndexConstants
 class FreeSpace:
     """Distance from a floor point to the map's regions, metres (0 inside)."""
 
-    def __init__(self, ring_points: np.ndarray, ring_offsets: np.ndarray, work: MapIndexConstants = DEFAULT.map_index,
-                 margin_m: float = 0.0) -> None:
+    def __init__(self, ring_points: np.ndarray, ring_offsets: np.ndarray, work: MapIndexConstants = DEFAULT.map_index) -> None:
         """``ring_points`` (P, 2) and ``ring_offsets`` (K+1,): the region rings
         of a map (outer rings and holes alike; the union of regions is their
         even-odd set because regions do not overlap). The raster's cell and
         margin are ``free_cell_m`` and ``free_border_m``; a map too large for
-        ``free_max_cells`` cells of that size gets larger cells.
-        ``margin_m``: how far in from the walls the regions were drawn (the
-        builder's robot radius; 0 when the map does not say)."""
-        self.margin_m = float(margin_m)
+        ``free_max_cells`` cells of that size gets larger cells."""
         self.cell = float(work.free_cell_m)
         border = work.free_border_m
         if len(ring_points) == 0:
@@ -75,15 +59,6 @@ class FreeSpace:
         cell = np.floor((np.asarray(xy, dtype=float) - self.origin) / self.cell).astype(np.int64)  # (..., 2)
         np.clip(cell, 0, self._last, out=cell)
         return self.dist[cell[..., 1], cell[..., 0]]
-
-    def allows(self, xy: np.ndarray, free_m: float, model_m: float) -> np.ndarray:
-        """(...) bool: may a camera stand at ``xy`` (..., 2)? Within
-        ``free_m`` of the regions (``Tolerances.free_space_m``: a camera off
-        the robot's centre) or, where the map records it, within the floor
-        it left between its regions and the walls (``margin_m``, give or
-        take the map's error ``model_m``): not inside a wall nor beyond the
-        building (module docstring)."""
-        return self.distance(xy) <= max(free_m, self.margin_m + model_m)
 
 
 def _even_odd_raster(points, offsets, origin, cell, nx, ny, block: int) -> np.ndarray:
