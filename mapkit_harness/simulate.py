@@ -24,7 +24,7 @@ from linemap.rig import Mount, Rig
 from matcher.map_geometry.occlusion import wall_edges
 from matcher.search.tree.constraints import wrap
 
-from mapkit_harness.visibility_oracle import sight_blocked
+from mapkit_harness.visibility_oracle import longest_run, sight_blocked
 
 #: The paper's pose estimation quality (PEQ) levels: level -> the prior's
 #: bounds ``(dt, dyaw)`` (metres, degrees); a frame's prior is drawn within
@@ -106,14 +106,6 @@ def _seen_samples(c: np.ndarray, pts: np.ndarray, ea: np.ndarray, eb: np.ndarray
     return seen
 
 
-def _longest_run(flags: np.ndarray) -> tuple[int, int]:
-    """First and last index of the first longest run of True in ``flags`` (S,) (one True at least)."""
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))
-    starts, ends = edges[0::2], edges[1::2]
-    k = int(np.argmax(ends - starts))
-    return int(starts[k]), int(ends[k]) - 1
-
-
 def map_range(linemap) -> float:
     """The range, metres, that the map's region lists were built with (its
     ``build`` record; no limit for a map without one). A segment seen only
@@ -149,7 +141,7 @@ def visible_lines(linemap, camera: Camera, pose, min_px: float = 20.0, samples: 
     for i, vis, samples_of in zip(ids, visible, pts):
         if not vis.any():
             continue
-        p3 = samples_of[list(_longest_run(vis))]
+        p3 = samples_of[list(longest_run(vis))]
         uv, z = camera.project(p3, x, y, yaw)
         if (z <= 0).any() or np.linalg.norm(uv[1] - uv[0]) < min_px:
             continue

@@ -97,6 +97,14 @@ def crosses_an_edge(origin: np.ndarray, targets: np.ndarray, ea: np.ndarray, eb:
     return out
 
 
+def longest_run(flags: np.ndarray) -> tuple[int, int]:
+    """First and last index of the first longest run of True in ``flags`` (S,) (one True at least)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))
+    starts, ends = edges[0::2], edges[1::2]
+    k = int(np.argmax(ends - starts))
+    return int(starts[k]), int(ends[k]) - 1
+
+
 def sight_blocked(c: np.ndarray, q: np.ndarray, ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
     """(S,) bool: sight lines from c (2,) to points q (S, 2) cross a wall edge.
 
@@ -222,9 +230,8 @@ class VisibilityOracle:
                     ids.append(i)
                 continue
             # Longest run of consecutive seen samples, as a length.
-            padded = np.concatenate([[0], run.astype(np.int8), [0]])
-            edges = np.diff(padded)
-            longest = (np.nonzero(edges == -1)[0] - np.nonzero(edges == 1)[0]).max()
+            first, last = longest_run(run)
+            longest = last - first + 1
             if (longest - 1) * self.spacing[i] >= self.L - 1e-9:
                 ids.append(i)
         return np.array(ids, dtype=np.int64)

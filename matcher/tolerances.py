@@ -401,7 +401,7 @@ class VerdictConstants(_Constants):
     #: (``calibration_screen_share``), trusted only when that scale explains
     #: ``RigConstants.clear_ratio`` times the files' lines (no new threshold:
     #: a rival calibration is judged as a rival place is).
-    calibration_focal_grid: tuple = (0.683, 0.751, 0.826, 0.909, 1.1, 1.21, 1.331, 1.464)
+    calibration_focal_grid: tuple = tuple(round(1.1 ** k, 3) for k in (-4, -3, -2, -1, 1, 2, 3, 4))
 
 
 @dataclass(frozen=True)
