@@ -125,6 +125,7 @@ def _one_line_error(code, out, err, *needles):
         assert n in lines[0], lines[0]
 
 
+@pytest.mark.slow
 def test_a_room_2_km_across_is_refused_before_the_region_builder(tmp_path, capsys):
     """An empty square room 1999 m across (inside the 2 km plan limit) ran
     out of memory; it is now refused in seconds, naming the option."""
@@ -154,6 +155,7 @@ def test_a_million_block_copies_are_refused_without_expanding_them(tmp_path, cap
     _one_line_error(code, out, err, "more than 100000 entities", "--max-entities")
 
 
+@pytest.mark.slow
 def test_the_entity_limit_counts_plain_entities_and_is_an_option(tmp_path, capsys):
     _room(tmp_path / "lines.dxf", 30.0, lines=600)
     code, out, err = run(capsys, "preview", tmp_path / "lines.dxf", "-o", tmp_path / "p.png", "--max-entities", "500")

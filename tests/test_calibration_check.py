@@ -102,6 +102,7 @@ def test_a_focal_length_20_percent_off_is_refused_with_its_reason(flat, cam, fra
     assert all(dm <= 0.2 for dm, _ in off), off
 
 
+@pytest.mark.slow
 def test_right_cameras_are_answered_as_without_the_check(flat, cam, frames):
     unchecked = replace(DEFAULT, verdict=replace(DEFAULT.verdict, calibration_judged=()))
     for fr, checked, plain in zip(frames, _outcomes(flat, cam, frames), _outcomes(flat, cam, frames, unchecked)):
@@ -110,6 +111,7 @@ def test_right_cameras_are_answered_as_without_the_check(flat, cam, frames):
         assert checked.ok and pose_error(checked.pose, fr.pose)[0] < 0.2
 
 
+@pytest.mark.slow
 def test_lost_mode_refuses_a_focal_length_twice_off_instead_of_a_place_metres_away(flat, cam):
     """A frame seen at twice the camera file's focal length, localised with
     no prior: the region holding the frame's true segments fits them with

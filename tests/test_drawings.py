@@ -120,6 +120,7 @@ def test_room_polygons_with_a_facade_contour_build_without_a_wall_layer(tmp_path
     assert report.counts["regions"] >= 6
 
 
+@pytest.mark.slow
 def test_room_drawn_as_two_nested_outlines_builds_and_previews(tmp_path, capsys):
     path = tmp_path / "nested.dxf"
     facts = nested_room(path)

@@ -23,6 +23,7 @@ def _warm():
     preload()
 
 
+@pytest.mark.slow
 @fuzz_settings(examples=8)
 @given(rng=st.randoms(use_true_random=False))
 def test_damaged_zind_ends_in_a_clean_error_or_a_map(tmp_path_factory, rng):

@@ -107,6 +107,7 @@ def _build(main, tmp_path, *flags):
     return main([*flags, "build", str(ROOT / "maps" / "flat.dxf"), "-o", str(tmp_path / "out.lmap")])
 
 
+@pytest.mark.slow
 def test_a_bug_in_build_map_is_reported_as_a_bug_not_as_bad_input(tmp_path, capsys, monkeypatch):
     """The issue's case: a broadcasting slip inside build_map came out as
     'mapkit: error: operands could not be broadcast together', exit 2."""

@@ -167,6 +167,7 @@ def _rig_frame(building, rig, pose, seed: int) -> list:
     return out
 
 
+@pytest.mark.slow
 def test_a_rig_on_a_building_is_tracked_on_one_storey(building):
     cam = paper_camera()
     rig = Rig((RigCamera("front", cam, Mount(0.1, 0.0, 0.0)), RigCamera("back", cam, Mount(-0.1, 0.0, 180.0))))

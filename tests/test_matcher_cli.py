@@ -141,6 +141,7 @@ def test_bad_lines_files_one_line(files, capsys, tmp_path, content, message):
     assert err.startswith("matcher: error: ") and message in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_truncated_image_is_one_line_from_a_fresh_process(files, tmp_path):
     """libpng's own complaint on the C stderr is kept quiet: the one line says it."""
     img = np.random.default_rng(0).integers(0, 255, (480, 640)).astype(np.uint8)  # the cut falls in pixel data
@@ -229,6 +230,7 @@ def test_reader_gone_is_quiet(files):
     assert out.returncode == 0 and out.stderr == ""
 
 
+@pytest.mark.slow
 def test_python_dash_m(files):
     out = subprocess.run([sys.executable, "-m", "matcher", *args(files, "--json")], capture_output=True, text=True,
                          timeout=120)

@@ -62,6 +62,7 @@ def test_the_true_place_is_among_the_voted_ones(cam):
     assert found >= 8
 
 
+@pytest.mark.slow
 def test_clutter_votes_for_no_trusted_place(cam):
     """Random lines alone: lost mode returns no pose."""
     from mapkit_harness.simulate import clutter_lines

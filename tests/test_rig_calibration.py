@@ -27,6 +27,7 @@ def _scaled(rig: Rig, scale: float) -> Rig:
                      for rc in rig.cameras))
 
 
+@pytest.mark.slow
 def test_a_rig_whose_focal_length_is_20_percent_off_is_refused_with_its_reason(flat):
     truth = ring_rig(4, hfov_deg=70.0, radius_m=0.2)
     wrong = _scaled(truth, 0.8)
@@ -55,6 +56,7 @@ def test_a_right_rig_is_not_blamed(flat):
     assert pose_error(res.pose, f.pose)[0] < 0.01
 
 
+@pytest.mark.slow
 def test_a_focal_length_10_percent_off_is_refused_where_the_fit_from_the_answer_finds_it_2_percent_off(flat):
     # Every camera file's focal length 10 % long: the structure search's
     # answer to this frame is accepted 28 cm off without the check. There

@@ -79,6 +79,7 @@ def test_a_rig_tracker_with_no_prior_searches_then_confirms(flat, rig, rig_run):
         assert dist < 0.03 and dyaw < 0.5
 
 
+@pytest.mark.slow
 def test_a_rig_frame_with_the_wrong_number_of_cameras_is_skipped_with_its_reason(flat, rig, rig_run):
     tracker = matcher.Tracker(flat, rig, prior=rig_run.truth[0], dt=0.2, dyaw=10)
     assert tracker.step(rig_run.times[0], rig_run.odom[0], rig_run.lines[0])

@@ -56,6 +56,7 @@ def test_first_hits_is_the_nearest_crossing_of_each_ray():
     assert np.isinf(dist[0, [2, 4, 5]]).all()
 
 
+@pytest.mark.slow
 def test_yaw_from_level_lines_of_a_rig(flat, ring):
     """The true heading is among the yaw hypotheses (within a bin), and
     they are few: the example map's walls run two ways."""
@@ -73,6 +74,7 @@ def test_yaw_from_level_lines_of_a_rig(flat, ring):
         assert (gaps > 3).sum() <= 4, yaws
 
 
+@pytest.mark.slow
 def test_ranking_of_the_whole_floor_puts_the_truth_first(flat, ring):
     """Lost (the whole floor, every yaw hypothesis): the first peak is the
     true pose, to within the lattice's step and a couple of degrees."""
@@ -86,6 +88,7 @@ def test_ranking_of_the_whole_floor_puts_the_truth_first(flat, ring):
         assert len(ranking.peaks.poses) >= 2  # the runner-up elsewhere is known
 
 
+@pytest.mark.slow
 def test_rig_localised_by_the_structure_search(flat, ring):
     """From a prior and lost, the verified answer is the truth."""
     for f in _frames(flat, ring, 7, 3):
@@ -184,6 +187,7 @@ def test_a_cameras_place_is_the_lattice_point_nearest_it(flat):
     assert np.array_equal(grid.shifted(rows, np.zeros(2))[0], rows)
 
 
+@pytest.mark.slow
 def test_a_ring_of_off_centre_cameras_peaks_at_the_truth(flat):
     """Cameras 0.2 m off the robot's centre: each seen from its own place,
     the best peak is within 15 cm of the truth on every frame (median under
@@ -199,6 +203,7 @@ def test_a_ring_of_off_centre_cameras_peaks_at_the_truth(flat):
     assert max(errors) < 0.15 and float(np.median(errors)) < 0.07, errors
 
 
+@pytest.mark.slow
 def test_a_right_rig_on_a_drawing_a_few_centimetres_off_is_not_blamed_on_its_files(flat):
     """Eight 50-degree cameras (a few lines each) on a drawing whose walls
     are up to a few centimetres off: judged with its own pose free, a

@@ -104,6 +104,7 @@ def test_units_stay_refused_when_no_door_tells_them_apart(tmp_path):
         load_scene(row_of_rooms(tmp_path / "u.dxf", n=8, insunits=4), BuildOptions(units="mm"))
 
 
+@pytest.mark.slow
 def test_the_command_line_refuses_with_exit_2_one_line_and_no_output(tmp_path):
     path = row_of_rooms(tmp_path / "doors.dxf", n=5, door_offset=0.6)
     out = tmp_path / "doors.lmap"

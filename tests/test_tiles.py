@@ -133,6 +133,7 @@ def test_the_memory_budget_chooses_one_piece_or_the_tile_side():
         tile_side_for_budget(box(0, 0, 200, 200), settings, 150.0)
 
 
+@pytest.mark.slow
 def test_a_tile_in_a_process_of_its_own_gives_the_tile_built_here(office):
     """ChildTiles (a floor past --memory-budget) builds the tile in a fresh
     process: the same compact result, array for array; the outlines and

@@ -439,6 +439,7 @@ def test_cli_serves_until_ctrl_c(flat_path):
     assert "Traceback" not in err and "stopped" in err
 
 
+@pytest.mark.slow
 def test_cli_errors_are_one_line(tmp_path, flat_path):
     r = _mapkit("view", str(tmp_path / "missing.lmap"), "--port", "0")
     assert r.returncode == 2 and r.stderr.startswith("mapkit: error:") and "Traceback" not in r.stderr

@@ -300,6 +300,7 @@ def test_merging_follows_the_cheapest_pair_first(growth):
     assert bits == [lists[r] for r in reps]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workers", [2, 3])
 def test_threads_give_the_same_partition(flat, workers):
     scene, part = flat
