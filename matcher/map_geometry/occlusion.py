@@ -88,25 +88,33 @@ def face_normals(segments: np.ndarray, walls, work: MapIndexConstants = DEFAULT.
     return out
 
 
-def ray_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float, chunk: int) -> np.ndarray:
-    """(R,) distance along each ray (origins (R, 2), unit dirs (R, 2)) to the
-    first wall edge crossed beyond ``skip`` metres; inf if none. At most
-    ``chunk`` (ray, wall edge) pairs are handled at once."""
+def fan_cast(origins: np.ndarray, dirs: np.ndarray, walls, skip: float, chunk: int) -> np.ndarray:
+    """(U, B) distance along each of the rays from each of ``origins`` (U, 2)
+    in each of the unit directions ``dirs`` (B, 2) to the first wall edge
+    crossed beyond ``skip`` metres; inf if none. At most about ``chunk``
+    (ray, wall edge) pairs are handled at once.
+
+    A ray o + t d meets the edge a + u s at t = (w x s) / (d x s) and
+    u = (w x d) / (d x s), w = a - o: the denominators are the fan's, the
+    same from every origin, and w x s is one number per (origin, edge), so
+    only u is worked out per ray."""
+    U, B = len(origins), len(dirs)
     if walls is None or len(walls[0]) == 0:
-        return np.full(len(origins), np.inf)
-    step = max(1, chunk // len(walls[0]))
-    if len(origins) > step:  # in chunks of rays: (rays, edges) arrays stay small
-        return np.concatenate([ray_cast(origins[i:i + step], dirs[i:i + step], walls, skip, chunk)
-                               for i in range(0, len(origins), step)])
+        return np.full((U, B), np.inf)
     ea, eb = walls
     s = eb - ea  # (E, 2)
-    den = dirs[:, None, 0] * s[None, :, 1] - dirs[:, None, 1] * s[None, :, 0]
-    w = ea[None] - origins[:, None]
+    den = dirs[:, None, 0] * s[None, :, 1] - dirs[:, None, 1] * s[None, :, 0]  # (B, E)
+    crosses = np.abs(den) > 1e-12
+    out = np.empty((U, B))
+    block = max(1, chunk // (len(s) * B))
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0]) / den
-        u = (w[..., 0] * dirs[:, None, 1] - w[..., 1] * dirs[:, None, 0]) / den
-    hit = (np.abs(den) > 1e-12) & (t > skip) & (u >= 0) & (u <= 1)
-    return np.where(hit, t, np.inf).min(axis=1)
+        for i in range(0, U, block):
+            w = ea[None] - origins[i:i + block, None]  # (u, E, 2)
+            t = (w[..., 0] * s[None, :, 1] - w[..., 1] * s[None, :, 0])[:, None] / den  # (u, B, E)
+            u = (w[:, None, :, 0] * dirs[None, :, None, 1] - w[:, None, :, 1] * dirs[None, :, None, 0]) / den
+            hit = crosses & (t > skip) & (u >= 0) & (u <= 1)
+            out[i:i + block] = np.where(hit, t, np.inf).min(axis=2)
+    return out
 
 
 class SightRays:
@@ -149,9 +157,7 @@ class SightRays:
         keys = [(round(float(x), 6), round(float(y), 6)) for x, y in points]
         todo = [i for i, k in enumerate(keys) if k not in self._rows]
         if todo:
-            o = np.repeat(points[todo], self.bins, axis=0)
-            d = np.tile(self._dirs, (len(todo), 1))
-            got = ray_cast(o, d, self.walls, self.skip, self.chunk).reshape(len(todo), self.bins)
+            got = fan_cast(points[todo], self._dirs, self.walls, self.skip, self.chunk)
             for i, row in zip(todo, got):
                 self._rows[keys[i]] = row
                 # The widened row: each bin the longest of itself and its neighbours.

@@ -234,15 +234,17 @@ def first_hits(points: np.ndarray, bins: int, segments: np.ndarray) -> tuple[np.
     p, s = np.nonzero(count > 0)
     n = count[p, s]
     pair = np.repeat(np.arange(len(p)), n)
-    k = first[p, s][pair] + np.arange(len(pair)) - np.repeat(np.cumsum(n) - n, n)
+    k = np.repeat(first[p, s] - (np.cumsum(n) - n), n) + np.arange(len(pair))
     kb = np.mod(k, bins)
     middle = (np.arange(bins) + 0.5) * width
-    cos, sin = np.cos(middle)[kb], np.sin(middle)[kb]
-    ap = a[p, s][pair]
-    e = (b[p, s] - a[p, s])[pair]
-    denom = cos * e[:, 1] - sin * e[:, 0]
+    # What a ray needs of its pair, taken once a pair: the segment's
+    # direction e and the cross product a x e (a ray hits the segment's
+    # line at t = (a x e) / (u x e), u the ray's direction).
+    ap, e = a[p, s], b[p, s] - a[p, s]
+    a_cross_e = ap[:, 0] * e[:, 1] - ap[:, 1] * e[:, 0]
+    denom = np.cos(middle)[kb] * e[pair, 1] - np.sin(middle)[kb] * e[pair, 0]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (ap[:, 0] * e[:, 1] - ap[:, 1] * e[:, 0]) / denom
+        t = a_cross_e[pair] / denom
     t = np.where(np.isfinite(t) & (t > 0), t, np.inf)
     key = p[pair] * bins + kb
     np.minimum.at(dist, key, t)
