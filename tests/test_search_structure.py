@@ -173,6 +173,23 @@ def test_observations_keep_their_cameras_mount_group(flat):
     assert observe(prepare_rig_frame(centre, g.lines, STRUCTURE).views, math.radians(1.0)).mounts.shape == (1, 2)
 
 
+def test_profiles_made_on_demand_are_those_made_all_at_once(flat):
+    """The lattice's profiles are made the first time a point is asked for:
+    asked for in overlapping batches, in any order, they are those one call
+    over the same points gives."""
+    from matcher.search.structure.profiles import GridProfiles, profiles_at
+
+    grid = GridProfiles(flat, STRUCTURE)
+    rng = np.random.default_rng(5)
+    rows = rng.choice(len(grid.profiles.points), 60, replace=False)
+    grid.profiles.take(rows[:40])
+    got = grid.profiles.take(rows[::-1][:45])  # 20 new, 25 made before
+    want = profiles_at(grid.structure, grid.profiles.points[rows[::-1][:45]], grid.bins, grid.step / math.sqrt(2), STRUCTURE)
+    for name in ("points", "floor_inv", "ceiling_inv", "ceiling_z", "edge_cum"):
+        assert np.array_equal(getattr(got, name), getattr(want, name), equal_nan=True), name
+    assert np.isfinite(got.floor_inv).any() and got.edge_cum[-1].max() > 0  # profiles with content
+
+
 def test_a_cameras_place_is_the_lattice_point_nearest_it(flat):
     grid = grid_profiles(flat, STRUCTURE)
     pts = grid.profiles.points

@@ -285,7 +285,7 @@ def _loaded(lmap_path: str, args):
             from matcher.search.structure.profiles import grid_profiles
 
             c = time.process_time()
-            grid_profiles(m, matcher.Tolerances())
+            grid_profiles(m, matcher.Tolerances()).make_all()
             print(f"  structure profiles of the map: {time.process_time() - c:.1f} s of CPU, once", file=sys.stderr)
         _MAPS[lmap_path] = m
     return _MAPS[lmap_path]

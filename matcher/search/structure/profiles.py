@@ -1,10 +1,11 @@
 """What the structure search uses from the map: per floor point and world
 bearing, where the walls' junctions and the vertical edges in sight are.
 
-Derived once per map (:func:`grid_profiles`, kept with the map like the
+Derived per map (:func:`grid_profiles`, kept with the map like the
 :class:`~matcher.map_index.MapIndex` parts) for a lattice of floor points
-covering the map's regions, and on demand for any other points (the
-refinement's, :func:`profiles_at`). Bearings are binned: ``bins`` bins round
+covering the map's regions, each point's the first time a search asks for
+it (:class:`ProfileTable`), and for any other points (the refinement's,
+:func:`profiles_at`). Bearings are binned: ``bins`` bins round
 the turn, bin ``k`` covering world bearings ``[k, k + 1) * 2 pi / bins``
 (counter-clockwise from the x axis), each bin's profile taken along its
 middle ray.
@@ -118,13 +119,18 @@ class GridProfiles:
         self.structure = structure_of(linemap, tol)
         self.bins = bins_of(tol)
         self.step, points = lattice(linemap, tol, self.bins)
-        self.profiles = profiles_at(self.structure, points, self.bins, self.step / math.sqrt(2.0), tol)
+        self.profiles = ProfileTable(self.structure, points, self.bins, self.step / math.sqrt(2.0), tol)
         self.directions = map_directions(linemap, self.bins // 2)
         self._cell = np.round((points - points.min(axis=0, initial=0.0)) / self.step).astype(np.int64) \
             if len(points) else np.zeros((0, 2), np.int64)
         shape = self._cell.max(axis=0) + 1 if len(points) else np.zeros(2, np.int64)
         self._row = np.full(tuple(int(n) for n in shape), -1, np.int64)
         self._row[self._cell[:, 0], self._cell[:, 1]] = np.arange(len(points))
+
+    def make_all(self) -> None:
+        """Make every lattice point's profiles now (a lost search's first
+        call would; a robot may rather pay it when it loads its map)."""
+        self.profiles.take(np.arange(len(self.profiles.points)))
 
     def shifted(self, rows: np.ndarray, offset: np.ndarray) -> tuple[np.ndarray, float]:
         """``(rows (R,), residual)``: the lattice points nearest to
@@ -140,6 +146,40 @@ class GridProfiles:
         found = self._row[cell[fits, 0], cell[fits, 1]]
         out[np.flatnonzero(fits)[found >= 0]] = found[found >= 0]
         return out, residual
+
+
+class ProfileTable:
+    """The :class:`Profiles` of a fixed set of ``points`` (P, 2), each
+    point's made the first time it is asked for and kept: a search from a
+    prior asks for the few lattice points within its reach, and only a lost
+    search for the whole floor. A point's profiles do not depend on which
+    others are made with it, so the table holds what one :func:`profiles_at`
+    call over all points gives."""
+
+    def __init__(self, structure: MapStructure, points: np.ndarray, bins: int, slack_m: float,
+                 tol: Tolerances) -> None:
+        self.structure, self.points, self.slack_m, self._tol = structure, points, slack_m, tol
+        self.bins = bins
+        self._made = np.zeros(len(points), dtype=bool)
+        self._table: Profiles | None = None  # allocated at the first call
+
+    def take(self, rows: np.ndarray) -> Profiles:
+        """The profiles of ``points[rows]``, making those not made yet."""
+        rows = np.asarray(rows, dtype=np.int64)
+        todo = np.unique(rows[~self._made[rows]])
+        if len(todo):
+            part = profiles_at(self.structure, self.points[todo], self.bins, self.slack_m, self._tol)
+            if self._table is None:
+                P = len(self.points)
+                self._table = Profiles(self.points, np.empty((self.bins, P), np.float32),
+                                       np.empty((self.bins, P), np.float32), np.empty((self.bins, P), np.float32),
+                                       np.empty((2 * self.bins + 1, P), np.int32), self.slack_m)
+            for name in ("floor_inv", "ceiling_inv", "ceiling_z", "edge_cum"):
+                getattr(self._table, name)[:, todo] = getattr(part, name)
+            self._made[todo] = True
+        if self._table is None:  # no points asked for
+            return profiles_at(self.structure, self.points[rows], self.bins, self.slack_m, self._tol)
+        return self._table.take(rows)
 
 
 class _Kept:
