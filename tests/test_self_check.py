@@ -19,7 +19,7 @@ from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, Mapki
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
-from mapkit_harness.plans.inconsistent import (doors_across_passages, leaf_across_its_arc, plan_beside_elevation,
+from mapkit_harness.plans.inconsistent import (doors_across_passages, doors_with_the_furniture, leaf_across_its_arc, plan_beside_elevation,
                                                 room_outline_on_layer_0, row_of_rooms,
                                                 solid_walls_in_metres, storeys_in_a_frame, tiled_podium)
 
@@ -156,12 +156,24 @@ def test_a_tile_grid_stopped_at_glass_is_floor_and_a_doorless_light_box_is_not(t
     assert any("shut in by walls or glass" in w for w in scene.info["warnings"])
 
 
-def test_door_swings_on_a_layer_read_as_furniture_where_no_door_was_found(tmp_path):
-    # proxy_cityscience: its door swings are on 'Furniture'; read right otherwise, the map has no door at all.
-    plan = row_of_rooms(tmp_path / "f.dxf", n=6, door_layer="Furniture")
-    with pytest.raises(InconsistentDrawingError, match=r"draws 6 door swing\(s\) on 'Furniture'.*--doors LAYER"):
+def test_door_swings_on_a_layer_read_as_furniture_hinged_on_a_wall_are_doors(tmp_path):
+    # proxy_cityscience: its door swings are on 'Furniture' (arcs and leaves, or leaf and arc in one
+    # polyline); read right otherwise, the map had no door at all and was refused.
+    for plan in (row_of_rooms(tmp_path / "f.dxf", n=6, door_layer="Furniture"),
+                 doors_with_the_furniture(tmp_path / "poly.dxf", n=4)):
+        scene = load_scene(plan)
+        n = 6 if plan.name == "f.dxf" else 4
+        assert scene.info["counts"]["doors"] == n and len(polygon_parts(scene.free_space)) == 1
+        assert any(f"{n} door swing(s) hinged on a wall, drawn on the layer(s) 'Furniture'" in w
+                   for w in scene.info["warnings"])
+        assert not any("contradicts" in w or "not in a wall gap" in w for w in scene.info["warnings"])
+
+
+def test_door_swings_on_a_layer_read_as_furniture_off_the_walls_are_named_in_the_refusal(tmp_path):
+    # Swings hinged on no wall (and the chairs' arcs) are not doors: the map, which found none, is refused.
+    plan = doors_with_the_furniture(tmp_path / "off.dxf", n=4, hinged=False)
+    with pytest.raises(InconsistentDrawingError, match=r"draws 8 door swing\(s\) on 'Furniture'.*--doors LAYER"):
         load_scene(plan)
-    assert load_scene(plan, BuildOptions(doors=["Furniture"])).info["counts"]["doors"] == 6
 
 
 def test_a_door_line_at_one_wall_gives_no_passage_and_no_error():

@@ -9,7 +9,8 @@ door drawings off their walls, its header in the wrong units;
 partitions on the wall layer); :func:`plan_beside_elevation` (a plan with
 an elevation of its facade and its framing plan beside it on the same layer);
 :func:`solid_walls_in_metres` (thick double-line walls, no opening drawn,
-a header in mm).
+a header in mm); :func:`doors_with_the_furniture` (door swings drawn on
+the furniture layer, beside chairs' arcs).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import ezdxf
+import numpy as np
 
 
 def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_layer: str = "A-DOOR",
@@ -265,3 +267,35 @@ def solid_walls_in_metres(path: str | Path, insunits: int = 4, thickness: float 
 __all__ = ["doors_across_passages", "leaf_across_its_arc", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms",
            "solid_walls_in_metres", "storeys_in_a_frame",
            "tiled_podium"]
+
+
+def doors_with_the_furniture(path: str | Path, n: int = 4, hinged: bool = True) -> Path:
+    """``n`` rooms of 4 x 4 m in a row off a 2 m corridor, single-line walls
+    on 'Walls' with a 0.9 m gap in each room's corridor wall; each door's
+    swing on 'Furniture', drawn as one polyline (hinge, the open leaf's tip,
+    the arc back to the far jamb: proxy_cityscience's office doors), hinged
+    at the gap's jamb or, with ``hinged`` False, 0.5 m into the room, off
+    the wall; in each room a round table on 'Furniture' with a chair's
+    back, a quarter arc of 0.6 m and a radial line, in its middle (an arc
+    of a door's size hinged on no wall)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, furniture = {"layer": "Walls"}, {"layer": "Furniture"}
+    w = 4.0
+    msp.add_lwpolyline([(0, 0), (n * w, 0), (n * w, 6), (0, 6)], close=True, dxfattribs=wall)
+    for i in range(1, n):
+        msp.add_line((i * w, 0), (i * w, 4), dxfattribs=wall)
+    for i in range(n):
+        x0, hinge = i * w, i * w + 1.0
+        msp.add_line((x0, 4), (hinge, 4), dxfattribs=wall)
+        msp.add_line((hinge + 0.9, 4), (x0 + w, 4), dxfattribs=wall)
+        y = 4.0 if hinged else 3.5
+        arc = [(hinge + 0.9 * np.sin(t), y - 0.9 * np.cos(t)) for t in np.linspace(0, np.pi / 2, 9)]
+        msp.add_lwpolyline([(hinge, y), *arc], dxfattribs=furniture)
+        cx, cy = x0 + 2.5, 2.0
+        msp.add_circle((cx, cy), 0.5, dxfattribs=furniture)
+        msp.add_arc((cx - 1.2, cy), 0.6, 90, 180, dxfattribs=furniture)
+        msp.add_line((cx - 1.2, cy), (cx - 1.8, cy), dxfattribs=furniture)
+    doc.saveas(path)
+    return Path(path)
