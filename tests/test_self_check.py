@@ -19,8 +19,9 @@ from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, Mapki
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
-from mapkit_harness.plans.inconsistent import (doors_across_passages, doors_with_the_furniture, leaf_across_its_arc, plan_beside_elevation,
-                                                room_outline_on_layer_0, row_of_rooms,
+from mapkit_harness.plans.inconsistent import (doors_across_passages, doors_with_the_furniture, leaf_across_its_arc,
+                                                plan_beside_elevation, room_outline_on_layer_0,
+                                                room_polygons_off_an_open_corridor, row_of_rooms,
                                                 solid_walls_in_metres, storeys_in_a_frame, tiled_podium)
 
 
@@ -255,3 +256,14 @@ def test_a_plan_drawn_at_a_fraction_of_its_size_is_refused_naming_the_scale_its_
         load_scene(path)
     scene = load_scene(path, BuildOptions(scale=5))
     assert scene.info["counts"]["doors"] == 8 and len(polygon_parts(scene.free_space)) == 1
+
+
+def test_room_polygons_for_some_rooms_leave_the_corridor_between_them_inside(tmp_path):
+    # proxy_learning, proxy_cucea: a floor layer of room polygons (some rooms only) said where the floor
+    # ended; the corridor, open at its end, was no floor and the rooms four separate parts, built without error.
+    scene = load_scene(room_polygons_off_an_open_corridor(tmp_path / "corridor.dxf"))
+    parts = polygon_parts(scene.free_space)
+    assert len(parts) == 1 and 65.0 < scene.free_space.area < 80.0  # 4 rooms and the corridor, 0.2 m off the walls
+    assert scene.free_space.bounds[0] > 0.0  # nothing leaks out of the open end
+    assert scene.info["interior"] == "rooms closed from the walls"
+    assert any("'Meeting rooms' outline rooms, not the floor" in w for w in scene.info["warnings"])

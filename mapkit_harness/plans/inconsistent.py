@@ -299,3 +299,29 @@ def doors_with_the_furniture(path: str | Path, n: int = 4, hinged: bool = True) 
         msp.add_line((cx - 1.2, cy), (cx - 1.8, cy), dxfattribs=furniture)
     doc.saveas(path)
     return Path(path)
+
+
+def room_polygons_off_an_open_corridor(path: str | Path, n: int = 4, polygons: int = 2) -> Path:
+    """``n`` rooms of 4 x 4 m in a row off a corridor 2 m wide, single-line
+    walls on 'Walls', each room's doorway a 1 m gap in the corridor wall (no
+    door drawn); the corridor's west end open to the outside across a
+    2.2 m gap between two wall ends that do not face each other (the south
+    one ends going north, the north one going west); the first
+    ``polygons`` rooms outlined on 'Meeting rooms', a room-polygon layer
+    (proxy_learning: room polygons for some rooms, none for the corridor)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, zone = {"layer": "Walls"}, {"layer": "Meeting rooms"}
+    w = 4.0
+    msp.add_lwpolyline([(0, 4), (0, 0), (n * w, 0), (n * w, 6), (1, 6)], dxfattribs=wall)
+    for i in range(n):
+        x0 = i * w
+        if i:
+            msp.add_line((x0, 0), (x0, 4), dxfattribs=wall)
+        msp.add_line((x0, 4), (x0 + 1.5, 4), dxfattribs=wall)
+        msp.add_line((x0 + 2.5, 4), (x0 + w, 4), dxfattribs=wall)
+        if i < polygons:
+            msp.add_lwpolyline([(x0, 0), (x0 + w, 0), (x0 + w, 4), (x0, 4)], close=True, dxfattribs=zone)
+    doc.saveas(path)
+    return Path(path)

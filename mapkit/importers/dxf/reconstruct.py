@@ -86,9 +86,7 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges,
                                           room_faces(drawing.role("rooms"), drawing.role("doors")))
-    if interior_source == "closed from the walls":
-        warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
-             f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
+    _tell_closed_outline(interior_source, drawing, warn)
 
     free = _free_space(interior, walls, obstacles, options.robot_radius)
     if not filled_rooms.is_empty:
@@ -136,6 +134,17 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     )
     _refuse_if_empty(scene, interior_source, options, drawing.role("walls"))
     return scene
+
+
+def _tell_closed_outline(interior_source: str, drawing: PlanDrawing, warn) -> None:
+    """Warn when the building's outline was closed from its outer walls (:func:`_interior`)."""
+    if interior_source == "closed from the walls":
+        warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
+             f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
+    elif interior_source == "rooms closed from the walls":
+        warn(f"the floor layer(s) {', '.join(sorted({repr(s.layer) for s in drawing.role('floor')}))} outline rooms, "
+             f"not the floor: the corridors and halls between them are inside the building's outline, closed from "
+             f"its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
 
 
 def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, info: dict, door_items: list):
@@ -434,7 +443,9 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     barriers enclose that a door opens into (a room whose own outline stays
     open); they say where the inside is, as a floor layer does. Plans still
     open after that (the holes cover less than ``OPEN_PLAN_FRACTION`` of the
-    walls' convex hull) are closed from their outer walls (:func:`.closure.closed_footprint`);
+    walls' convex hull) are closed from their outer walls (:func:`.closure.closed_footprint`),
+    as are those whose only floor layers are room polygons (zone layers:
+    they say where rooms are, not where the corridors between them end);
     if that encloses too little as well, the source is ``"open"`` and the
     inside empty (the caller refuses the plan).
     """
@@ -465,6 +476,12 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
             inside, source = unary_union([enclosed, footprint]), "closed from the walls"
         else:
             return Polygon(), "open"
+    if source == "floor layer" and all(is_zone_layer(s.layer) for s in floor):
+        # Room polygons say where rooms are, not where the floor ends: the corridors and halls between
+        # them are inside the outer walls, closed as a plan without a floor layer is.
+        footprint = closed_footprint(shut)
+        if footprint.difference(shut).area >= OPEN_PLAN_FRACTION * hull.area:
+            inside, source = unary_union([inside, footprint]), "rooms closed from the walls"
     # The robot walks through doors: their gaps join the rooms they connect.
     # A small closing seals hairline slits where a gap meets a room (they
     # would block the passage once the free space is shrunk); walls are
