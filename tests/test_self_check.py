@@ -14,6 +14,7 @@ import subprocess
 import sys
 
 import pytest
+from shapely.geometry import Point
 
 from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, MapkitError
 from mapkit.importers import load_scene
@@ -21,7 +22,8 @@ from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
 from mapkit_harness.plans.inconsistent import (doors_across_passages, doors_with_the_furniture, leaf_across_its_arc,
                                                 plan_beside_elevation, room_outline_on_layer_0,
-                                                room_polygons_off_an_open_corridor, row_of_rooms,
+                                                room_polygons_off_an_open_corridor, rooms_beside_doorless_spaces,
+                                                row_of_rooms,
                                                 solid_walls_in_metres, storeys_in_a_frame, tiled_podium)
 
 
@@ -267,3 +269,17 @@ def test_room_polygons_for_some_rooms_leave_the_corridor_between_them_inside(tmp
     assert scene.free_space.bounds[0] > 0.0  # nothing leaks out of the open end
     assert scene.info["interior"] == "rooms closed from the walls"
     assert any("'Meeting rooms' outline rooms, not the floor" in w for w in scene.info["warnings"])
+
+
+def test_a_space_no_door_is_drawn_at_is_no_room_but_one_whose_door_was_missed_is_refused(tmp_path):
+    # proxy_factory: with room polygons, a store and a duct with no door drawn were rooms cut off (refused);
+    # a stall door hung on no wall in the next room, by the store's wall, is no door of the store.
+    scene = load_scene(rooms_beside_doorless_spaces(tmp_path / "store.dxf"))
+    assert len(polygon_parts(scene.free_space)) == 1 and scene.info["counts"]["doors"] == 3
+    assert not scene.free_space.contains(Point(14.0, 2.0))  # the store (x 12 to 16 m, y 0 to 4 m) is left out
+    assert scene.free_space.contains(Point(10.0, 2.0))  # the room beside it is not
+    assert any("1 space(s) shut in by walls or glass no door opens and no door is drawn at" in w
+               for w in scene.info["warnings"])
+    # The room whose door is drawn off its wall (no gap holds it) is a room whose door was missed: refused.
+    with pytest.raises(InconsistentDrawingError, match=r"1 room\(s\) of 0.5 m2 or more \(12 m2\) are cut off.*--doors"):
+        load_scene(rooms_beside_doorless_spaces(tmp_path / "missed.dxf", missed_door=True))
