@@ -14,13 +14,16 @@ import subprocess
 import sys
 
 import pytest
+from shapely.geometry import Point
 
 from mapkit.errors import ImplausibleUnitsError, InconsistentDrawingError, MapkitError
 from mapkit.importers import load_scene
 from mapkit.options import BuildOptions
 from mapkit.shapes import polygon_parts
-from mapkit_harness.plans.inconsistent import (doors_across_passages, leaf_across_its_arc, plan_beside_elevation,
-                                                room_outline_on_layer_0, row_of_rooms,
+from mapkit_harness.plans.inconsistent import (doors_across_passages, doors_with_the_furniture, leaf_across_its_arc,
+                                                plan_beside_elevation, room_outline_on_layer_0,
+                                                room_polygons_off_an_open_corridor, rooms_beside_doorless_spaces,
+                                                row_of_rooms,
                                                 solid_walls_in_metres, storeys_in_a_frame, tiled_podium)
 
 
@@ -157,12 +160,24 @@ def test_a_tile_grid_stopped_at_glass_is_floor_and_a_doorless_light_box_is_not(t
     assert any("shut in by walls or glass" in w for w in scene.info["warnings"])
 
 
-def test_door_swings_on_a_layer_read_as_furniture_where_no_door_was_found(tmp_path):
-    # proxy_cityscience: its door swings are on 'Furniture'; read right otherwise, the map has no door at all.
-    plan = row_of_rooms(tmp_path / "f.dxf", n=6, door_layer="Furniture")
-    with pytest.raises(InconsistentDrawingError, match=r"draws 6 door swing\(s\) on 'Furniture'.*--doors LAYER"):
+def test_door_swings_on_a_layer_read_as_furniture_hinged_on_a_wall_are_doors(tmp_path):
+    # proxy_cityscience: its door swings are on 'Furniture' (arcs and leaves, or leaf and arc in one
+    # polyline); read right otherwise, the map had no door at all and was refused.
+    for plan in (row_of_rooms(tmp_path / "f.dxf", n=6, door_layer="Furniture"),
+                 doors_with_the_furniture(tmp_path / "poly.dxf", n=4)):
+        scene = load_scene(plan)
+        n = 6 if plan.name == "f.dxf" else 4
+        assert scene.info["counts"]["doors"] == n and len(polygon_parts(scene.free_space)) == 1
+        assert any(f"{n} door swing(s) hinged on a wall, drawn on the layer(s) 'Furniture'" in w
+                   for w in scene.info["warnings"])
+        assert not any("contradicts" in w or "not in a wall gap" in w for w in scene.info["warnings"])
+
+
+def test_door_swings_on_a_layer_read_as_furniture_off_the_walls_are_named_in_the_refusal(tmp_path):
+    # Swings hinged on no wall (and the chairs' arcs) are not doors: the map, which found none, is refused.
+    plan = doors_with_the_furniture(tmp_path / "off.dxf", n=4, hinged=False)
+    with pytest.raises(InconsistentDrawingError, match=r"draws 8 door swing\(s\) on 'Furniture'.*--doors LAYER"):
         load_scene(plan)
-    assert load_scene(plan, BuildOptions(doors=["Furniture"])).info["counts"]["doors"] == 6
 
 
 def test_a_door_line_at_one_wall_gives_no_passage_and_no_error():
@@ -244,3 +259,28 @@ def test_a_plan_drawn_at_a_fraction_of_its_size_is_refused_naming_the_scale_its_
         load_scene(path)
     scene = load_scene(path, BuildOptions(scale=5))
     assert scene.info["counts"]["doors"] == 8 and len(polygon_parts(scene.free_space)) == 1
+
+
+def test_room_polygons_for_some_rooms_leave_the_corridor_between_them_inside(tmp_path):
+    # proxy_learning, proxy_cucea: a floor layer of room polygons (some rooms only) said where the floor
+    # ended; the corridor, open at its end, was no floor and the rooms four separate parts, built without error.
+    scene = load_scene(room_polygons_off_an_open_corridor(tmp_path / "corridor.dxf"))
+    parts = polygon_parts(scene.free_space)
+    assert len(parts) == 1 and 65.0 < scene.free_space.area < 80.0  # 4 rooms and the corridor, 0.2 m off the walls
+    assert scene.free_space.bounds[0] > 0.0  # nothing leaks out of the open end
+    assert scene.info["interior"] == "rooms closed from the walls"
+    assert any("'Meeting rooms' outline rooms, not the floor" in w for w in scene.info["warnings"])
+
+
+def test_a_space_no_door_is_drawn_at_is_no_room_but_one_whose_door_was_missed_is_refused(tmp_path):
+    # proxy_factory: with room polygons, a store and a duct with no door drawn were rooms cut off (refused);
+    # a stall door hung on no wall in the next room, by the store's wall, is no door of the store.
+    scene = load_scene(rooms_beside_doorless_spaces(tmp_path / "store.dxf"))
+    assert len(polygon_parts(scene.free_space)) == 1 and scene.info["counts"]["doors"] == 3
+    assert not scene.free_space.contains(Point(14.0, 2.0))  # the store (x 12 to 16 m, y 0 to 4 m) is left out
+    assert scene.free_space.contains(Point(10.0, 2.0))  # the room beside it is not
+    assert any("1 space(s) shut in by walls or glass no door opens and no door is drawn at" in w
+               for w in scene.info["warnings"])
+    # The room whose door is drawn off its wall (no gap holds it) is a room whose door was missed: refused.
+    with pytest.raises(InconsistentDrawingError, match=r"1 room\(s\) of 0.5 m2 or more \(12 m2\) are cut off.*--doors"):
+        load_scene(rooms_beside_doorless_spaces(tmp_path / "missed.dxf", missed_door=True))

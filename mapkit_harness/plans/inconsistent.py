@@ -9,7 +9,10 @@ door drawings off their walls, its header in the wrong units;
 partitions on the wall layer); :func:`plan_beside_elevation` (a plan with
 an elevation of its facade and its framing plan beside it on the same layer);
 :func:`solid_walls_in_metres` (thick double-line walls, no opening drawn,
-a header in mm).
+a header in mm); :func:`doors_with_the_furniture` (door swings drawn on
+the furniture layer, beside chairs' arcs); :func:`room_polygons_off_an_open_corridor`
+and :func:`rooms_beside_doorless_spaces` (room polygons for some rooms;
+a store with no door drawn).
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import ezdxf
+import numpy as np
 
 
 def row_of_rooms(path: str | Path, n: int = 6, wall_layer: str = "A-WALL", door_layer: str = "A-DOOR",
@@ -265,3 +269,102 @@ def solid_walls_in_metres(path: str | Path, insunits: int = 4, thickness: float 
 __all__ = ["doors_across_passages", "leaf_across_its_arc", "plan_beside_elevation", "room_outline_on_layer_0", "row_of_rooms",
            "solid_walls_in_metres", "storeys_in_a_frame",
            "tiled_podium"]
+
+
+def doors_with_the_furniture(path: str | Path, n: int = 4, hinged: bool = True) -> Path:
+    """``n`` rooms of 4 x 4 m in a row off a 2 m corridor, single-line walls
+    on 'Walls' with a 0.9 m gap in each room's corridor wall; each door's
+    swing on 'Furniture', drawn as one polyline (hinge, the open leaf's tip,
+    the arc back to the far jamb: proxy_cityscience's office doors), hinged
+    at the gap's jamb or, with ``hinged`` False, 0.5 m into the room, off
+    the wall; in each room a round table on 'Furniture' with a chair's
+    back, a quarter arc of 0.6 m and a radial line, in its middle (an arc
+    of a door's size hinged on no wall)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, furniture = {"layer": "Walls"}, {"layer": "Furniture"}
+    w = 4.0
+    msp.add_lwpolyline([(0, 0), (n * w, 0), (n * w, 6), (0, 6)], close=True, dxfattribs=wall)
+    for i in range(1, n):
+        msp.add_line((i * w, 0), (i * w, 4), dxfattribs=wall)
+    for i in range(n):
+        x0, hinge = i * w, i * w + 1.0
+        msp.add_line((x0, 4), (hinge, 4), dxfattribs=wall)
+        msp.add_line((hinge + 0.9, 4), (x0 + w, 4), dxfattribs=wall)
+        y = 4.0 if hinged else 3.5
+        arc = [(hinge + 0.9 * np.sin(t), y - 0.9 * np.cos(t)) for t in np.linspace(0, np.pi / 2, 9)]
+        msp.add_lwpolyline([(hinge, y), *arc], dxfattribs=furniture)
+        cx, cy = x0 + 2.5, 2.0
+        msp.add_circle((cx, cy), 0.5, dxfattribs=furniture)
+        msp.add_arc((cx - 1.2, cy), 0.6, 90, 180, dxfattribs=furniture)
+        msp.add_line((cx - 1.2, cy), (cx - 1.8, cy), dxfattribs=furniture)
+    doc.saveas(path)
+    return Path(path)
+
+
+def room_polygons_off_an_open_corridor(path: str | Path, n: int = 4, polygons: int = 2) -> Path:
+    """``n`` rooms of 4 x 4 m in a row off a corridor 2 m wide, single-line
+    walls on 'Walls', each room's doorway a 1 m gap in the corridor wall (no
+    door drawn); the corridor's west end open to the outside across a
+    2.2 m gap between two wall ends that do not face each other (the south
+    one ends going north, the north one going west); the first
+    ``polygons`` rooms outlined on 'Meeting rooms', a room-polygon layer
+    (proxy_learning: room polygons for some rooms, none for the corridor)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, zone = {"layer": "Walls"}, {"layer": "Meeting rooms"}
+    w = 4.0
+    msp.add_lwpolyline([(0, 4), (0, 0), (n * w, 0), (n * w, 6), (1, 6)], dxfattribs=wall)
+    for i in range(n):
+        x0 = i * w
+        if i:
+            msp.add_line((x0, 0), (x0, 4), dxfattribs=wall)
+        msp.add_line((x0, 4), (x0 + 1.5, 4), dxfattribs=wall)
+        msp.add_line((x0 + 2.5, 4), (x0 + w, 4), dxfattribs=wall)
+        if i < polygons:
+            msp.add_lwpolyline([(x0, 0), (x0 + w, 0), (x0 + w, 4), (x0, 4)], close=True, dxfattribs=zone)
+    doc.saveas(path)
+    return Path(path)
+
+
+def rooms_beside_doorless_spaces(path: str | Path, missed_door: bool = False) -> Path:
+    """A 16 x 6 m outline on 'Walls' (single lines), four 4 x 4 m rooms off
+    a 2 m corridor; rooms 0 to 2 each entered by a 0.9 m door swing on
+    'Doors' in a gap of the corridor wall, the first two outlined on
+    'Meeting rooms' (room polygons); room 3 a store with no door drawn; in
+    room 0 a column drawn as a 1.6 m square around a 1.4 m one; in room 2,
+    beside the store's wall, a toilet stall's door swing hung on no wall
+    (proxy_factory: stores, ducts and hollow columns with no door, stall
+    doors on partitions not drawn as walls). ``missed_door``: room 2's door
+    is drawn 0.5 m into the room off an unbroken corridor wall instead (a
+    door the plan draws but no gap holds)."""
+    doc = ezdxf.new("R2013")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    wall, door, zone = {"layer": "Walls"}, {"layer": "Doors"}, {"layer": "Meeting rooms"}
+    msp.add_lwpolyline([(0, 0), (16, 0), (16, 6), (0, 6)], close=True, dxfattribs=wall)
+    for i in range(4):
+        x0 = 4.0 * i
+        if i:
+            msp.add_line((x0, 0), (x0, 4), dxfattribs=wall)
+        hinge = x0 + 1.0
+        if i == 3 or (i == 2 and missed_door):
+            msp.add_line((x0, 4), (x0 + 4, 4), dxfattribs=wall)
+        else:
+            msp.add_line((x0, 4), (hinge, 4), dxfattribs=wall)
+            msp.add_line((hinge + 0.9, 4), (x0 + 4, 4), dxfattribs=wall)
+        if i < 3:
+            y = 3.5 if (i == 2 and missed_door) else 4.0
+            msp.add_line((hinge, y), (hinge, y - 0.9), dxfattribs=door)
+            msp.add_arc((hinge, y), 0.9, 270, 360, dxfattribs=door)
+        if i < 2:
+            msp.add_lwpolyline([(x0, 0), (x0 + 4, 0), (x0 + 4, 4), (x0, 4)], close=True, dxfattribs=zone)
+    msp.add_lwpolyline([(1.2, 1.2), (2.8, 1.2), (2.8, 2.8), (1.2, 2.8)], close=True, dxfattribs=wall)
+    msp.add_lwpolyline([(1.3, 1.3), (2.7, 1.3), (2.7, 2.7), (1.3, 2.7)], close=True, dxfattribs=wall)
+    # A stall door in room 2 (x 8-12) by the store's wall at x = 12, hung on no wall: open, 0.2 m off it.
+    msp.add_line((11.8, 1.0), (11.0, 1.0), dxfattribs=door)
+    msp.add_arc((11.8, 1.0), 0.8, 90, 180, dxfattribs=door)
+    doc.saveas(path)
+    return Path(path)

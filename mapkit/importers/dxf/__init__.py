@@ -33,6 +33,7 @@ from mapkit.importers.dxf.door_swings import find_door_swings
 from mapkit.importers.dxf.self_check import enforce
 from mapkit.importers.dxf.entities import SILENT, check_entity_count, flatten_entities
 from mapkit.importers.dxf.layers import layer_counts, resolve_layer_roles
+from mapkit.importers.dxf.loose_swings import adopt_loose_swings
 from mapkit.importers.dxf.read import model_space, read_dxf
 from mapkit.importers.dxf.sheets import choose_plan, find_plans, nearest_plan, plans_met
 from mapkit.importers.dxf.openings import drawing_items
@@ -133,7 +134,7 @@ def load_drawing(path: Path, options: BuildOptions, document: tuple | None = Non
              f"local origin at ({offset[0]:.0f}, {offset[1]:.0f}) m, kept in the map as origin_offset_m "
              f"('mapkit export --drawing-coordinates' puts it back)")
     strokes, swing_strokes, plans, others = _one_plan(strokes, swing_strokes, roles, options.plan_number, note)
-    drawing = _by_role(strokes, swing_strokes, roles, set(room_outlines))
+    drawing = _by_role(strokes, swing_strokes, roles, set(room_outlines), note)
     for s in others:  # the sheet's other plans: shown in previews, not built
         drawing.ignored.setdefault(s.layer, []).append(s)
 
@@ -207,9 +208,12 @@ def _one_plan(strokes: list, swing_strokes: list, roles: dict, choice: int | Non
             [s for s in strokes if not ours(s)])
 
 
-def _by_role(strokes: list, swing_strokes: list, roles: dict, room_outlines: set[str] = frozenset()) -> PlanDrawing:
+def _by_role(strokes: list, swing_strokes: list, roles: dict, room_outlines: set[str] = frozenset(),
+             note=None) -> PlanDrawing:
     """The strokes sorted by their layer's role (door swings are doors
-    whatever their layer); those of other layers kept for previews. The
+    whatever their layer: those on wall layers, ``swing_strokes``, and those
+    on layers of another role hinged on a wall, :mod:`.loose_swings`, which
+    are ``note``-d); those of other layers kept for previews. The
     strokes of ``room_outlines`` layers (:mod:`.room_layers`) are walls and
     also the "rooms" role; in such a plan each straight door line is a door."""
     drawing = PlanDrawing()
@@ -223,8 +227,14 @@ def _by_role(strokes: list, swing_strokes: list, roles: dict, room_outlines: set
                 drawing.strokes.setdefault("rooms", []).append(s)
         else:
             drawing.ignored.setdefault(s.layer, []).append(s)
+    taken = adopt_loose_swings(drawing, 1 + max((s.group for s in strokes + swing_strokes if s.group is not None),
+                                                default=-1))
+    if taken and note is not None:
+        note(f"{sum(taken.values())} door swing(s) hinged on a wall, drawn on the layer(s) {_names(sorted(taken))} "
+             "read as something else, taken as doors")
     if room_outlines and drawing.role("doors"):
-        first = 1 + max((s.group for s in strokes + swing_strokes if s.group is not None), default=-1)
+        first = 1 + max((s.group for s in strokes + swing_strokes + drawing.role("doors") if s.group is not None),
+                        default=-1)
         drawing.strokes["doors"] = door_lines_apart(drawing.role("doors"), first)
     return drawing
 

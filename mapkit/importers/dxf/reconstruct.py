@@ -86,25 +86,10 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     bridges = end_bridges(walls, options.max_wall_thickness)
     interior, interior_source = _interior(walls, door_gaps, obstacles, drawing.role("floor"), bridges,
                                           room_faces(drawing.role("rooms"), drawing.role("doors")))
-    if interior_source == "closed from the walls":
-        warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
-             f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
+    _tell_closed_outline(interior_source, drawing, warn)
 
     free = _free_space(interior, walls, obstacles, options.robot_radius)
-    if not filled_rooms.is_empty:
-        free, shafts = _without_shafts(free, filled_rooms, door_gaps, options.robot_radius)
-        if shafts:
-            warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
-                 f"{sum(p.area for p in shafts):.1f} m2")
-    elif interior_source == "floor layer" and door_gaps and not any(is_zone_layer(s.layer) for s in drawing.role("floor")):
-        # A floor layer says where the floor is, not where the rooms are: a space shut in by walls or glass that
-        # none of the plan's doors opens is no place the robot reaches (a light box between two glass panes).
-        # Where the drawing says where its rooms are, such a space is a room whose door was missed: the
-        # self-check (:mod:`.self_check`) refuses it.
-        free, shut_in = _without_shafts(free, _largest(free), door_gaps, options.robot_radius)
-        if shut_in:
-            warn(f"{len(shut_in)} space(s) shut in by walls or glass with no door into them are not free space: "
-                 f"{sum(p.area for p in shut_in):.1f} m2")
+    free = _without_shut_in(free, filled_rooms, interior_source, drawing, door_gaps, door_items, options, warn)
     if stair_runs:
         free = _without_stairs(free, stair_runs, [walls, obstacles, *door_gaps, *bridges],
                                door_gaps + _doorways(bridges, interior, obstacles) + door_items, options, warn, info)
@@ -136,6 +121,17 @@ def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | 
     )
     _refuse_if_empty(scene, interior_source, options, drawing.role("walls"))
     return scene
+
+
+def _tell_closed_outline(interior_source: str, drawing: PlanDrawing, warn) -> None:
+    """Warn when the building's outline was closed from its outer walls (:func:`_interior`)."""
+    if interior_source == "closed from the walls":
+        warn(f"no closed outline encloses the plan and no floor layer outlines an area; the building's outline is "
+             f"closed from its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
+    elif interior_source == "rooms closed from the walls":
+        warn(f"the floor layer(s) {', '.join(sorted({repr(s.layer) for s in drawing.role('floor')}))} outline rooms, "
+             f"not the floor: the corridors and halls between them are inside the building's outline, closed from "
+             f"its outer walls across gaps up to {OUTLINE_MAX_GAP:g} m")
 
 
 def _with_zone_walls(drawing: PlanDrawing, walls: MultiPolygon, options: BuildOptions, info: dict, door_items: list):
@@ -348,6 +344,57 @@ def _without_stairs(free: MultiPolygon, runs: list, barriers: list, entries: lis
     return free
 
 
+def _without_shut_in(free: MultiPolygon, filled_rooms, interior_source: str, drawing: PlanDrawing,
+                     door_gaps: list[Polygon], door_items: list, options: BuildOptions, warn) -> MultiPolygon:
+    """``free`` (metres) without the walled spaces the robot never enters, warned:
+
+    - with room fills beside drawn walls (``filled_rooms``): those no fill
+      covers and no door opens (shafts, chases);
+    - with a floor layer: those shut in by walls or glass that none of the
+      plan's doors (``door_gaps``) opens. A floor layer says where the
+      floor is, not where the rooms are (a light box between two glass
+      panes);
+    - with room polygons (zone layers), which say where rooms are: those
+      no door opens and no door drawing left unused (``door_items`` that no
+      door gap holds) reaches from outside the other spaces: a shaft, a
+      column's hollow core, a store whose door is not drawn. A space such a
+      drawing reaches (within ``robot_radius`` and ``max_wall_thickness``:
+      a door line along the wall beside it, a swing drawn in the room off
+      its wall) is a room whose door was missed: kept, for the self-check
+      (:mod:`.self_check`) to refuse. A drawing lying mostly in another
+      space (a toilet stall's door, its partitions not drawn as walls)
+      opens that space, not this one.
+    """
+    if not filled_rooms.is_empty:
+        free, shafts = _without_shafts(free, filled_rooms, door_gaps, options.robot_radius)
+        if shafts:
+            warn(f"{len(shafts)} walled space(s) with no room fill and no door (shafts, chases) are not free space: "
+                 f"{sum(p.area for p in shafts):.1f} m2")
+        return free
+    if interior_source not in ("floor layer", "rooms closed from the walls") or not door_gaps:
+        return free
+    zones = any(is_zone_layer(s.layer) for s in drawing.role("floor"))
+    gaps = unary_union(door_gaps)
+    unused = [d for d in door_items if zones and d.distance(gaps) > SNAP_GAP]  # door drawings no gap holds
+    parts = list(free.geoms)
+    largest = max(range(len(parts)), key=lambda k: parts[k].area, default=-1)
+    reach = options.robot_radius + options.max_wall_thickness
+
+    def drawn_at(part) -> bool:  # an unused door drawing by the part, no more of it in other spaces than not
+        return any(2.0 * (d.intersection(free).length - d.intersection(part).length) <= d.length
+                   for d in unused if part.distance(d) <= reach)
+
+    keep, shut_in = [], []
+    for k, part in enumerate(parts):
+        entered = k == largest or part.distance(gaps) <= options.robot_radius + SNAP_GAP or drawn_at(part)
+        (keep if entered else shut_in).append(part)
+    if shut_in:
+        kind = "no door opens and no door is drawn at" if zones else "with no door into them"
+        warn(f"{len(shut_in)} space(s) shut in by walls or glass {kind} are not free space: "
+             f"{sum(p.area for p in shut_in):.1f} m2")
+    return MultiPolygon(keep)
+
+
 def _without_shafts(free: MultiPolygon, rooms, door_gaps: list[Polygon], robot_radius: float):
     """``free`` without its parts that no room fill covers and no door
     reaches, and those parts.
@@ -434,7 +481,9 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     barriers enclose that a door opens into (a room whose own outline stays
     open); they say where the inside is, as a floor layer does. Plans still
     open after that (the holes cover less than ``OPEN_PLAN_FRACTION`` of the
-    walls' convex hull) are closed from their outer walls (:func:`.closure.closed_footprint`);
+    walls' convex hull) are closed from their outer walls (:func:`.closure.closed_footprint`),
+    as are those whose only floor layers are room polygons (zone layers:
+    they say where rooms are, not where the corridors between them end);
     if that encloses too little as well, the source is ``"open"`` and the
     inside empty (the caller refuses the plan).
     """
@@ -465,6 +514,12 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
             inside, source = unary_union([enclosed, footprint]), "closed from the walls"
         else:
             return Polygon(), "open"
+    if source == "floor layer" and all(is_zone_layer(s.layer) for s in floor):
+        # Room polygons say where rooms are, not where the floor ends: the corridors and halls between
+        # them are inside the outer walls, closed as a plan without a floor layer is.
+        footprint = closed_footprint(shut)
+        if footprint.difference(shut).area >= OPEN_PLAN_FRACTION * hull.area:
+            inside, source = unary_union([inside, footprint]), "rooms closed from the walls"
     # The robot walks through doors: their gaps join the rooms they connect.
     # A small closing seals hairline slits where a gap meets a room (they
     # would block the passage once the free space is shrunk); walls are

@@ -23,11 +23,10 @@ result that contradicts it is built wrong:
   (``SELF_CHECK_MIN_DOORS_USED``): where most are not, the rooms behind
   them are lost or sealed.
 - **doors drawn elsewhere**: where the map found no door, the drawing
-  draws none on any layer: a stroke that is an arc of a door leaf's radius
-  (``DOOR_SWING_RADIUS``, within ``DOOR_SWING_SNAP``) turning a quarter
-  (between half of ``DOOR_SWING_MAX_SWEEP_DEG`` and all of it), its leaf
-  drawn from its centre to one of its ends, on a layer read as furniture
-  or of no role is a door swing the map left out.
+  draws none on any layer: a door swing (:mod:`.loose_swings`, an arc of a
+  door leaf's radius and its leaf) left on a layer read as furniture or of
+  no role (not hinged on a wall, so not taken as a door) is one the map
+  left out.
 - **the doors' size**: where anything here contradicts the drawing and
   its door drawings are a median width no door has, the drawing is at a
   fraction of its size (no unit mends it): the refusal names the
@@ -55,14 +54,13 @@ from scipy import ndimage
 
 from mapkit.errors import InconsistentDrawingError
 from mapkit.importers.dxf.layer_roles import guess_role, is_zone_layer
+from mapkit.importers.dxf.loose_swings import find_swings
 from mapkit.importers.dxf.openings import door_strokes, drawing_items
 from mapkit.importers.dxf.strokes import PlanDrawing
 from mapkit.importers.dxf.units import scale_from_gaps
 from mapkit.scene import Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_SWING_MAX_SWEEP_DEG, DOOR_SWING_RADIUS, DOOR_SWING_SNAP,
-                               DOOR_SWING_TIP_SHARE,
-                               DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
+from mapkit.tolerances import (DOOR_REACH_SLACK, DOOR_UNITS_MIN_DOORS, MAX_FLOOR_AREA_M2, OUTLINE_MAX_GAP, ROOM_PART_MIN_AREA,
                                SELF_CHECK_CELL_M, SELF_CHECK_MIN_DOORS_USED, SELF_CHECK_MIN_FREE_SHARE,
                                SELF_CHECK_WALL_SHARE, TYPICAL_DOOR_WIDTH, ZERO)
 
@@ -241,47 +239,15 @@ def door_scale(drawing: PlanDrawing) -> tuple[int, float, float] | None:
 
 
 def _swings_elsewhere(drawing: PlanDrawing) -> dict[str, int]:
-    """Door swings (see the module docstring) on the layers the plan left
-    out (furniture, layers of no role), per layer: an arc whose hinge (its
-    centre) and one of its ends a leaf drawn on the same layer reaches (a
-    vertex within ``DOOR_SWING_TIP_SHARE`` of the radius of each; a stair's
-    or a table's arcs have none)."""
+    """Door swings (:func:`.loose_swings.find_swings`, a leaf any stroke
+    that reaches the hinge and the arc's end) on the layers the plan left
+    out (furniture, layers of no role), per layer."""
     out: dict[str, int] = {}
     for layer, strokes in drawing.ignored.items():
-        arcs = [(k, _swing_arc(s.coords)) for k, s in enumerate(strokes) if not s.closed and len(s.coords) >= 4]
-        arcs = [(k, arc) for k, arc in arcs if arc is not None]
-        if not arcs:
-            continue
-        n = 0
-        for k, (centre, r, ends) in arcs:
-            others = [np.asarray(s.coords, dtype=float)[:, :2] for j, s in enumerate(strokes) if j != k]
-            reach = max(DOOR_SWING_SNAP, DOOR_SWING_TIP_SHARE * r)
-            n += any(np.linalg.norm(v - centre, axis=1).min() <= reach
-                     and min(np.linalg.norm(v - e, axis=1).min() for e in ends) <= reach for v in others)
+        n = len(find_swings(strokes, leaf_radii=np.inf))
         if n:
             out[layer] = n
     return out
-
-
-def _swing_arc(coords) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]] | None:
-    """``(centre, radius, ends)`` of a polyline (N, 2+) metres that is an arc
-    of a door leaf's radius turning about a quarter; None otherwise."""
-    p = np.asarray(coords, dtype=float)[:, :2]
-    a, b, c = p[0], p[len(p) // 2], p[-1]
-    m = 2.0 * np.array([b - a, c - a])
-    if abs(np.linalg.det(m)) <= ZERO.distance:
-        return None
-    centre = np.linalg.solve(m, np.array([b @ b - a @ a, c @ c - a @ a]))
-    radii = np.linalg.norm(p - centre, axis=1)
-    r = float(radii.mean())
-    lo, hi = DOOR_SWING_RADIUS
-    if not lo <= r <= hi or float(np.abs(radii - r).max()) > DOOR_SWING_SNAP:
-        return None
-    u, v = a - centre, c - centre
-    sweep = float(np.degrees(np.arccos(np.clip(u @ v / (np.linalg.norm(u) * np.linalg.norm(v)), -1.0, 1.0))))
-    if not 0.5 * DOOR_SWING_MAX_SWEEP_DEG <= sweep <= DOOR_SWING_MAX_SWEEP_DEG:
-        return None
-    return centre, r, (a, c)
 
 
 def _rooms_cut_off(scene: Scene, robot_radius: float) -> list[float]:
