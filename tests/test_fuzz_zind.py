@@ -60,6 +60,7 @@ def test_the_mutations_change_the_document():
     assert deep and any("[" * 50 in text for text in deep)  # nested past what json.dumps could write
 
 
+@pytest.mark.slow
 def test_the_mutations_draw_the_same_document_for_the_same_seed():
     """A hostile value put into one document and then edited by a later
     mutation must not edit the table it came from: the same seed would then

@@ -399,7 +399,7 @@ def test_the_rig_file_example_of_docs_inputs_reads(tmp_path):
     assert got[0].mount == Mount(0.2, 0.0, 0.0) and got[0].camera.pitch_deg == 5
 
 
-@pytest.mark.parametrize("kind", ["camchain-lines", "camchain-bytes", "rig-json"])
+@pytest.mark.parametrize("kind", [pytest.param("camchain-lines", marks=pytest.mark.slow), "camchain-bytes", "rig-json"])
 def test_damaged_rig_files_are_a_rig_or_one_line_error(tmp_path, kind):
     """Seeded damage (the fuzz families' mutations) to a Kalibr camchain, in
     both PyYAML styles, and to a rig JSON: each reads into a rig or ends in
