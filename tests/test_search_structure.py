@@ -17,7 +17,7 @@ from mapkit_harness.simulate import make_rig_frame, pose_error, visible_lines
 from matcher.rig.frame import prepare_rig_frame
 from matcher.search import default_search
 from matcher.search.structure.observed import observe
-from matcher.search.structure.profiles import first_hits, grid_profiles
+from matcher.search.structure.profiles import clear_of_walls, first_hits, grid_profiles
 from matcher.search.structure.ranking import rank_places
 from matcher.search.structure.yaw import yaw_bins
 from matcher.verdict import NOT_LOCALISED, Evidence, decide
@@ -54,6 +54,32 @@ def test_first_hits_is_the_nearest_crossing_of_each_ray():
     assert (index[0, ahead] == 0).all()
     assert np.isclose(dist[0, 3], 3.0 / math.cos(math.radians(22.5))) and index[0, 3] == 2
     assert np.isinf(dist[0, [2, 4, 5]]).all()
+
+
+def test_clear_of_walls_keeps_the_points_farther_than_the_clearance():
+    """Two walls meeting at the origin (along +x and +y): points at known
+    distances from the nearer, beyond a wall's end measured to its end."""
+    walls = np.array([[[0.0, 0.0], [4.0, 0.0]], [[0.0, 0.0], [0.0, 4.0]]])
+    points = np.array([[2.0, 0.05], [2.0, 0.2], [0.1, 3.0], [1.0, 1.0], [5.0, 0.1], [4.1, 0.05]])
+    kept = clear_of_walls(points, walls, 0.116, chunk=3)  # chunk: two points a block
+    assert kept.tolist() == [False, True, False, True, True, False]
+
+
+def test_a_map_for_a_small_footprint_scores_no_point_at_a_wall():
+    """A room whose region reaches 2 cm from its walls (a tripod's
+    footprint): the lattice keeps no point within its slack and the map's
+    error of a wall face, and keeps the room's middle."""
+    linemap = make_box_map(robot_radius=0.02)
+    grid = grid_profiles(linemap, STRUCTURE)
+    points = grid.profiles.points
+    walls = grid.structure.floor
+    clearance = grid.step / math.sqrt(2.0) + STRUCTURE.model_m
+    rel = points[:, None] - walls[None, :, 0]
+    d = walls[:, 1] - walls[:, 0]
+    t = np.clip(np.einsum("pwi,wi->pw", rel, d) / np.einsum("wi,wi->w", d, d), 0.0, 1.0)
+    nearest = np.linalg.norm(rel - t[..., None] * d, axis=2).min(axis=1)
+    assert nearest.min() > clearance
+    assert nearest.max() > 2.0 and len(points) > 900
 
 
 @pytest.mark.slow

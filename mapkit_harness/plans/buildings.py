@@ -326,12 +326,13 @@ def make_small_flat() -> LineMap:
     return assemble_map(segments, kinds, regions, lists, walls, meta)
 
 
-def make_box_map(width: float = 6.0, depth: float = 5.0) -> LineMap:
-    """One empty rectangular room, one region: the smallest useful map (fast)."""
+def make_box_map(width: float = 6.0, depth: float = 5.0, robot_radius: float = ROBOT_RADIUS) -> LineMap:
+    """One empty rectangular room, one region (the room shrunk by
+    ``robot_radius``, metres): the smallest useful map (fast)."""
     free = box(0.0, 0.0, width, depth)
     walls = box(-0.15, -0.15, width + 0.15, depth + 0.15).difference(free)
     segments, kinds = flat_segments(free)
-    region = free.buffer(-ROBOT_RADIUS, join_style="mitre")
+    region = free.buffer(-robot_radius, join_style="mitre")
     meta = {"units": "m", "wall_height": WALL_HEIGHT, "source": SOURCE}
     return assemble_map(segments, kinds, [region], [np.arange(len(segments))], walls, meta)
 

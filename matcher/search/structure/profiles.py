@@ -119,7 +119,9 @@ class GridProfiles:
         self.structure = structure_of(linemap, tol)
         self.bins = bins_of(tol)
         self.step, points = lattice(linemap, tol, self.bins)
-        self.profiles = ProfileTable(self.structure, points, self.bins, self.step / math.sqrt(2.0), tol)
+        slack = self.step / math.sqrt(2.0)
+        points = points[clear_of_walls(points, self.structure.floor, slack + tol.model_m, tol.map_index.ray_chunk)]
+        self.profiles = ProfileTable(self.structure, points, self.bins, slack, tol)
         self.directions = map_directions(linemap, self.bins // 2)
         self._cell = np.round((points - points.min(axis=0, initial=0.0)) / self.step).astype(np.int64) \
             if len(points) else np.zeros((0, 2), np.int64)
@@ -224,6 +226,34 @@ def lattice(linemap: LineMap, tol: Tolerances, bins: int) -> tuple[float, np.nda
     grid = np.stack(np.meshgrid(xs, ys, indexing="xy"), axis=-1).reshape(-1, 2)
     inside = index_of(linemap).free(tol.map_index).distance(grid) <= 0.0
     return step, grid[inside]
+
+
+def clear_of_walls(points: np.ndarray, walls: np.ndarray, clearance_m: float, chunk: int) -> np.ndarray:
+    """(P,) bool: the ``points`` (P, 2) farther than ``clearance_m`` from
+    every wall face ``walls`` (W, 2, 2), the floor junctions, metres;
+    ``chunk`` bounds the point-and-wall pairs worked at once.
+
+    A lattice point stands for every place within its slack (half the
+    lattice's diagonal) and the map's error. A point that near a wall
+    cannot be scored: the wall's corners and jambs fall within the widened
+    bearings of every bin (:func:`edge_counts`) and its face may lie on
+    either side of the true place, so the point agrees with any frame and
+    outranks the rooms' middles. A map built for a small footprint (a
+    tripod's, a few centimetres) has regions that reach that near; one
+    built for a robot's does not."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    keep = np.ones(len(points), dtype=bool)
+    if not len(walls) or not len(points):
+        return keep
+    a, d = walls[:, 0], walls[:, 1] - walls[:, 0]  # (W, 2)
+    dd = np.maximum(np.einsum("wi,wi->w", d, d), 1e-18)
+    block = max(1, chunk // len(walls))
+    for s in range(0, len(points), block):
+        rel = points[s:s + block, None, :] - a[None]  # (B, W, 2)
+        t = np.clip(np.einsum("bwi,wi->bw", rel, d) / dd, 0.0, 1.0)
+        gap = rel - t[..., None] * d[None]
+        keep[s:s + block] = np.einsum("bwi,bwi->bw", gap, gap).min(axis=1) > clearance_m ** 2
+    return keep
 
 
 def profiles_at(structure: MapStructure, points: np.ndarray, bins: int, slack_m: float, tol: Tolerances) -> Profiles:
