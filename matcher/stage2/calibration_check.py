@@ -143,6 +143,13 @@ class MatchedLines:
         self.w_mean = 0.5 / (per_px * sigma_off)  # (T, 2): end point -> the offset's weighted share
         self.w_diff = 0.5 / (per_px * sigma_turn[:, None])
         self.hyp = np.zeros(len(self.lines), dtype=np.int64)
+        # The fits ask for the same calibration over and over (the file's,
+        # for every camera of a rig but the one whose calibration is free)
+        # and for the same pose twice (with a parameter bumped): what
+        # depends on the calibration alone is kept per calibration, and the
+        # last answer per pose and calibration (:meth:`weighted`).
+        self._terms: dict[tuple, refine.MatchTerms] = {}
+        self._last: tuple | None = None  # (pose, calibration, residuals, derivatives or None)
 
     def __len__(self) -> int:
         return len(self.lines)
@@ -150,20 +157,38 @@ class MatchedLines:
     def weighted(self, pose: np.ndarray, calib: np.ndarray, jacobian: bool = False):
         """(2T,) noise-weighted residuals at ``pose`` (3,) (x, y, yaw radians)
         and calibration ``calib`` (4,) (:data:`PARAMETERS`), and with
-        ``jacobian`` their (2T, 3) derivatives in the pose."""
-        cam = self.camera
-        s, dh, dcx, dcy = calib
-        rays = np.empty(self.lines.shape[:2] + (3,))
-        rays[..., 0] = (self.lines[..., 0] - cam.cx - dcx) / (s * cam.fx)
-        rays[..., 1] = (self.lines[..., 1] - cam.cy - dcy) / (s * cam.fy)
-        rays[..., 2] = 1.0
-        rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
-        terms = refine.MatchTerms(self.seg_a, self.seg_b, rays[:, 0], rays[:, 1], cam.pitch, cam.height_m + dh)
-        out = refine.residuals(pose[None], self.hyp, terms, jacobian)
-        if not jacobian:
-            return self._whiten(out)
-        r, J = out
-        return self._whiten(r), self._whiten(J)
+        ``jacobian`` their (2T, 3) derivatives in the pose. Read only: the
+        arrays are kept for the next call at the same pose and calibration."""
+        key = (np.asarray(pose, dtype=float).tobytes(), tuple(float(v) for v in calib))
+        last = self._last
+        if last is not None and last[0] == key and (last[2] is not None or not jacobian):
+            return (last[1], last[2]) if jacobian else last[1]
+        out = refine.residuals(np.asarray(pose, dtype=float)[None], self.hyp, self._terms_at(key[1]), jacobian)
+        r, J = (self._whiten(out[0]), self._whiten(out[1])) if jacobian else (self._whiten(out), None)
+        for a in (r, J):
+            if a is not None:
+                a.flags.writeable = False
+        self._last = (key, r, J)
+        return (r, J) if jacobian else r
+
+    def _terms_at(self, calib: tuple) -> refine.MatchTerms:
+        """The :class:`~matcher.stage2.refine.MatchTerms` of the matches at
+        calibration ``calib`` (4,), made once per calibration (the few a
+        fit's iterations ask for again; the file's always)."""
+        terms = self._terms.get(calib)
+        if terms is None:
+            cam = self.camera
+            s, dh, dcx, dcy = calib
+            rays = np.empty(self.lines.shape[:2] + (3,))
+            rays[..., 0] = (self.lines[..., 0] - cam.cx - dcx) / (s * cam.fx)
+            rays[..., 1] = (self.lines[..., 1] - cam.cy - dcy) / (s * cam.fy)
+            rays[..., 2] = 1.0
+            rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+            terms = refine.MatchTerms(self.seg_a, self.seg_b, rays[:, 0], rays[:, 1], cam.pitch, cam.height_m + dh)
+            if len(self._terms) >= 8:  # a fit's free parameter takes a new value every iteration
+                self._terms = {k: v for k, v in self._terms.items() if k == (1.0, 0.0, 0.0, 0.0)}
+            self._terms[calib] = terms
+        return terms
 
     def _whiten(self, r: np.ndarray) -> np.ndarray:
         """Residuals (T, 2[, k]) of the two end points -> (2T[, k]): offset, then turn, over their noise."""
