@@ -98,12 +98,29 @@ def visible_points(shown: list, walls: list, work: Stage2Constants, shared: Shar
         same = [k for k, x in enumerate(walls) if x is w and len(shown[k][0])]
         if not same:
             continue
-        clear = sight_clear(np.concatenate([shown[k][0] for k in same]), np.concatenate([shown[k][1] for k in same]),
-                            w, work.refined_sight_end_m, shared)
-        bounds = np.cumsum([0] + [len(shown[k][0]) for k in same])
+        seen = _any_clear(np.concatenate([shown[k][0] for k in same]).reshape(-1, n, 2),
+                          np.concatenate([shown[k][1] for k in same]).reshape(-1, n, 2), w, work, shared)
+        bounds = np.cumsum([0] + [len(shown[k][0]) // n for k in same])
         for k, a, b in zip(same, bounds[:-1], bounds[1:]):
-            out[k] = clear[a:b].reshape(-1, n).any(axis=1)
+            out[k] = seen[a:b]
     return out
+
+
+def _any_clear(cams: np.ndarray, points: np.ndarray, walls, work: Stage2Constants, shared: SharedConstants) -> np.ndarray:
+    """(T,) bool: is any of the sight lines from ``cams`` (T, n, 2) to
+    ``points`` (T, n, 2) clear (:func:`~matcher.map_geometry.occlusion.sight_clear`)?
+    The middle points' first, the others only where it is hidden (most
+    segments a line fits are in sight at their middle); each sight line's
+    test is its own, so the answer is the one of testing all."""
+    T, n = points.shape[:2]
+    mid = n // 2
+    seen = sight_clear(cams[:, mid], points[:, mid], walls, work.refined_sight_end_m, shared)
+    hidden = np.flatnonzero(~seen)
+    if len(hidden) and n > 1:
+        rest = np.delete(np.arange(n), mid)
+        c, p = cams[hidden][:, rest].reshape(-1, 2), points[hidden][:, rest].reshape(-1, 2)
+        seen[hidden] = sight_clear(c, p, walls, work.refined_sight_end_m, shared).reshape(-1, n - 1).any(axis=1)
+    return seen
 
 
 def resolve_pieces(camera, poses, label, cls, segs, lines, near_m: float):
