@@ -117,18 +117,25 @@ def _closest_first(part: Extension, pairs: _Pairs, ok: np.ndarray, dist: np.ndar
     out_h, out_l, out_s = [], [], []
     lines_taken = set()  # (hypothesis, line)
     cand = np.nonzero(ok)[0]
-    for k in cand[np.lexsort((dist[cand], ph[cand]))].tolist():
-        c, h, s_, l_ = int(pc[k]), int(ph[k]), int(si[k]), int(li[k])
+    cand = cand[np.lexsort((dist[cand], ph[cand]))]
+    # Each pair's line's span along its projected segment, all at once;
+    # the spans of the lines already on a segment (the matches before this
+    # extension) the first time a pair of that segment asks.
+    spans = _spans_along(uv[pc[cand], si[cand]], part.image_lines.lines[li[cand]]).tolist()
+    on_spans: dict = {}  # (contender, segment) -> the spans of the lines on it
+    overlap_px = 2.0 * tol.line_end_px
+    for c, h, s_, l_, (lo, hi) in zip(pc[cand].tolist(), ph[cand].tolist(), si[cand].tolist(), li[cand].tolist(),
+                                      spans):
         if (h, l_) in lines_taken:
             continue
-        on_it = matched.setdefault((c, s_), [])
-        if on_it:
-            spans = _spans_along(np.broadcast_to(uv[c, s_], (len(on_it) + 1, 2, 2)),
-                                 part.image_lines.lines[on_it + [l_]])
-            overlap = np.minimum(spans[:-1, 1], spans[-1, 1]) - np.maximum(spans[:-1, 0], spans[-1, 0])
-            if (overlap > 2.0 * tol.line_end_px).any():
-                continue
-        on_it.append(l_)
+        on_it = on_spans.get((c, s_))
+        if on_it is None:
+            before = matched.get((c, s_), [])
+            on_it = on_spans[(c, s_)] = _spans_along(np.broadcast_to(uv[c, s_], (len(before), 2, 2)),
+                                                     part.image_lines.lines[before]).tolist() if before else []
+        if any(min(b, hi) - max(a, lo) > overlap_px for a, b in on_it):
+            continue
+        on_it.append((lo, hi))
         lines_taken.add((h, l_))
         out_h.append(h)
         out_s.append(s_)
