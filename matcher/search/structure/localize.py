@@ -153,10 +153,7 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
     pull the pose off; stage 2 keeps the pose that explains the most
     lines).
     None when no camera has candidates."""
-    cands = []
-    for v in frame.views:
-        c = select_candidates(linemap, v.camera, v.camera_prior(prior), tol)
-        cands.append(None if isinstance(c, str) else c)
+    cands = _frame_candidates(linemap, frame, prior, tol)
     if all(c is None for c in cands):
         return None
     pairs = [(v, c) for v, c in zip(frame.views, cands) if c is not None]
@@ -171,6 +168,23 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
         passes.append(poses)
         gate /= 2.0
     return cands, verify_seeds(frame.views, cands, _seeds(peaks.poses[i:i + 1], passes), prior, tol)
+
+def _frame_candidates(linemap, frame: RigFrame, prior: tuple, tol: Tolerances) -> list:
+    """Per camera of ``frame`` its candidates under the robot's ``prior``
+    (radians; None: none), the regions' visible lists read once per camera
+    place (a panorama's views, a ring of cameras at the robot's centre,
+    share theirs)."""
+    lists: dict[tuple, np.ndarray] = {}
+    cands = []
+    for v in frame.views:
+        px = v.camera_prior(prior)
+        ids = lists.get((px[0], px[1], px[3]))
+        if ids is None:
+            ids = lists[(px[0], px[1], px[3])] = linemap.candidate_segments(px[0], px[1], px[3])
+        c = select_candidates(linemap, v.camera, px, tol, candidate_ids=ids)
+        cands.append(None if isinstance(c, str) else c)
+    return cands
+
 
 def _best_key(ranked: RigRanked) -> tuple:
     """The ranking key (lines explained most, then cost, then E) of the best
