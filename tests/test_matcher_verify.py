@@ -263,3 +263,63 @@ def test_pose_spread_matches_the_scatter_of_noisy_fits(small_map, cam, pose, ver
     scatter_yaw = float(np.std(errors[:, 2]))
     assert 0.65 < scatter_m / predicted[0] < 1.3, (scatter_m, predicted)
     assert 0.65 < scatter_yaw / predicted[1] < 1.3, (scatter_yaw, predicted)
+
+
+def test_sight_batches_answer_as_every_sight_line_tested():
+    """A segment is seen when any of its sight points is (stage 2's
+    ``visible_points``, which tests each segment's middle point first and
+    the others only where the middle is hidden): the same answers as
+    testing every sight line, in a flat with rooms and doorways, from
+    cameras all over it (some of the sight lines blocked, some not)."""
+    from mapkit_harness.plans.buildings import make_small_flat
+    from matcher.map_geometry.occlusion import sight_clear
+    from matcher.map_index import index_of
+    from matcher.stage2.fit import visible_points
+    from matcher.tolerances import DEFAULT
+
+    flat = make_small_flat()
+    walls = index_of(flat).walls
+    rng = np.random.default_rng(7)
+    n = len(DEFAULT.stage2.refined_sight_array)
+    lo, hi = flat.ring_points.min(axis=0), flat.ring_points.max(axis=0)
+    parts, want = [], []
+    for T in (40, 0, 25):  # a rig's cameras, one with nothing to test
+        cams = np.repeat(rng.uniform(lo, hi, (T, 2)), n, axis=0)
+        segs = flat.segments[rng.integers(len(flat.segments), size=T)][:, :, :2]
+        t = np.array(DEFAULT.stage2.refined_sight_samples)
+        pts = (segs[:, None, 0] + t[None, :, None] * (segs[:, None, 1] - segs[:, None, 0])).reshape(-1, 2)
+        parts.append((cams, pts))
+        want.append(sight_clear(cams, pts, walls, DEFAULT.stage2.refined_sight_end_m, DEFAULT.shared)
+                    .reshape(-1, n).any(axis=1))
+    got = visible_points(parts, [walls, walls, walls], DEFAULT.stage2, DEFAULT.shared)
+    for g, w in zip(got, want):
+        assert g.tolist() == w.tolist()
+    both = np.concatenate(want)
+    assert both.any() and not both.all()  # blocked and clear cases both met
+    # Hidden at the middle and seen at another point: the second pass answers.
+    mids = np.concatenate([sight_clear(c[n // 2::n], p[n // 2::n], walls, DEFAULT.stage2.refined_sight_end_m,
+                                       DEFAULT.shared) for c, p in parts if len(c)])
+    assert (both & ~mids).any()
+
+
+def test_calibration_fits_reuse_nothing_that_changes_their_answer():
+    """The calibration check's matches keep their terms per calibration and
+    their last residuals per pose: asked in any order, each answer is the
+    one a fresh set of matches gives."""
+    from matcher.stage2.calibration_check import MatchedLines
+    from matcher.tolerances import DEFAULT
+
+    rng = np.random.default_rng(3)
+    cam = paper_camera(HEIGHT, math.degrees(PITCH))
+    segs = np.c_[rng.uniform(-4, 4, (12, 2, 2)), rng.uniform(0, 2.5, (12, 2, 1))]
+    lines = rng.uniform([0, 0], [640, 480], (12, 2, 2))
+    kept = MatchedLines(cam, lines, segs, DEFAULT)
+    asks = [((0.1, 0.2, 0.3), (1.0, 0, 0, 0), True), ((0.1, 0.2, 0.3), (1.0, 0, 0, 0), False),
+            ((0.1, 0.2, 0.3), (1.05, 0, 0, 0), False), ((0.1, 0.2, 0.3), (1.0, 0, 0, 0), False),
+            ((0.1, 0.25, 0.3), (1.0, 0, 0, 0), False), ((0.1, 0.25, 0.3), (1.0, 0, 0, 0), True)]
+    asks += [((0.0, 0.0, 0.1 * k), (1.0 + 0.01 * k, 0.01, 0, 2.0), bool(k % 2)) for k in range(12)]
+    for pose, calib, jac in asks:
+        fresh = MatchedLines(cam, lines, segs, DEFAULT).weighted(np.array(pose), np.array(calib), jac)
+        got = kept.weighted(np.array(pose), np.array(calib), jac)
+        for g, f in zip((got,) if not jac else got, (fresh,) if not jac else fresh):
+            assert np.array_equal(g, f)
