@@ -157,7 +157,9 @@ def focal_profile(views, cands, pose: np.ndarray, prior: tuple, tol, per_camera=
         scaled = [_scaled(v, scale, tol) for v in views]
         seeds = [pose]
         if per_camera and scale != 1.0:  # the answer's matches refitted at that scale: where they put the robot
-            at = RigMatchedLines([(_scaled(v, scale, tol), lines, segs) for v, lines, segs in per_camera], tol)
+            made = {id(v): w for v, w in zip(views, scaled)}  # the answer's cameras are the frame's
+            at = RigMatchedLines([(made.get(id(v)) or _scaled(v, scale, tol), lines, segs)
+                                  for v, lines, segs in per_camera], tol)
             seeds.append(fit(at, pose, None, tol.verdict)[0])
         ranked = verify_seeds(scaled, cands, np.array(seeds), prior, tol)
         h = int(ranked.order[0])
