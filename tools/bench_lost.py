@@ -42,6 +42,9 @@ def main(argv=None) -> int:
     ap.add_argument("--focal-scale", type=float, default=1.0,
                     help="the frames' camera has the file's focal length times this (a wrong camera file; "
                          "default 1: right)")
+    ap.add_argument("--search", choices=("tree", "structure"), default=None,
+                    help="the search that ranks places (Tolerances.search; default the matcher's for a single "
+                         "camera, the tree)")
     add_report_option(ap)
     args = ap.parse_args(argv)
     return reported(args.report, lambda: run(args), __file__, argv)
@@ -49,7 +52,7 @@ def main(argv=None) -> int:
 
 def run(args) -> int:
     """The benchmark as ``main``'s arguments say; prints the table."""
-    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms)
+    tol = replace(matcher.Tolerances(), time_budget_ms=args.budget_ms, search=args.search)
     linemap = matcher.load_map(args.map)
     camera = paper_camera(1.2, 0.0)
     seen_by = replace(camera, fx=camera.fx * args.focal_scale, fy=camera.fy * args.focal_scale)
@@ -57,7 +60,8 @@ def run(args) -> int:
     budget = "" if math.isinf(args.budget_ms) else f"; budget {args.budget_ms:g} ms per call"
     focal = "" if args.focal_scale == 1.0 else f"; frames seen at {args.focal_scale:g} x the camera file's focal length"
     print(f"map {args.map}: {linemap.n_segments} segments, {linemap.n_regions} regions; "
-          f"{'first accepted region' if args.first_accepted else 'every region'}{budget}{focal}")
+          f"{'first accepted region' if args.first_accepted else 'every region'}{budget}{focal}; "
+          f"search {args.search or 'default'}")
     table = Table("frame", "s", "regions tried", "position err m", "yaw err deg", "right")
     seconds, right, wrong = [], 0, 0
     for i in range(args.frames):
