@@ -96,14 +96,17 @@ def _candidate_pairs(part: Extension, tol) -> _Pairs | None:
     uv, in_front = project_segments(part.camera, part.poses[hyps][:, None, :],
                                     np.broadcast_to(segs, (len(hyps),) + segs.shape), tol.stage2.near_plane_m)
     # The lines each hypothesis left free, and the lines on each of its segments.
-    where = {h: c for c, h in enumerate(hyps.tolist())}
-    free = np.ones((len(hyps), len(image_lines.usable)), dtype=bool)
+    may = _may_fit(image_lines.lines[usable], uv, in_front, tol)
     matched = {}  # (contender, segment) -> the lines on it
-    mine = np.nonzero(np.isin(m.hyp, hyps))[0]
-    for h_, s_, l_ in zip(m.hyp[mine].tolist(), m.local[mine].tolist(), m.line[mine].tolist()):
-        free[where[h_], l_] = False
-        matched.setdefault((where[h_], s_), []).append(l_)
-    pc, ui, si = np.nonzero(_may_fit(image_lines.lines[usable], uv, in_front, tol) & free[:, usable, None])
+    if len(m):  # the lines matched before (none when a rig's verification matches afresh)
+        where = {h: c for c, h in enumerate(hyps.tolist())}
+        free = np.ones((len(hyps), len(image_lines.usable)), dtype=bool)
+        mine = np.nonzero(np.isin(m.hyp, hyps))[0]
+        for h_, s_, l_ in zip(m.hyp[mine].tolist(), m.local[mine].tolist(), m.line[mine].tolist()):
+            free[where[h_], l_] = False
+            matched.setdefault((where[h_], s_), []).append(l_)
+        may &= free[:, usable, None]
+    pc, ui, si = np.nonzero(may)
     if not len(pc):  # no usable line left free near a segment
         return None
     return _Pairs(pc, usable[ui], si, hyps[pc], uv, in_front, matched)
