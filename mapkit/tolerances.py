@@ -402,7 +402,8 @@ TYPICAL_WALL_THICKNESS = 0.2
 #: imperial) that puts it closest to ``TYPICAL_DOOR_WIDTH`` is taken
 #: (:func:`mapkit.importers.dxf.units.units_from_gaps`) if at least
 #: ``GAP_UNITS_AGREE_SHARE`` of the gaps are then a door's width and the
-#: plan comes closer to ``TYPICAL_EXTENT``. Gaps are a weaker sign than
+#: plan's extent and walls' thickness together come closer to
+#: ``TYPICAL_EXTENT`` and ``TYPICAL_WALL_THICKNESS``. Gaps are a weaker sign than
 #: door symbols (a gallery's openings, a corridor's width, doorways of 0.7
 #: to 2 m): a unit only 3.3 times another (m, ft) is never told from them.
 #: On the corpus (docs/benchmarks/drawings.md) the right units give medians
