@@ -126,6 +126,15 @@ BRIDGE_MAX_GAP = 4.0
 #: it is refused, naming --floor (:mod:`mapkit.importers.dxf.closure`).
 OUTLINE_MAX_GAP = 3.0
 
+#: A floor layer's outline beyond the outer walls' closed footprint is
+#: inside the building when more than this share of its rim runs along that
+#: footprint (:func:`mapkit.importers.dxf.reconstruct._floor_within_building`):
+#: the building then surrounds more of it than the outside does (an atrium
+#: or a courtyard open through a ramp or an entrance wider than
+#: ``OUTLINE_MAX_GAP``). A terrace laid along one side of the building meets
+#: it along under half its rim (one side of four), one drawn apart not at all.
+FLOOR_SURROUNDED_SHARE = 0.5
+
 #: Mitre limit (times the offset) of that closing's offsets: square corners
 #: stay square; sharper ones are bevelled rather than spiking far out.
 OUTLINE_MITRE_LIMIT = 2.0
@@ -402,7 +411,8 @@ TYPICAL_WALL_THICKNESS = 0.2
 #: imperial) that puts it closest to ``TYPICAL_DOOR_WIDTH`` is taken
 #: (:func:`mapkit.importers.dxf.units.units_from_gaps`) if at least
 #: ``GAP_UNITS_AGREE_SHARE`` of the gaps are then a door's width and the
-#: plan comes closer to ``TYPICAL_EXTENT``. Gaps are a weaker sign than
+#: plan's extent and walls' thickness together come closer to
+#: ``TYPICAL_EXTENT`` and ``TYPICAL_WALL_THICKNESS``. Gaps are a weaker sign than
 #: door symbols (a gallery's openings, a corridor's width, doorways of 0.7
 #: to 2 m): a unit only 3.3 times another (m, ft) is never told from them.
 #: On the corpus (docs/benchmarks/drawings.md) the right units give medians

@@ -27,8 +27,8 @@ FLAT = Path(__file__).resolve().parent.parent / "maps" / "flat.dxf"
 ROOMS, ROOM, DEPTH, CORRIDOR, DOOR = 6, 4.0, 4.0, 2.0, 0.9
 
 
-def _rooms_off_a_corridor(path, insunits: int, unit_per_m: float, double: bool = False):
-    """Six 4 x 4 m rooms in a row off a 2 m corridor, each entered through a
+def _rooms_off_a_corridor(path, insunits: int, unit_per_m: float, double: bool = False, rooms: int = ROOMS):
+    """``rooms`` (six) 4 x 4 m rooms in a row off a 2 m corridor, each entered through a
     0.9 m doorway (a gap in the corridor wall, no door drawn) on layer
     'A-WALL'; drawn ``unit_per_m`` drawing units to the metre under the
     header code ``insunits``. Single wall lines, or (``double``) each wall
@@ -38,7 +38,7 @@ def _rooms_off_a_corridor(path, insunits: int, unit_per_m: float, double: bool =
     doc.header["$INSUNITS"] = insunits
     msp = doc.modelspace()
     wall = {"layer": "A-WALL"}
-    width, top = ROOMS * ROOM, DEPTH + CORRIDOR
+    width, top = rooms * ROOM, DEPTH + CORRIDOR
     t = 0.2 if double else 0.0
 
     def piece(x0, y0, x1, y1):
@@ -55,9 +55,9 @@ def _rooms_off_a_corridor(path, insunits: int, unit_per_m: float, double: bool =
         piece(x0, y0, x1, y1)
     for x in (0, width):
         piece(x, 0, x, top)
-    for i in range(1, ROOMS):
+    for i in range(1, rooms):
         piece(i * ROOM, 0, i * ROOM, DEPTH)
-    for i in range(ROOMS):
+    for i in range(rooms):
         x0, x1 = i * ROOM, (i + 1) * ROOM
         piece(x0, DEPTH, x0 + 1.0, DEPTH)
         piece(x0 + 1.0 + DOOR, DEPTH, x1, DEPTH)
@@ -122,6 +122,21 @@ def test_the_example_flat_without_its_doors_drawn_in_centimetres_is_read_in_cent
     assert len(polygon_parts(scene.free_space)) == 1 and scene.free_space.area == pytest.approx(61.7, rel=0.02)
 
 
+def test_a_long_plan_whose_header_says_mm_is_read_in_cm_when_its_walls_say_so_too(tmp_path):
+    # 28 rooms off a corridor, 112 m long, drawn in centimetres under a
+    # header saying millimetres: as stated the plan is 11.2 m long (nearer
+    # a typical building's 20 m than 112 m is), but its doorways are 9 mm
+    # wide and its walls 2 cm thick. Before, the extent alone kept mm (the
+    # map refused or built at a tenth of its size); the walls' thickness
+    # outweighs it now.
+    scene = load_scene(_rooms_off_a_corridor(tmp_path / "long.dxf", 4, 100.0, double=True, rooms=28))
+    assert scene.info["units"] == "cm"
+    assert any("read in cm instead" in w and "its walls 0.20 m thick" in w and "the plan 112 m across" in w
+               for w in scene.info["warnings"]), scene.info["warnings"]
+    assert len(polygon_parts(scene.free_space)) == 1
+    assert 28 * ROOM * DEPTH * 0.5 < scene.free_space.area < 28 * ROOM * (DEPTH + CORRIDOR)
+
+
 def test_doorways_in_feet_that_are_inches(tmp_path):
     scene = load_scene(_rooms_off_a_corridor(tmp_path / "in.dxf", 2, 1.0 / 0.0254))  # says feet, drawn in inches
     assert scene.info["units"] == "in"
@@ -154,6 +169,17 @@ def test_right_units_and_an_explicit_choice_are_kept(tmp_path):
 ])
 def test_the_unit_the_gaps_say(widths, unit, extent, expected):
     found = units_from_gaps(widths, unit, extent)
+    assert (found[0] if found else None) == expected
+
+
+@pytest.mark.parametrize("thickness, expected", [
+    (None, None),     # single wall lines: the extent alone judges, 11.2 m is nearer a building's size than 112 m
+    (0.02, "cm"),     # walls 2 cm thick as read: 0.2 m in cm, which outweighs the extent
+    (0.2, None),      # 0.2 m as read, 2 m in cm: double lines no wall is (rooms facing each other), no sign
+    (0.03, "cm"),     # 3 cm as read, 0.3 m in cm: both a wall's, cm the nearer a typical one
+])
+def test_the_walls_thickness_joins_the_extent_in_judging_the_unit_the_gaps_say(thickness, expected):
+    found = units_from_gaps([0.09] * 6, "mm", 11.2, thickness, BuildOptions().max_wall_thickness)
     assert (found[0] if found else None) == expected
 
 

@@ -182,6 +182,52 @@ def test_a_walled_space_with_no_room_fill_and_no_door_is_a_shaft(tmp_path):
     assert any("no room fill and no door" in w for w in scene.info["warnings"])
 
 
+# ---- a courtyard the building surrounds, open to the outside wider than a door -----------------
+
+
+def write_courtyard_plan(path, floor):
+    """A U-shaped building, 30 x 20 m (single wall lines on ``WALLS``): a
+    south and a north wing 6 m deep and a west wing between them, around a
+    24 x 8 m courtyard (x 6..30, y 6..14) that opens east across its whole
+    8 m (wider than ``OUTLINE_MAX_GAP``: no wall end faces another there).
+    Each wing is a room entered from the courtyard through a 1 m doorway.
+    ``floor``: the outlines drawn on layer ``Floor`` (x0, y0, x1, y1)."""
+    walls = [((0, 0), (30, 0)), ((30, 0), (30, 6)), ((0, 0), (0, 20)), ((0, 20), (30, 20)), ((30, 20), (30, 14)),
+             ((30, 6), (11, 6)), ((10, 6), (6, 6)), ((6, 6), (6, 9)), ((6, 10), (6, 14)), ((6, 14), (10, 14)),
+             ((11, 14), (30, 14)), ((0, 6), (6, 6)), ((0, 14), (6, 14))]
+    write_plan(path, walls)
+    doc = ezdxf.readfile(path)
+    for x0, y0, x1, y1 in floor:
+        doc.modelspace().add_lwpolyline([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], close=True,
+                                         dxfattribs={"layer": "Floor"})
+    doc.saveas(path)
+    return path
+
+
+def test_a_courtyard_the_floor_layer_covers_and_the_building_surrounds_is_inside(tmp_path):
+    """The CityScope IDB level 0: its atrium, which the floor layer covers,
+    opens to the outside through two vehicle ramps 8 m wide; clipped to the
+    outer walls closed across 3 m gaps it was no free space, and its wings
+    were separate parts (refused: the free space a quarter of the building)."""
+    plan = write_courtyard_plan(tmp_path / "court.dxf", floor=[(0, 0, 30, 20)])
+    scene = load_scene(plan, BuildOptions(robot_radius=0.2))
+    assert scene.info["interior"] == "floor layer"
+    assert scene.free_space.contains(Point(18, 10))  # the courtyard
+    assert len(scene.free_space.geoms) == 1  # the wings joined through it
+    assert scene.free_space.difference(box(0, 0, 30, 20)).area < 1e-6
+
+
+def test_a_terrace_the_floor_layer_lays_along_one_side_of_the_building_is_outside(tmp_path):
+    """A floor outline of a terrace beside the south wing's east wall meets
+    the building along one side of four: no free space, as a floor outline
+    drawn apart from it."""
+    floor = [(0, 0, 30, 6), (0, 14, 30, 20), (0, 6, 6, 14), (30, 0, 36, 6)]
+    scene = load_scene(write_courtyard_plan(tmp_path / "terrace.dxf", floor),
+                       BuildOptions(robot_radius=0.2, accept_inconsistent=True))
+    assert scene.free_space.difference(box(0, 0, 30, 20)).area < 1e-6
+    assert scene.free_space.area > 3 * 0.5 * 48  # the wings are free space
+
+
 def test_layers_lists_a_sheet_whose_wall_layer_by_name_is_empty(tmp_path, capsys):
     """The house sheet's only layer named like walls ('2ND-WALL') is empty:
     'mapkit layers', the command its refusal sends the user to, failed

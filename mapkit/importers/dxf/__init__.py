@@ -276,7 +276,8 @@ def _flatten_in_units(msp, roles: dict, far: list, unit_guessed: tuple[str, bool
         elif len(widths) >= DOOR_UNITS_MIN_DOORS:
             told = units_from_doors(widths, unit, extent * factor)
         else:  # too few door symbols to tell: the gaps in its walls tell
-            told = units_from_gaps(wall_doorway_gaps(walls), unit, extent * factor)
+            told = units_from_gaps(wall_doorway_gaps(walls), unit, extent * factor, wall_thickness(walls),
+                                   options.max_wall_thickness)
     if told is None:
         for message in first_notes:
             note(message)

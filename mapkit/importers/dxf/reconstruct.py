@@ -53,7 +53,7 @@ from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import (DOUBLE_DOOR_SQUARENESS, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP,
+from mapkit.tolerances import (DOUBLE_DOOR_SQUARENESS, FLOOR_SURROUNDED_SHARE, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP,
                                SMALL_PLAN_M, SNAP_GAP, ZERO, ZONE_WALLS_DRAWN_SHARE)
 
 
@@ -503,7 +503,8 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
         # The walls enclose the building: a floor layer adds the rooms they
         # leave open, but nothing beyond the outer walls (a floor outline of
         # a terrace or of the next wing drawn beside the plan).
-        inside, source = unary_union([enclosed, floor_area.intersection(closed_footprint(shut))]), "floor layer"
+        inside, source = unary_union([enclosed, _floor_within_building(floor_area, closed_footprint(shut))]), \
+            "floor layer"
     elif not floor_area.is_empty:
         inside, source = unary_union([enclosed, floor_area]), "floor layer"
     elif enclosed.area >= OPEN_PLAN_FRACTION * hull.area:
@@ -528,6 +529,23 @@ def _interior(walls: MultiPolygon, door_gaps: list[Polygon], obstacles: MultiPol
     inside = unary_union([inside, *door_gaps, *doorways])
     inside = inside.buffer(SNAP_GAP, join_style="mitre").buffer(-SNAP_GAP, join_style="mitre")
     return inside, source
+
+
+def _floor_within_building(floor_area, footprint):
+    """What of a floor layer's ``floor_area`` lies in the building whose
+    outer walls close into ``footprint`` (:func:`.closure.closed_footprint`,
+    metres): all of it inside the footprint, and each piece beyond it that
+    the building surrounds, more than ``FLOOR_SURROUNDED_SHARE`` of its rim
+    running along the footprint (an atrium or a courtyard, open to the
+    outside through gaps wider than ``OUTLINE_MAX_GAP``: a vehicle ramp, an
+    entrance hall's glazing not drawn). A floor outline of a terrace or of
+    the next wing drawn beside the building meets it along one side at
+    most, or not at all: no free space."""
+    inner = floor_area.intersection(footprint)
+    rim = footprint.buffer(SNAP_GAP, join_style="mitre")
+    surrounded = [p for p in polygon_parts(floor_area.difference(footprint))
+                  if p.length > 0 and p.exterior.intersection(rim).length > FLOOR_SURROUNDED_SHARE * p.exterior.length]
+    return unary_union([inner, *surrounded]) if surrounded else inner
 
 
 def _between_zones(walls, zones, max_wall_thickness: float):

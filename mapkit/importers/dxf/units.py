@@ -135,10 +135,7 @@ def units_from_evidence(door_widths_m, gap_widths_m, thickness_m: float | None, 
         return UNIT_METRES[u] / UNIT_METRES[unit]
 
     def misfit(u: str) -> float:
-        off = _off_typical(extent_m * ratio(u)) + abs(math.log10(door * ratio(u) / TYPICAL_DOOR_WIDTH))
-        if thickness_m is not None and thickness_m > 0:
-            off += abs(math.log10(thickness_m * ratio(u) / TYPICAL_WALL_THICKNESS))
-        return off
+        return _building_misfit(extent_m, thickness_m, ratio(u)) + abs(math.log10(door * ratio(u) / TYPICAL_DOOR_WIDTH))
 
     fits = [u for u in _DRAWING_UNITS if _plausible(extent_m * ratio(u))]
     if not fits:
@@ -230,15 +227,27 @@ def _gaps_no_door_fits(gap_widths_m) -> tuple[np.ndarray, float] | None:
     return widths, median
 
 
-def units_from_gaps(gap_widths_m, unit: str, extent_m: float) -> tuple[str, str] | None:
+def units_from_gaps(gap_widths_m, unit: str, extent_m: float, thickness_m: float | None = None,
+                    max_wall_thickness: float = 0.0) -> tuple[str, str] | None:
     """The unit the doorway gaps of a plan without door symbols say it is
     in, when its stated or guessed ``unit`` makes them no door's width:
     ``gap_widths_m`` the free widths of its doorways as read in ``unit``
     (metres, :func:`.doorway_gaps.doorway_gaps`), ``extent_m`` its extent
-    as read. Returns ``(unit, warning)``, or None when the gaps agree with
+    and ``thickness_m`` its walls' thickness
+    (:func:`.wall_thickness.wall_thickness`; None: single wall lines), as
+    read. Returns ``(unit, warning)``, or None when the gaps agree with
     ``unit``, are too few (``DOOR_UNITS_MIN_DOORS``), or no unit of the same
     system makes most of them a door's width (``GAP_UNITS_AGREE_SHARE``)
-    and the plan closer to a building's typical size."""
+    and the plan closer to a building: the signs independent of the gaps,
+    its extent and its walls' thickness, together closer (log scale) to
+    ``TYPICAL_EXTENT`` and ``TYPICAL_WALL_THICKNESS`` than as read. A
+    header's mm over a plan drawn in cm makes a 120 m building 12 m across,
+    nearer a typical building's size, but its walls 3 cm thick, no wall's
+    thickness: the walls outweigh the extent there. The thickness counts
+    only when both readings make it a wall's (``max_wall_thickness``, the
+    ``--max-wall-thickness`` beyond which double lines are no wall): in a
+    small plan of single wall lines it measures rooms facing each other, a
+    room's width in one of the two readings."""
     gaps = _gaps_no_door_fits(gap_widths_m)
     if gaps is None:
         return None
@@ -253,12 +262,27 @@ def units_from_gaps(gap_widths_m, unit: str, extent_m: float) -> tuple[str, str]
     if best == unit or not lo <= median * ratio(best) <= hi or not _plausible(extent_m * ratio(best)):
         return None
     agree = float(np.mean((widths * ratio(best) >= lo) & (widths * ratio(best) <= hi)))
-    if agree < GAP_UNITS_AGREE_SHARE or _off_typical(extent_m * ratio(best)) >= _off_typical(extent_m):
+    if thickness_m is not None and thickness_m * max(1.0, ratio(best)) > max_wall_thickness:
+        thickness_m = None  # double lines no wall is in one of the readings: rooms, not walls
+    if agree < GAP_UNITS_AGREE_SHARE or _building_misfit(extent_m, thickness_m, ratio(best)) >= \
+            _building_misfit(extent_m, thickness_m, 1.0):
         return None
+    walls = "" if not thickness_m else f", its walls {thickness_m * ratio(best):.2f} m thick"
     return best, (f"read in {unit}, the drawing draws no doors and its {len(widths)} doorways (gaps in its walls) are "
                   f"a median {median:.3g} m wide, no door's width; read in {best} instead (doorways "
-                  f"{median * ratio(best):.2f} m, the plan {_fmt(extent_m * ratio(best))} across); pass --units to "
-                  f"override")
+                  f"{median * ratio(best):.2f} m{walls}, the plan {_fmt(extent_m * ratio(best))} across); pass --units "
+                  f"to override")
+
+
+def _building_misfit(extent_m: float, thickness_m: float | None, ratio: float) -> float:
+    """How far (log10, summed) a plan ``extent_m`` across with walls
+    ``thickness_m`` thick (None: not measured, no term), both metres as
+    read and multiplied by ``ratio``, is from a typical building's size and
+    walls."""
+    off = _off_typical(extent_m * ratio)
+    if thickness_m is not None and thickness_m > 0:
+        off += abs(math.log10(thickness_m * ratio / TYPICAL_WALL_THICKNESS))
+    return off
 
 
 def scale_from_gaps(gap_widths_m) -> tuple[int, float, float] | None:
