@@ -149,7 +149,7 @@ class MatchedLines:
         # depends on the calibration alone is kept per calibration, and the
         # last answer per pose and calibration (:meth:`weighted`).
         self._terms: dict[tuple, refine.MatchTerms] = {}
-        self._last: tuple | None = None  # (pose, calibration, residuals, derivatives or None)
+        self._last: tuple | None = None  # ((pose, calibration), residuals, derivatives or None)
 
     def __len__(self) -> int:
         return len(self.lines)
@@ -186,7 +186,7 @@ class MatchedLines:
             rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
             terms = refine.MatchTerms(self.seg_a, self.seg_b, rays[:, 0], rays[:, 1], cam.pitch, cam.height_m + dh)
             if len(self._terms) >= 8:  # a fit's free parameter takes a new value every iteration
-                self._terms = {k: v for k, v in self._terms.items() if k == (1.0, 0.0, 0.0, 0.0)}
+                self._terms = {k: v for k, v in self._terms.items() if k == tuple(_file_calibration())}
             self._terms[calib] = terms
         return terms
 

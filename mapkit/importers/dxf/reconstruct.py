@@ -53,8 +53,8 @@ from mapkit.importers.dxf.units import rescale_hint
 from mapkit.importers.dxf.walls import build_walls
 from mapkit.scene import Opening, Scene
 from mapkit.shapes import polygon_parts
-from mapkit.tolerances import (DOUBLE_DOOR_SQUARENESS, FLOOR_SURROUNDED_SHARE, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION, OUTLINE_MAX_GAP,
-                               SMALL_PLAN_M, SNAP_GAP, ZERO, ZONE_WALLS_DRAWN_SHARE)
+from mapkit.tolerances import (DOUBLE_DOOR_SQUARENESS, FLOOR_SURROUNDED_SHARE, MERGE, MIN_FREE_AREA, OPEN_PLAN_FRACTION,
+                               OUTLINE_MAX_GAP, SMALL_PLAN_M, SNAP_GAP, ZERO, ZONE_WALLS_DRAWN_SHARE)
 
 
 def reconstruct_scene(drawing: PlanDrawing, options: BuildOptions, info: dict | None = None) -> Scene:

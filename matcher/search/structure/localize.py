@@ -169,6 +169,7 @@ def _verify(linemap, frame: RigFrame, peaks: Peaks, i: int, prior: tuple, tol: T
         gate /= 2.0
     return cands, verify_seeds(frame.views, cands, _seeds(peaks.poses[i:i + 1], passes), prior, tol)
 
+
 def _frame_candidates(linemap, frame: RigFrame, prior: tuple, tol: Tolerances) -> list:
     """Per camera of ``frame`` its candidates under the robot's ``prior``
     (radians; None: none), the regions' visible lists read once per camera
